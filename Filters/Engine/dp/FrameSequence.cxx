@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/FrameSequence.h"
+
+#include "dp/PointCloud.h"
+#include "dp/PointCloudIO.h"
+#include "dp/detail/FileText.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+namespace fs = std::filesystem;
+
+namespace dp
+{
+
+bool naturalLess(const std::string& a, const std::string& b)
+{
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size())
+  {
+    const bool da = std::isdigit(static_cast<unsigned char>(a[i]));
+    const bool db = std::isdigit(static_cast<unsigned char>(b[j]));
+    if (da && db)
+    {
+      // Compare digit runs by value: skip leading zeros, then longer run is larger.
+      std::size_t ie = i, je = j;
+      while (ie < a.size() && std::isdigit(static_cast<unsigned char>(a[ie])))
+        ++ie;
+      while (je < b.size() && std::isdigit(static_cast<unsigned char>(b[je])))
+        ++je;
+      std::size_t is = i, js = j;
+      while (is + 1 < ie && a[is] == '0')
+        ++is;
+      while (js + 1 < je && b[js] == '0')
+        ++js;
+      if (ie - is != je - js)
+        return ie - is < je - js;
+      const int c = a.compare(is, ie - is, b, js, je - js);
+      if (c != 0)
+        return c < 0;
+      if (ie - i != je - j) // same value: fewer leading zeros first
+        return ie - i < je - j;
+      i = ie;
+      j = je;
+    }
+    else
+    {
+      if (a[i] != b[j])
+        return a[i] < b[j];
+      ++i;
+      ++j;
+    }
+  }
+  return a.size() - i < b.size() - j;
+}
+
+bool globMatch(const std::string& pattern, const std::string& name)
+{
+  // Iterative matcher with single-star backtracking; O(|pattern| * |name|) worst case.
+  std::size_t p = 0, n = 0, starP = std::string::npos, starN = 0;
+  auto classMatches = [&](std::size_t& pp, char c) -> bool
+  {
+    // pattern[pp] == '['; advances pp past the class.
+    std::size_t q = pp + 1;
+    bool negate = q < pattern.size() && (pattern[q] == '!' || pattern[q] == '^');
+    if (negate)
+      ++q;
+    bool matched = false;
+    bool first = true;
+    while (q < pattern.size() && (first || pattern[q] != ']'))
+    {
+      first = false;
+      if (q + 2 < pattern.size() && pattern[q + 1] == '-' && pattern[q + 2] != ']')
+      {
+        matched = matched || (c >= pattern[q] && c <= pattern[q + 2]);
+        q += 3;
+      }
+      else
+      {
+        matched = matched || c == pattern[q];
+        ++q;
+      }
+    }
+    pp = q + 1;
+    return matched != negate;
+  };
+  while (n < name.size())
+  {
+    if (p < pattern.size() && pattern[p] == '*')
+    {
+      starP = p++;
+      starN = n;
+      continue;
+    }
+    if (p < pattern.size() && pattern[p] == '[' && pattern.find(']', p + 2) != std::string::npos)
+    {
+      std::size_t next = p;
+      if (classMatches(next, name[n]))
+      {
+        p = next;
+        ++n;
+        continue;
+      }
+    }
+    else if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n]))
+    {
+      ++p;
+      ++n;
+      continue;
+    }
+    if (starP == std::string::npos)
+      return false;
+    p = starP + 1;
+    n = ++starN;
+  }
+  while (p < pattern.size() && pattern[p] == '*')
+    ++p;
+  return p == pattern.size();
+}
+
+FrameSequence FrameSequence::fromDirectory(const std::string& directory,
+                                           const std::string& pattern, double frameInterval)
+{
+  std::error_code ec;
+  if (!fs::is_directory(directory, ec))
+  {
+    throw FileError(directory, fs::exists(directory, ec) ? "is not a folder"
+                                                         : "folder does not exist");
+  }
+  std::vector<std::string> names;
+  for (fs::directory_iterator it(directory, ec), end; !ec && it != end; it.increment(ec))
+  {
+    const std::string name = it->path().filename().string();
+    if (!it->is_regular_file(ec) && !it->is_symlink(ec))
+      continue;
+    if (!globMatch(pattern.empty() ? "*" : pattern, name))
+      continue;
+    if (formatFromFileName(name) == PointFileFormat::Unknown)
+      continue; // e.g. a README or the .series file itself next to the frames
+    names.push_back(name);
+  }
+  if (ec)
+  {
+    throw FileError(directory, "cannot list folder (" + ec.message() + ")");
+  }
+  if (names.empty())
+  {
+    throw FileError(directory, "no point files match the pattern '" + pattern +
+                                 "' (readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk)");
+  }
+  std::sort(names.begin(), names.end(), naturalLess);
+  std::vector<std::string> paths;
+  for (const auto& name : names)
+    paths.push_back((fs::path(directory) / name).string());
+  return fromFiles(paths, frameInterval);
+}
+
+FrameSequence FrameSequence::fromSeriesFile(const std::string& seriesPath)
+{
+  const std::string text = detail::readWholeFile(seriesPath);
+  nlohmann::json json;
+  try
+  {
+    json = nlohmann::json::parse(text);
+  }
+  catch (const nlohmann::json::exception& e)
+  {
+    throw FileError(seriesPath, std::string("not valid JSON: ") + e.what());
+  }
+  if (!json.is_object() || !json.contains("files") || !json["files"].is_array())
+  {
+    throw FileError(seriesPath, "a .series file needs a \"files\" array "
+                                "({\"file-series-version\":\"1.0\",\"files\":[...]})");
+  }
+  const fs::path base = fs::path(seriesPath).parent_path();
+  FrameSequence sequence;
+  std::size_t index = 0;
+  for (const auto& entry : json["files"])
+  {
+    if (!entry.is_object() || !entry.contains("name") || !entry["name"].is_string())
+    {
+      throw FileError(seriesPath, "entry " + std::to_string(index) + " of \"files\" has no \"name\"");
+    }
+    Frame frame;
+    const fs::path name = entry["name"].get<std::string>();
+    frame.path = (name.is_absolute() ? name : base / name).string();
+    frame.time = static_cast<double>(index);
+    if (entry.contains("time"))
+    {
+      if (!entry["time"].is_number() || !std::isfinite(entry["time"].get<double>()))
+        throw FileError(seriesPath, "entry " + std::to_string(index) + " has a non-numeric \"time\"");
+      frame.time = entry["time"].get<double>();
+    }
+    sequence.Frames.push_back(frame);
+    ++index;
+  }
+  if (sequence.Frames.empty())
+  {
+    throw FileError(seriesPath, "the .series file lists no files");
+  }
+  // The pipeline needs increasing times: keep the file order, sorted by time.
+  std::stable_sort(sequence.Frames.begin(), sequence.Frames.end(),
+                   [](const Frame& a, const Frame& b) { return a.time < b.time; });
+  for (std::size_t i = 1; i < sequence.Frames.size(); ++i)
+  {
+    if (sequence.Frames[i].time == sequence.Frames[i - 1].time)
+      throw FileError(seriesPath, "two files share the time " +
+                                    std::to_string(sequence.Frames[i].time));
+  }
+  return sequence;
+}
+
+FrameSequence FrameSequence::fromFiles(const std::vector<std::string>& paths, double frameInterval)
+{
+  if (!(frameInterval > 0) || !std::isfinite(frameInterval))
+  {
+    throw std::invalid_argument("FrameInterval must be a positive number, got " +
+                                std::to_string(frameInterval));
+  }
+  FrameSequence sequence;
+  for (std::size_t i = 0; i < paths.size(); ++i)
+    sequence.Frames.push_back({paths[i], static_cast<double>(i) * frameInterval});
+  return sequence;
+}
+
+std::size_t FrameSequence::frameAtTime(double time) const
+{
+  if (Frames.empty())
+    return 0;
+  // A little slack so a time that lost its last bit on the way through the pipeline
+  // still selects its own frame.
+  time += 1e-9 * std::max(1.0, std::abs(time));
+  const auto it = std::upper_bound(Frames.begin(), Frames.end(), time,
+                                   [](double t, const Frame& f) { return t < f.time; });
+  if (it == Frames.begin())
+    return 0;
+  return static_cast<std::size_t>(it - Frames.begin()) - 1;
+}
+
+} // namespace dp

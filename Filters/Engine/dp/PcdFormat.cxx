@@ -1,0 +1,466 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PCD reader and writer (the Point Cloud Library's format, v0.7: ascii, binary,
+// binary_compressed).
+#include "dp/PointCloudIO.h"
+#include "dp/detail/FileText.h"
+
+#include <cstring>
+
+namespace dp
+{
+namespace
+{
+
+struct PcdField
+{
+  std::string name;
+  int size = 4;
+  char type = 'F'; // F float, I signed, U unsigned
+  int count = 1;
+  std::size_t offset = 0; // byte offset inside a binary record
+};
+
+double decodeField(const char* p, const PcdField& f)
+{
+  switch (f.type)
+  {
+    case 'F':
+      if (f.size == 4)
+      {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      }
+      else
+      {
+        double v;
+        std::memcpy(&v, p, 8);
+        return v;
+      }
+    case 'I':
+      switch (f.size)
+      {
+        case 1:
+          return static_cast<std::int8_t>(*p);
+        case 2:
+        {
+          std::int16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4:
+        {
+          std::int32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default:
+        {
+          std::int64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
+      }
+    default:
+      switch (f.size)
+      {
+        case 1:
+          return static_cast<std::uint8_t>(*p);
+        case 2:
+        {
+          std::uint16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4:
+        {
+          std::uint32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default:
+        {
+          std::uint64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
+      }
+  }
+}
+
+// LZF decompression (the codec PCL uses for binary_compressed); bounds-checked.
+bool lzfDecompress(const unsigned char* in, std::size_t inSize, unsigned char* out,
+                   std::size_t outSize)
+{
+  std::size_t ip = 0, op = 0;
+  while (ip < inSize)
+  {
+    unsigned ctrl = in[ip++];
+    if (ctrl < 32)
+    {
+      const std::size_t run = ctrl + 1;
+      if (ip + run > inSize || op + run > outSize)
+        return false;
+      std::memcpy(out + op, in + ip, run);
+      ip += run;
+      op += run;
+    }
+    else
+    {
+      std::size_t length = ctrl >> 5;
+      if (length == 7)
+      {
+        if (ip >= inSize)
+          return false;
+        length += in[ip++];
+      }
+      if (ip >= inSize)
+        return false;
+      const std::size_t back = ((ctrl & 0x1f) << 8) + in[ip++] + 1;
+      length += 2;
+      if (back > op || op + length > outSize)
+        return false;
+      for (std::size_t k = 0; k < length; ++k, ++op)
+        out[op] = out[op - back];
+    }
+  }
+  return op == outSize;
+}
+
+} // namespace
+
+PointCloud readPCD(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  std::string_view text(bytes);
+  std::string_view line;
+  std::vector<PcdField> fields;
+  std::size_t points = 0;
+  bool havePoints = false, haveWidth = false;
+  std::size_t width = 0, height = 1;
+  std::string data;
+  int lineNumber = 0;
+  auto fail = [&](const std::string& why)
+  { throw FileError(path, "PCD header line " + std::to_string(lineNumber) + ": " + why); };
+
+  while (data.empty())
+  {
+    if (!detail::nextLine(text, line))
+    {
+      throw FileError(path, "PCD header has no DATA line (not a PCD file, or truncated)");
+    }
+    ++lineNumber;
+    std::string_view rest = line;
+    const std::string keyword = detail::toLower(detail::nextToken(rest));
+    if (keyword.empty() || keyword[0] == '#')
+      continue;
+    std::vector<std::string_view> values;
+    for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
+      values.push_back(t);
+    auto numbers = [&](auto assign)
+    {
+      if (values.size() != fields.size())
+        fail(keyword + " has " + std::to_string(values.size()) + " entries for " +
+             std::to_string(fields.size()) + " fields");
+      for (std::size_t k = 0; k < values.size(); ++k)
+      {
+        double v = 0;
+        if (!detail::parseNumber(values[k], v) || v <= 0)
+          fail("bad " + keyword + " entry '" + std::string(values[k]) + "'");
+        assign(fields[k], static_cast<int>(v));
+      }
+    };
+    if (keyword == "version" || keyword == "viewpoint")
+      continue;
+    if (keyword == "fields")
+    {
+      for (auto v : values)
+        fields.push_back({std::string(v), 4, 'F', 1, 0});
+    }
+    else if (keyword == "size")
+    {
+      numbers([&](PcdField& f, int v) { f.size = v; });
+      for (auto& f : fields)
+        if (f.size != 1 && f.size != 2 && f.size != 4 && f.size != 8)
+          fail("unsupported field size " + std::to_string(f.size));
+    }
+    else if (keyword == "type")
+    {
+      if (values.size() != fields.size())
+        fail("TYPE does not match FIELDS");
+      for (std::size_t k = 0; k < values.size(); ++k)
+      {
+        fields[k].type = values[k].empty() ? '?' : values[k][0];
+        if (fields[k].type != 'F' && fields[k].type != 'I' && fields[k].type != 'U')
+          fail("unknown TYPE '" + std::string(values[k]) + "'");
+      }
+    }
+    else if (keyword == "count")
+      numbers([&](PcdField& f, int v) { f.count = v; });
+    else if (keyword == "width" || keyword == "height" || keyword == "points")
+    {
+      double v = -1;
+      if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0)
+        fail("bad " + keyword + " value");
+      const auto count = static_cast<std::size_t>(v);
+      if (keyword == "width")
+        width = count, haveWidth = true;
+      else if (keyword == "height")
+        height = count;
+      else
+        points = count, havePoints = true;
+    }
+    else if (keyword == "data")
+    {
+      data = values.empty() ? "?" : detail::toLower(values[0]);
+    }
+    else
+      fail("unknown keyword '" + keyword + "'");
+  }
+  if (!havePoints)
+  {
+    if (!haveWidth)
+      throw FileError(path, "PCD header has neither POINTS nor WIDTH");
+    points = width * height;
+  }
+  if (fields.empty())
+    throw FileError(path, "PCD header has no FIELDS");
+
+  std::size_t recordSize = 0;
+  int xyz[3] = {-1, -1, -1}, normal[3] = {-1, -1, -1}, rgb = -1;
+  for (std::size_t k = 0; k < fields.size(); ++k)
+  {
+    PcdField& f = fields[k];
+    if (f.type == 'F' && f.size != 4 && f.size != 8)
+      throw FileError(path, "PCD field '" + f.name + "' is a float of size " +
+                              std::to_string(f.size));
+    f.offset = recordSize;
+    recordSize += static_cast<std::size_t>(f.size) * f.count;
+    const std::string& n = f.name;
+    const int i = static_cast<int>(k);
+    if (n == "x" || n == "y" || n == "z")
+      xyz[n[0] - 'x'] = i;
+    else if (n == "normal_x" || n == "normal_y" || n == "normal_z")
+      normal[n.back() - 'x'] = i;
+    else if (n == "rgb" || n == "rgba")
+      rgb = i;
+  }
+  if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
+    throw FileError(path, "PCD file lacks one of the fields x, y, z");
+
+  // Gather every value as double in point-major order (value v of field k of point i).
+  std::vector<std::size_t> firstValue(fields.size());
+  std::size_t valuesPerPoint = 0;
+  for (std::size_t k = 0; k < fields.size(); ++k)
+  {
+    firstValue[k] = valuesPerPoint;
+    valuesPerPoint += fields[k].count;
+  }
+  std::vector<double> values(points * valuesPerPoint);
+  const std::string_view body = text;
+  auto truncatedError = [&](std::size_t got)
+  {
+    throw FileError(path, "PCD data ends early (truncated file): the header declares " +
+                            std::to_string(points) + " points but the data holds " +
+                            std::to_string(got));
+  };
+  std::vector<std::uint32_t> packedColor(rgb >= 0 ? points : 0);
+
+  if (data == "ascii")
+  {
+    std::string_view cursor = body;
+    for (std::size_t i = 0; i < points; ++i)
+    {
+      for (std::size_t k = 0; k < fields.size(); ++k)
+      {
+        for (int c = 0; c < fields[k].count; ++c)
+        {
+          const std::string_view token = detail::nextToken(cursor);
+          if (token.empty())
+            truncatedError(i);
+          double v = 0;
+          if (!detail::parseNumber(token, v))
+            throw FileError(path, "PCD point " + std::to_string(i) + ": '" + std::string(token) +
+                                    "' is not a number");
+          values[i * valuesPerPoint + firstValue[k] + c] = v;
+          if (static_cast<int>(k) == rgb && c == 0)
+          {
+            // PCL writes rgb as the float whose bits are 0x00RRGGBB (or as an integer).
+            if (fields[k].type == 'F')
+            {
+              const float asFloat = static_cast<float>(v);
+              std::memcpy(&packedColor[i], &asFloat, 4);
+            }
+            else
+              packedColor[i] = static_cast<std::uint32_t>(v);
+          }
+        }
+      }
+    }
+  }
+  else if (data == "binary" || data == "binary_compressed")
+  {
+    std::string decompressed;
+    const char* raw = body.data();
+    bool fieldMajor = false;
+    if (data == "binary")
+    {
+      if (body.size() < points * recordSize)
+        truncatedError(recordSize ? body.size() / recordSize : 0);
+    }
+    else
+    {
+      std::uint32_t sizes[2];
+      if (body.size() < 8)
+        throw FileError(path, "PCD binary_compressed data ends before its size fields");
+      std::memcpy(sizes, body.data(), 8);
+      if (sizes[1] != points * recordSize)
+        throw FileError(path, "PCD binary_compressed: uncompressed size " +
+                                std::to_string(sizes[1]) + " does not match " +
+                                std::to_string(points) + " points of " +
+                                std::to_string(recordSize) + " bytes");
+      if (body.size() - 8 < sizes[0])
+        throw FileError(path, "PCD binary_compressed data ends early (truncated file)");
+      decompressed.resize(sizes[1]);
+      if (!lzfDecompress(reinterpret_cast<const unsigned char*>(body.data()) + 8, sizes[0],
+                         reinterpret_cast<unsigned char*>(decompressed.data()), sizes[1]))
+        throw FileError(path, "PCD binary_compressed data is corrupt (LZF stream invalid)");
+      raw = decompressed.data();
+      fieldMajor = true; // compressed PCD stores all values of field 0, then field 1, ...
+    }
+    std::size_t fieldStart = 0;
+    for (std::size_t k = 0; k < fields.size(); ++k)
+    {
+      const PcdField& f = fields[k];
+      for (std::size_t i = 0; i < points; ++i)
+      {
+        const char* base = fieldMajor ? raw + fieldStart + i * f.size * f.count
+                                      : raw + i * recordSize + f.offset;
+        for (int c = 0; c < f.count; ++c)
+        {
+          values[i * valuesPerPoint + firstValue[k] + c] = decodeField(base + c * f.size, f);
+        }
+        if (static_cast<int>(k) == rgb)
+          std::memcpy(&packedColor[i], base, 4);
+      }
+      fieldStart += points * f.size * f.count;
+    }
+  }
+  else
+  {
+    throw FileError(path, "PCD DATA '" + data + "' is not ascii, binary or binary_compressed");
+  }
+
+  PointCloud cloud;
+  cloud.points.resize(3 * points);
+  const bool hasNormals = normal[0] >= 0 && normal[1] >= 0 && normal[2] >= 0;
+  if (hasNormals)
+    cloud.normals.resize(3 * points);
+  if (rgb >= 0)
+  {
+    cloud.colorComponents = fields[rgb].name == "rgba" ? 4 : 3;
+    cloud.colors.resize(cloud.colorComponents * points);
+  }
+  for (std::size_t k = 0; k < fields.size(); ++k)
+  {
+    const int i = static_cast<int>(k);
+    const bool known = i == xyz[0] || i == xyz[1] || i == xyz[2] || i == rgb ||
+                       (hasNormals && (i == normal[0] || i == normal[1] || i == normal[2]));
+    if (!known && fields[k].name != "_")
+      cloud.attributes.push_back({fields[k].name, fields[k].count, {}});
+  }
+  for (std::size_t i = 0; i < points; ++i)
+  {
+    const double* v = &values[i * valuesPerPoint];
+    for (int c = 0; c < 3; ++c)
+      cloud.points[3 * i + c] = v[firstValue[xyz[c]]];
+    if (hasNormals)
+      for (int c = 0; c < 3; ++c)
+        cloud.normals[3 * i + c] = static_cast<float>(v[firstValue[normal[c]]]);
+    if (rgb >= 0)
+    {
+      const std::uint32_t packed = packedColor[i];
+      std::uint8_t* out = &cloud.colors[cloud.colorComponents * i];
+      out[0] = static_cast<std::uint8_t>((packed >> 16) & 0xff);
+      out[1] = static_cast<std::uint8_t>((packed >> 8) & 0xff);
+      out[2] = static_cast<std::uint8_t>(packed & 0xff);
+      if (cloud.colorComponents == 4)
+        out[3] = static_cast<std::uint8_t>((packed >> 24) & 0xff);
+    }
+  }
+  for (auto& a : cloud.attributes)
+  {
+    std::size_t k = 0;
+    while (fields[k].name != a.name)
+      ++k;
+    a.values.resize(points * a.components);
+    for (std::size_t i = 0; i < points; ++i)
+      for (int c = 0; c < a.components; ++c)
+        a.values[i * a.components + c] =
+          static_cast<float>(values[i * valuesPerPoint + firstValue[k] + c]);
+  }
+  return cloud;
+}
+
+void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
+{
+  cloud.validate();
+  const std::size_t n = cloud.numberOfPoints();
+  std::string fieldsLine = "x y z", sizeLine = "4 4 4", typeLine = "F F F", countLine = "1 1 1";
+  if (cloud.hasNormals())
+  {
+    fieldsLine += " normal_x normal_y normal_z";
+    sizeLine += " 4 4 4";
+    typeLine += " F F F";
+    countLine += " 1 1 1";
+  }
+  if (cloud.hasColors())
+  {
+    fieldsLine += " rgb";
+    sizeLine += " 4";
+    typeLine += " F";
+    countLine += " 1";
+  }
+  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " +
+                    fieldsLine + "\nSIZE " + sizeLine + "\nTYPE " + typeLine + "\nCOUNT " +
+                    countLine + "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\n" +
+                    "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
+                    (binary ? "binary" : "ascii") + "\n";
+  auto put = [&](float v)
+  {
+    if (binary)
+    {
+      char b[4];
+      std::memcpy(b, &v, 4);
+      out.append(b, 4);
+    }
+    else
+    {
+      char buffer[32];
+      const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
+      out.append(buffer, r.ptr);
+      out += ' ';
+    }
+  };
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+      put(static_cast<float>(cloud.points[3 * i + c]));
+    if (cloud.hasNormals())
+      for (int c = 0; c < 3; ++c)
+        put(cloud.normals[3 * i + c]);
+    if (cloud.hasColors())
+    {
+      const std::uint8_t* c = &cloud.colors[cloud.colorComponents * i];
+      const std::uint32_t packed = (std::uint32_t(c[0]) << 16) | (std::uint32_t(c[1]) << 8) | c[2];
+      float asFloat;
+      std::memcpy(&asFloat, &packed, 4);
+      put(asFloat);
+    }
+    if (!binary)
+      out.back() = '\n';
+  }
+  detail::writeWholeFile(path, out);
+}
+
+} // namespace dp

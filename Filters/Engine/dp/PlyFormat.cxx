@@ -1,0 +1,674 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PLY reader and writer (Turk's format: ASCII, binary little and big endian).
+#include "dp/PointCloudIO.h"
+#include "dp/detail/FileText.h"
+
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+namespace dp
+{
+namespace
+{
+
+enum class PlyType
+{
+  Int8,
+  UInt8,
+  Int16,
+  UInt16,
+  Int32,
+  UInt32,
+  Float32,
+  Float64
+};
+
+std::optional<PlyType> parsePlyType(std::string_view name)
+{
+  if (name == "char" || name == "int8")
+    return PlyType::Int8;
+  if (name == "uchar" || name == "uint8")
+    return PlyType::UInt8;
+  if (name == "short" || name == "int16")
+    return PlyType::Int16;
+  if (name == "ushort" || name == "uint16")
+    return PlyType::UInt16;
+  if (name == "int" || name == "int32")
+    return PlyType::Int32;
+  if (name == "uint" || name == "uint32")
+    return PlyType::UInt32;
+  if (name == "float" || name == "float32")
+    return PlyType::Float32;
+  if (name == "double" || name == "float64")
+    return PlyType::Float64;
+  return std::nullopt;
+}
+
+std::size_t sizeOf(PlyType t)
+{
+  switch (t)
+  {
+    case PlyType::Int8:
+    case PlyType::UInt8:
+      return 1;
+    case PlyType::Int16:
+    case PlyType::UInt16:
+      return 2;
+    case PlyType::Int32:
+    case PlyType::UInt32:
+    case PlyType::Float32:
+      return 4;
+    case PlyType::Float64:
+      return 8;
+  }
+  return 0;
+}
+
+template <typename T>
+T loadSwapped(const char* p, bool swap)
+{
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, p, sizeof(T));
+  if (swap)
+  {
+    std::reverse(bytes, bytes + sizeof(T));
+  }
+  T value;
+  std::memcpy(&value, bytes, sizeof(T));
+  return value;
+}
+
+double decode(const char* p, PlyType t, bool swap)
+{
+  switch (t)
+  {
+    case PlyType::Int8:
+      return static_cast<std::int8_t>(*p);
+    case PlyType::UInt8:
+      return static_cast<std::uint8_t>(*p);
+    case PlyType::Int16:
+      return loadSwapped<std::int16_t>(p, swap);
+    case PlyType::UInt16:
+      return loadSwapped<std::uint16_t>(p, swap);
+    case PlyType::Int32:
+      return loadSwapped<std::int32_t>(p, swap);
+    case PlyType::UInt32:
+      return loadSwapped<std::uint32_t>(p, swap);
+    case PlyType::Float32:
+      return loadSwapped<float>(p, swap);
+    case PlyType::Float64:
+      return loadSwapped<double>(p, swap);
+  }
+  return 0.0;
+}
+
+struct PlyProperty
+{
+  std::string name;
+  PlyType type = PlyType::Float32;
+  bool isList = false;
+  PlyType countType = PlyType::UInt8;
+};
+
+struct PlyElement
+{
+  std::string name;
+  std::size_t count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+// Where a vertex property goes in the PointCloud.
+enum class Slot
+{
+  Skip,
+  X,
+  Y,
+  Z,
+  NX,
+  NY,
+  NZ,
+  Red,
+  Green,
+  Blue,
+  Alpha,
+  Attribute
+};
+
+Slot slotFor(const std::string& name)
+{
+  static const std::pair<const char*, Slot> names[] = {
+    {"x", Slot::X},         {"y", Slot::Y},          {"z", Slot::Z},
+    {"nx", Slot::NX},       {"ny", Slot::NY},        {"nz", Slot::NZ},
+    {"normal_x", Slot::NX}, {"normal_y", Slot::NY},  {"normal_z", Slot::NZ},
+    {"red", Slot::Red},     {"green", Slot::Green},  {"blue", Slot::Blue},
+    {"alpha", Slot::Alpha}, {"diffuse_red", Slot::Red}, {"diffuse_green", Slot::Green},
+    {"diffuse_blue", Slot::Blue}};
+  for (const auto& [n, s] : names)
+  {
+    if (name == n)
+    {
+      return s;
+    }
+  }
+  return Slot::Attribute;
+}
+
+enum class Encoding
+{
+  Ascii,
+  Little,
+  Big
+};
+
+struct PlyHeader
+{
+  Encoding encoding = Encoding::Ascii;
+  std::vector<PlyElement> elements;
+  std::size_t bodyOffset = 0;
+};
+
+PlyHeader parseHeader(const std::string& path, const std::string& bytes)
+{
+  PlyHeader header;
+  std::string_view text(bytes);
+  std::string_view line;
+  if (!detail::nextLine(text, line) || line.substr(0, 3) != "ply")
+  {
+    throw FileError(path, "not a PLY file (it does not start with 'ply')");
+  }
+  bool sawFormat = false;
+  int lineNumber = 1;
+  while (true)
+  {
+    if (!detail::nextLine(text, line))
+    {
+      throw FileError(path, "PLY header has no 'end_header' line (file truncated?)");
+    }
+    ++lineNumber;
+    std::string_view rest = line;
+    const std::string_view keyword = detail::nextToken(rest);
+    auto fail = [&](const std::string& why)
+    { throw FileError(path, "PLY header line " + std::to_string(lineNumber) + ": " + why); };
+    if (keyword == "end_header")
+    {
+      break;
+    }
+    if (keyword.empty() || keyword == "comment" || keyword == "obj_info")
+    {
+      continue;
+    }
+    if (keyword == "format")
+    {
+      const std::string_view kind = detail::nextToken(rest);
+      if (kind == "ascii")
+        header.encoding = Encoding::Ascii;
+      else if (kind == "binary_little_endian")
+        header.encoding = Encoding::Little;
+      else if (kind == "binary_big_endian")
+        header.encoding = Encoding::Big;
+      else
+        fail("unknown format '" + std::string(kind) + "'");
+      sawFormat = true;
+    }
+    else if (keyword == "element")
+    {
+      PlyElement element;
+      element.name = std::string(detail::nextToken(rest));
+      double count = -1;
+      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) ||
+          count < 0)
+      {
+        fail("malformed element line '" + std::string(line) + "'");
+      }
+      element.count = static_cast<std::size_t>(count);
+      header.elements.push_back(std::move(element));
+    }
+    else if (keyword == "property")
+    {
+      if (header.elements.empty())
+      {
+        fail("property before any element");
+      }
+      PlyProperty property;
+      std::string_view typeName = detail::nextToken(rest);
+      if (typeName == "list")
+      {
+        property.isList = true;
+        const auto countType = parsePlyType(detail::nextToken(rest));
+        typeName = detail::nextToken(rest);
+        if (!countType)
+        {
+          fail("unknown list count type in '" + std::string(line) + "'");
+        }
+        property.countType = *countType;
+      }
+      const auto type = parsePlyType(typeName);
+      if (!type)
+      {
+        fail("unknown property type '" + std::string(typeName) + "'");
+      }
+      property.type = *type;
+      property.name = std::string(detail::nextToken(rest));
+      if (property.name.empty())
+      {
+        fail("property without a name");
+      }
+      header.elements.back().properties.push_back(property);
+    }
+    else
+    {
+      fail("unknown keyword '" + std::string(keyword) + "'");
+    }
+  }
+  if (!sawFormat)
+  {
+    throw FileError(path, "PLY header has no 'format' line");
+  }
+  header.bodyOffset = bytes.size() - text.size();
+  return header;
+}
+
+// Reads values one at a time from either encoding, reporting truncation with context.
+class BodyReader
+{
+public:
+  BodyReader(const std::string& path, const std::string& bytes, const PlyHeader& header)
+    : Path(path)
+    , Body(std::string_view(bytes).substr(header.bodyOffset))
+    , Mode(header.encoding)
+  {
+  }
+
+  // Returns false when the data ran out (truncated file).
+  bool read(PlyType type, double& value)
+  {
+    if (Mode == Encoding::Ascii)
+    {
+      const std::string_view token = detail::nextToken(Body);
+      if (token.empty())
+      {
+        return false;
+      }
+      if (!detail::parseNumber(token, value))
+      {
+        throw FileError(Path, "PLY body: '" + std::string(token) + "' is not a number");
+      }
+      return true;
+    }
+    const std::size_t size = sizeOf(type);
+    if (Body.size() < size)
+    {
+      return false;
+    }
+    value = decode(Body.data(), type, Mode == Encoding::Big);
+    Body.remove_prefix(size);
+    return true;
+  }
+
+  bool isBinary() const { return Mode != Encoding::Ascii; }
+  std::size_t remaining() const { return Body.size(); }
+  const char* cursor() const { return Body.data(); }
+  void advance(std::size_t n) { Body.remove_prefix(n); }
+
+private:
+  std::string Path;
+  std::string_view Body;
+  Encoding Mode;
+};
+
+[[noreturn]] void truncated(const std::string& path, const PlyElement& element, std::size_t item)
+{
+  throw FileError(path, "PLY data ends early (truncated file): the header declares " +
+                          std::to_string(element.count) + " '" + element.name +
+                          "' elements but the data stops inside number " +
+                          std::to_string(item + 1));
+}
+
+void readVertices(const std::string& path, const PlyElement& element, BodyReader& reader,
+                  PointCloud& cloud)
+{
+  std::vector<Slot> slots;
+  std::vector<int> attributeIndex(element.properties.size(), -1);
+  bool hasXYZ[3] = {false, false, false};
+  bool hasNormal = false;
+  int colorCount = 0;
+  bool colorIsFloat = false;
+  for (std::size_t p = 0; p < element.properties.size(); ++p)
+  {
+    const PlyProperty& prop = element.properties[p];
+    Slot slot = prop.isList ? Slot::Skip : slotFor(prop.name);
+    if (slot >= Slot::X && slot <= Slot::Z)
+      hasXYZ[static_cast<int>(slot) - static_cast<int>(Slot::X)] = true;
+    if (slot >= Slot::NX && slot <= Slot::NZ)
+      hasNormal = true;
+    if (slot >= Slot::Red && slot <= Slot::Alpha)
+    {
+      ++colorCount;
+      colorIsFloat = colorIsFloat || prop.type == PlyType::Float32 || prop.type == PlyType::Float64;
+    }
+    if (slot == Slot::Attribute)
+    {
+      attributeIndex[p] = static_cast<int>(cloud.attributes.size());
+      cloud.attributes.push_back({prop.name, 1, {}});
+    }
+    slots.push_back(slot);
+  }
+  if (!hasXYZ[0] || !hasXYZ[1] || !hasXYZ[2])
+  {
+    throw FileError(path, "PLY 'vertex' element lacks one of the properties x, y, z");
+  }
+  const std::size_t n = element.count;
+  cloud.points.assign(3 * n, 0.0);
+  if (hasNormal)
+    cloud.normals.assign(3 * n, 0.0f);
+  if (colorCount >= 3)
+  {
+    cloud.colorComponents = colorCount >= 4 ? 4 : 3;
+    cloud.colors.assign(cloud.colorComponents * n, 255);
+  }
+  for (auto& a : cloud.attributes)
+    a.values.resize(n);
+
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (std::size_t p = 0; p < element.properties.size(); ++p)
+    {
+      const PlyProperty& prop = element.properties[p];
+      double value = 0;
+      if (prop.isList)
+      {
+        if (!reader.read(prop.countType, value))
+          truncated(path, element, i);
+        for (std::size_t k = 0, len = static_cast<std::size_t>(value); k < len; ++k)
+          if (!reader.read(prop.type, value))
+            truncated(path, element, i);
+        continue;
+      }
+      if (!reader.read(prop.type, value))
+        truncated(path, element, i);
+      const Slot slot = slots[p];
+      switch (slot)
+      {
+        case Slot::X:
+        case Slot::Y:
+        case Slot::Z:
+          cloud.points[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::X)] = value;
+          break;
+        case Slot::NX:
+        case Slot::NY:
+        case Slot::NZ:
+          cloud.normals[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::NX)] =
+            static_cast<float>(value);
+          break;
+        case Slot::Red:
+        case Slot::Green:
+        case Slot::Blue:
+        case Slot::Alpha:
+        {
+          const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
+          if (c < cloud.colorComponents)
+          {
+            const double scaled = colorIsFloat ? value * 255.0 : value;
+            cloud.colors[cloud.colorComponents * i + c] =
+              static_cast<std::uint8_t>(std::clamp(scaled + (colorIsFloat ? 0.5 : 0.0), 0.0, 255.0));
+          }
+          break;
+        }
+        case Slot::Attribute:
+          cloud.attributes[attributeIndex[p]].values[i] = static_cast<float>(value);
+          break;
+        case Slot::Skip:
+          break;
+      }
+    }
+  }
+  if (colorCount > 0 && colorCount < 3)
+  {
+    cloud.colorComponents = 0;
+  }
+}
+
+void readFaces(const std::string& path, const PlyElement& element, BodyReader& reader,
+               PointCloud& cloud)
+{
+  int indexProperty = -1;
+  for (std::size_t p = 0; p < element.properties.size(); ++p)
+  {
+    const auto& name = element.properties[p].name;
+    if (element.properties[p].isList && (name == "vertex_indices" || name == "vertex_index"))
+      indexProperty = static_cast<int>(p);
+  }
+  if (indexProperty < 0)
+  {
+    throw FileError(path, "PLY 'face' element has no 'vertex_indices' list property");
+  }
+  cloud.faceOffsets.reserve(element.count + 1);
+  cloud.faceOffsets.push_back(0);
+  cloud.faceConnectivity.reserve(3 * element.count);
+  const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
+  for (std::size_t f = 0; f < element.count; ++f)
+  {
+    for (std::size_t p = 0; p < element.properties.size(); ++p)
+    {
+      const PlyProperty& prop = element.properties[p];
+      double value = 0;
+      if (!prop.isList)
+      {
+        if (!reader.read(prop.type, value))
+          truncated(path, element, f);
+        continue;
+      }
+      if (!reader.read(prop.countType, value))
+        truncated(path, element, f);
+      const auto length = static_cast<std::size_t>(value);
+      for (std::size_t k = 0; k < length; ++k)
+      {
+        if (!reader.read(prop.type, value))
+          truncated(path, element, f);
+        if (static_cast<int>(p) == indexProperty)
+        {
+          if (value < 0 || value >= numberOfPoints)
+          {
+            throw FileError(path, "PLY face " + std::to_string(f) + " uses vertex " +
+                                    std::to_string(static_cast<long long>(value)) +
+                                    ", but there are only " +
+                                    std::to_string(cloud.numberOfPoints()) + " vertices");
+          }
+          cloud.faceConnectivity.push_back(static_cast<std::int64_t>(value));
+        }
+      }
+    }
+    cloud.faceOffsets.push_back(static_cast<std::int64_t>(cloud.faceConnectivity.size()));
+  }
+  if (element.count == 0)
+  {
+    cloud.faceOffsets.clear();
+  }
+}
+
+// Binary fast path for the common vertex layout: fixed-size records, no lists.
+bool fixedRecordSize(const PlyElement& element, std::size_t& size)
+{
+  size = 0;
+  for (const auto& p : element.properties)
+  {
+    if (p.isList)
+      return false;
+    size += sizeOf(p.type);
+  }
+  return true;
+}
+
+void skipElement(const std::string& path, const PlyElement& element, BodyReader& reader)
+{
+  std::size_t record = 0;
+  if (reader.isBinary() && fixedRecordSize(element, record))
+  {
+    if (reader.remaining() < record * element.count)
+      truncated(path, element, reader.remaining() / std::max<std::size_t>(record, 1));
+    reader.advance(record * element.count);
+    return;
+  }
+  for (std::size_t i = 0; i < element.count; ++i)
+  {
+    for (const auto& prop : element.properties)
+    {
+      double value = 0;
+      if (!reader.read(prop.isList ? prop.countType : prop.type, value))
+        truncated(path, element, i);
+      if (prop.isList)
+        for (std::size_t k = 0, len = static_cast<std::size_t>(value); k < len; ++k)
+          if (!reader.read(prop.type, value))
+            truncated(path, element, i);
+    }
+  }
+}
+
+} // namespace
+
+PointCloud readPLY(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  const PlyHeader header = parseHeader(path, bytes);
+  BodyReader reader(path, bytes, header);
+  PointCloud cloud;
+  bool sawVertex = false;
+  for (const PlyElement& element : header.elements)
+  {
+    std::size_t record = 0;
+    if (element.name == "vertex")
+    {
+      // Check the byte count up front so a truncated binary file fails before any parsing.
+      if (reader.isBinary() && fixedRecordSize(element, record) &&
+          reader.remaining() < record * element.count)
+      {
+        truncated(path, element, reader.remaining() / std::max<std::size_t>(record, 1));
+      }
+      readVertices(path, element, reader, cloud);
+      sawVertex = true;
+    }
+    else if (element.name == "face" && sawVertex)
+    {
+      readFaces(path, element, reader, cloud);
+    }
+    else
+    {
+      skipElement(path, element, reader);
+    }
+  }
+  if (!sawVertex)
+  {
+    throw FileError(path, "PLY file has no 'vertex' element");
+  }
+  return cloud;
+}
+
+namespace
+{
+
+template <typename T>
+void appendValue(std::string& out, T value, PlyEncoding encoding)
+{
+  if (encoding == PlyEncoding::Ascii)
+  {
+    if constexpr (std::is_floating_point_v<T>)
+    {
+      char buffer[32];
+      const auto r = std::to_chars(buffer, buffer + sizeof(buffer), value);
+      out.append(buffer, r.ptr);
+    }
+    else
+    {
+      out += std::to_string(value);
+    }
+    out += ' ';
+    return;
+  }
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (encoding == PlyEncoding::BinaryBigEndian)
+  {
+    std::reverse(bytes, bytes + sizeof(T));
+  }
+  out.append(bytes, sizeof(T));
+}
+
+} // namespace
+
+void writePLY(const std::string& path, const PointCloud& cloud, PlyEncoding encoding)
+{
+  cloud.validate();
+  const std::size_t n = cloud.numberOfPoints();
+  std::string out = "ply\nformat ";
+  out += encoding == PlyEncoding::Ascii              ? "ascii"
+         : encoding == PlyEncoding::BinaryBigEndian ? "binary_big_endian"
+                                                    : "binary_little_endian";
+  out += " 1.0\ncomment written by DynamicPoints\n";
+  out += "element vertex " + std::to_string(n) + "\n";
+  out += "property float x\nproperty float y\nproperty float z\n";
+  if (cloud.hasNormals())
+    out += "property float nx\nproperty float ny\nproperty float nz\n";
+  if (cloud.hasColors())
+  {
+    out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+    if (cloud.colorComponents == 4)
+      out += "property uchar alpha\n";
+  }
+  for (const auto& a : cloud.attributes)
+  {
+    for (int c = 0; c < a.components; ++c)
+    {
+      out += "property float " + a.name + (a.components > 1 ? "_" + std::to_string(c) : "") + "\n";
+    }
+  }
+  if (cloud.numberOfFaces() > 0)
+  {
+    out += "element face " + std::to_string(cloud.numberOfFaces()) + "\n";
+    out += "property list uchar int vertex_indices\n";
+  }
+  out += "end_header\n";
+  out.reserve(out.size() + n * 40 + cloud.faceConnectivity.size() * 5);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    for (int k = 0; k < 3; ++k)
+      appendValue(out, static_cast<float>(cloud.points[3 * i + k]), encoding);
+    if (cloud.hasNormals())
+      for (int k = 0; k < 3; ++k)
+        appendValue(out, cloud.normals[3 * i + k], encoding);
+    if (cloud.hasColors())
+      for (int k = 0; k < cloud.colorComponents; ++k)
+      {
+        const std::uint8_t c = cloud.colors[cloud.colorComponents * i + k];
+        if (encoding == PlyEncoding::Ascii)
+          appendValue(out, static_cast<int>(c), encoding);
+        else
+          out += static_cast<char>(c);
+      }
+    for (const auto& a : cloud.attributes)
+      for (int c = 0; c < a.components; ++c)
+        appendValue(out, a.values[a.components * i + c], encoding);
+    if (encoding == PlyEncoding::Ascii)
+      out.back() = '\n';
+  }
+  for (std::size_t f = 0; f < cloud.numberOfFaces(); ++f)
+  {
+    const auto begin = cloud.faceOffsets[f];
+    const auto count = cloud.faceOffsets[f + 1] - begin;
+    if (count > 255)
+    {
+      throw FileError(path, "cannot write a PLY face with more than 255 vertices");
+    }
+    if (encoding == PlyEncoding::Ascii)
+      appendValue(out, static_cast<int>(count), encoding);
+    else
+      out += static_cast<char>(count);
+    for (std::int64_t k = 0; k < count; ++k)
+      appendValue(out, static_cast<std::int32_t>(cloud.faceConnectivity[begin + k]), encoding);
+    if (encoding == PlyEncoding::Ascii)
+      out.back() = '\n';
+  }
+  detail::writeWholeFile(path, out);
+}
+
+} // namespace dp

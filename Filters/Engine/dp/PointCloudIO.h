@@ -1,0 +1,83 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file PointCloudIO.h
+ * @brief Readers and writers for the point-cloud formats the engine parses itself.
+ *
+ * Formats: PLY (ASCII, binary little and big endian; vertices with any scalar properties,
+ * normals nx/ny/nz, colours red/green/blue[/alpha], faces), PCD (ASCII and binary as PCL
+ * writes it, with packed `rgb`/`rgba`), plain text (XYZ, PTS, CSV, TXT: x y z [nx ny nz],
+ * optional header line naming the columns) and OBJ (v, vn, f; point-only files too).
+ * VTK's own formats (.vtp, .vtu, .vtk) are read by the VTK layer with VTK's readers.
+ *
+ * Every reader reads the whole file with one system call, checks it against its header
+ * (a truncated binary body, a short ASCII body, an index out of range are errors) and throws
+ * dp::FileError whose message starts with the file name. Non-finite coordinates are not
+ * errors: readPointCloud() drops them and counts them in the report.
+ */
+#pragma once
+
+#include "dp/PointCloud.h"
+
+#include <string>
+
+namespace dp
+{
+
+enum class PointFileFormat
+{
+  Unknown,
+  PLY,
+  PCD,
+  Text, // .xyz .pts .csv .txt
+  OBJ,
+  VTKXMLPolyData,         // .vtp
+  VTKXMLUnstructuredGrid, // .vtu
+  VTKLegacy               // .vtk
+};
+
+/** The format implied by the file name's extension (case-insensitive). */
+PointFileFormat formatFromFileName(const std::string& path);
+
+/** True for the formats readPointCloud() parses (not the VTK formats, not Unknown). */
+bool isEngineFormat(PointFileFormat format);
+
+/** The extensions readable by the product, without dots: "ply", "pcd", ... */
+const char* const* supportedExtensions();
+
+struct ReadReport
+{
+  std::size_t droppedNonFinite = 0; // points removed because a coordinate was NaN or Inf
+};
+
+/** Reads any engine format (by extension); drops non-finite points (counted in report). */
+PointCloud readPointCloud(const std::string& path, ReadReport* report = nullptr);
+
+PointCloud readPLY(const std::string& path);
+PointCloud readPCD(const std::string& path);
+PointCloud readTextPoints(const std::string& path);
+PointCloud readOBJ(const std::string& path);
+
+enum class PlyEncoding
+{
+  Ascii,
+  BinaryLittleEndian,
+  BinaryBigEndian
+};
+
+/** Writes float32 vertices (+ normals, colours, attributes) and int32 faces. */
+void writePLY(const std::string& path, const PointCloud& cloud,
+              PlyEncoding encoding = PlyEncoding::BinaryLittleEndian);
+
+/** Writes PCD v0.7 fields x y z [normal_x normal_y normal_z] [rgb], ASCII or binary. */
+void writePCD(const std::string& path, const PointCloud& cloud, bool binary = true);
+
+/** Writes "x y z [nx ny nz]" lines (space separated; comma separated for a .csv name). */
+void writeTextPoints(const std::string& path, const PointCloud& cloud);
+
+/** Writes v [vn] and f lines. */
+void writeOBJ(const std::string& path, const PointCloud& cloud);
+
+/** Writes in the format the extension names (binary PLY, binary PCD, text, OBJ). */
+void writePointCloud(const std::string& path, const PointCloud& cloud);
+
+} // namespace dp

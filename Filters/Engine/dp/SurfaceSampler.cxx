@@ -1,0 +1,244 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/SurfaceSampler.h"
+
+#include "dp/PointCloudIO.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <stdexcept>
+
+namespace fs = std::filesystem;
+
+namespace dp
+{
+namespace
+{
+
+// Deterministic random numbers: std::mt19937_64's sequence is fixed by the standard, and the
+// conversions below are our own (the standard distributions are implementation-defined).
+class Random
+{
+public:
+  Random(std::uint64_t seed, std::uint64_t stream)
+    : Engine(mix(seed ^ mix(stream + 0x9E3779B97F4A7C15ULL)))
+  {
+  }
+  double uniform() { return static_cast<double>(Engine() >> 11) * 0x1.0p-53; } // [0,1)
+  double gaussian()
+  {
+    // Box-Muller; 1 - u keeps the logarithm's argument in (0,1].
+    const double u = 1.0 - uniform(), v = uniform();
+    return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * v);
+  }
+
+private:
+  static std::uint64_t mix(std::uint64_t x) // SplitMix64 finaliser
+  {
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
+    return x ^ (x >> 31);
+  }
+  std::mt19937_64 Engine;
+};
+
+struct Vec3
+{
+  double x, y, z;
+};
+Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec3 cross(Vec3 a, Vec3 b)
+{
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+double norm(Vec3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
+
+Vec3 vertex(const std::vector<double>& p, std::int64_t i) { return {p[3 * i], p[3 * i + 1], p[3 * i + 2]}; }
+
+// A point on the surface: triangle index and barycentric weights of its corners.
+struct SurfacePoint
+{
+  std::size_t triangle;
+  double w0, w1, w2;
+};
+
+class AreaTable
+{
+public:
+  AreaTable(const std::vector<double>& positions, const std::vector<std::int64_t>& triangles)
+  {
+    const auto nv = static_cast<std::int64_t>(positions.size() / 3);
+    double total = 0;
+    Cumulative.reserve(triangles.size() / 3);
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+    {
+      for (int k = 0; k < 3; ++k)
+        if (triangles[t + k] < 0 || triangles[t + k] >= nv)
+          throw std::invalid_argument("triangle " + std::to_string(t / 3) +
+                                      " uses a vertex index out of range");
+      const Vec3 a = vertex(positions, triangles[t]), b = vertex(positions, triangles[t + 1]),
+                 c = vertex(positions, triangles[t + 2]);
+      total += 0.5 * norm(cross(b - a, c - a));
+      Cumulative.push_back(total);
+    }
+    if (!(total > 0) || !std::isfinite(total))
+      throw std::invalid_argument("the mesh has no surface area to sample");
+  }
+  SurfacePoint draw(Random& random) const
+  {
+    const double target = random.uniform() * Cumulative.back();
+    const auto it = std::upper_bound(Cumulative.begin(), Cumulative.end(), target);
+    const std::size_t t = std::min<std::size_t>(it - Cumulative.begin(), Cumulative.size() - 1);
+    // Uniform in the triangle: the square-root warp of two uniforms.
+    const double r1 = std::sqrt(random.uniform()), r2 = random.uniform();
+    return {t, 1 - r1, r1 * (1 - r2), r1 * r2};
+  }
+
+private:
+  std::vector<double> Cumulative;
+};
+
+Vec3 evaluate(const std::vector<double>& field, const std::vector<std::int64_t>& triangles,
+              const SurfacePoint& s)
+{
+  const Vec3 a = vertex(field, triangles[3 * s.triangle]),
+             b = vertex(field, triangles[3 * s.triangle + 1]),
+             c = vertex(field, triangles[3 * s.triangle + 2]);
+  return {s.w0 * a.x + s.w1 * b.x + s.w2 * c.x, s.w0 * a.y + s.w1 * b.y + s.w2 * c.y,
+          s.w0 * a.z + s.w1 * b.z + s.w2 * c.z};
+}
+
+// Area-weighted vertex normals (sum of unnormalised face normals).
+std::vector<double> vertexNormals(const std::vector<double>& positions,
+                                  const std::vector<std::int64_t>& triangles)
+{
+  std::vector<double> normals(positions.size(), 0.0);
+  for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+  {
+    const Vec3 a = vertex(positions, triangles[t]), b = vertex(positions, triangles[t + 1]),
+               c = vertex(positions, triangles[t + 2]);
+    const Vec3 n = cross(b - a, c - a);
+    for (int k = 0; k < 3; ++k)
+    {
+      normals[3 * triangles[t + k]] += n.x;
+      normals[3 * triangles[t + k] + 1] += n.y;
+      normals[3 * triangles[t + k] + 2] += n.z;
+    }
+  }
+  return normals;
+}
+
+} // namespace
+
+PointCloud sampleSurface(const std::vector<double>& positions,
+                         const std::vector<std::int64_t>& triangles, const SamplerOptions& options,
+                         std::size_t frame)
+{
+  if (triangles.size() % 3 != 0)
+    throw std::invalid_argument("triangle indices are not a multiple of 3");
+  if (options.noiseStdDev < 0 || options.holeRadius < 0)
+    throw std::invalid_argument("noise and hole radius must not be negative");
+  const AreaTable areas(positions, triangles);
+  Random random(options.seed, 2 * frame + 1);
+
+  // Holes: material points drawn from their own stream so they do not depend on the sampling.
+  std::vector<Vec3> holeCentres;
+  Random holeRandom(options.seed, options.holesMove ? 2 * frame + 2 : 0);
+  for (std::size_t h = 0; h < options.holes; ++h)
+    holeCentres.push_back(evaluate(positions, triangles, areas.draw(holeRandom)));
+  const double r2 = options.holeRadius * options.holeRadius;
+
+  const std::vector<double> normals =
+    options.normals ? vertexNormals(positions, triangles) : std::vector<double>{};
+  PointCloud cloud;
+  cloud.points.reserve(3 * options.pointsPerFrame);
+  for (std::size_t i = 0; i < options.pointsPerFrame; ++i)
+  {
+    const SurfacePoint s = areas.draw(random);
+    Vec3 p = evaluate(positions, triangles, s);
+    // Draw the noise even for points dropped later, so the stream does not depend on holes.
+    const Vec3 noise{random.gaussian(), random.gaussian(), random.gaussian()};
+    const bool inHole = std::any_of(holeCentres.begin(), holeCentres.end(), [&](const Vec3& c) {
+      const Vec3 d = p - c;
+      return d.x * d.x + d.y * d.y + d.z * d.z < r2;
+    });
+    if (inHole)
+      continue;
+    p.x += options.noiseStdDev * noise.x;
+    p.y += options.noiseStdDev * noise.y;
+    p.z += options.noiseStdDev * noise.z;
+    cloud.points.insert(cloud.points.end(), {p.x, p.y, p.z});
+    if (options.normals)
+    {
+      Vec3 n = evaluate(normals, triangles, s);
+      const double length = norm(n);
+      if (length > 0)
+        n = {n.x / length, n.y / length, n.z / length};
+      cloud.normals.insert(cloud.normals.end(), {static_cast<float>(n.x), static_cast<float>(n.y),
+                                                 static_cast<float>(n.z)});
+    }
+  }
+  return cloud;
+}
+
+double boundingBoxDiagonal(const std::vector<double>& positions)
+{
+  if (positions.size() < 3)
+    return 0.0;
+  double lo[3] = {positions[0], positions[1], positions[2]}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (std::size_t i = 0; i < positions.size(); i += 3)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], positions[i + k]);
+      hi[k] = std::max(hi[k], positions[i + k]);
+    }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions& sampling,
+                                 const std::string& outDir, const SequenceWriteOptions& writing)
+{
+  std::error_code ec;
+  fs::create_directories(outDir, ec);
+  if (ec)
+    throw FileError(outDir, "cannot create folder (" + ec.message() + ")");
+  if (writing.writeGroundTruth)
+  {
+    fs::create_directories(fs::path(outDir) / "truth", ec);
+    if (ec)
+      throw FileError(outDir + "/truth", "cannot create folder (" + ec.message() + ")");
+  }
+  nlohmann::json series;
+  series["file-series-version"] = "1.0";
+  series["files"] = nlohmann::json::array();
+  for (std::size_t f = 0; f < mesh.numberOfFrames(); ++f)
+  {
+    char number[32];
+    std::snprintf(number, sizeof(number), "%04zu", f);
+    const std::string name = writing.filePrefix + number + "." + writing.extension;
+    const std::vector<double> positions = mesh.positions(f);
+    writePointCloud((fs::path(outDir) / name).string(),
+                    sampleSurface(positions, mesh.triangles(), sampling, f));
+    if (writing.writeGroundTruth)
+    {
+      PointCloud truth = mesh.frameMesh(f);
+      writePLY((fs::path(outDir) / "truth" / (writing.filePrefix + number + ".ply")).string(),
+               truth);
+    }
+    series["files"].push_back({{"name", name}, {"time", static_cast<double>(f) * writing.frameInterval}});
+  }
+  const std::string seriesPath = (fs::path(outDir) / "points.series").string();
+  std::ofstream out(seriesPath);
+  out << series.dump(2) << "\n";
+  if (!out)
+    throw FileError(seriesPath, "cannot write the .series file");
+  return seriesPath;
+}
+
+} // namespace dp

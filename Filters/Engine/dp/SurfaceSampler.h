@@ -1,0 +1,66 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file SurfaceSampler.h
+ * @brief Turns an animated mesh into a synthetic point sequence, the way the paper made its
+ *        CG test data: area-uniform random surface points per frame, optionally with Gaussian
+ *        noise, holes (surface regions the "scanner" did not see) and normals.
+ *
+ * Determinism: frame f's points depend only on (seed, f), never on which frames were sampled
+ * before, so frames can be made in any order and the same seed gives the same files on every
+ * platform (own generators on std::mt19937_64, whose output the C++ standard fixes).
+ *
+ * Holes are balls around material points of the surface (a triangle and barycentric
+ * coordinates), so a hole follows the surface as it moves; every sample inside a ball is
+ * removed. With `holesMove` the material points are drawn anew for every frame.
+ */
+#pragma once
+
+#include "dp/AnimatedMesh.h"
+#include "dp/PointCloud.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace dp
+{
+
+struct SamplerOptions
+{
+  std::size_t pointsPerFrame = 20000; // samples drawn before holes are cut
+  std::uint64_t seed = 1;
+  double noiseStdDev = 0.0;   // Gaussian noise per coordinate, in the mesh's units
+  std::size_t holes = 0;      // number of holes per frame
+  double holeRadius = 0.0;    // in the mesh's units
+  bool holesMove = false;     // new hole positions in every frame
+  bool normals = true;        // write interpolated vertex normals
+};
+
+/**
+ * Samples one frame. `positions` are x y z per vertex, `triangles` 3 indices each.
+ * Throws std::invalid_argument for a mesh with no area or indices out of range.
+ */
+PointCloud sampleSurface(const std::vector<double>& positions,
+                         const std::vector<std::int64_t>& triangles, const SamplerOptions& options,
+                         std::size_t frame);
+
+struct SequenceWriteOptions
+{
+  std::string filePrefix = "frame_";
+  std::string extension = "ply"; // any format the product writes: ply pcd xyz csv obj
+  double frameInterval = 1.0;    // times written into the .series file
+  bool writeGroundTruth = false; // also truth/<prefix>NNNN.ply: the mesh of each frame
+};
+
+/**
+ * Samples every frame of `mesh` and writes `outDir/<prefix>NNNN.<ext>` plus
+ * `outDir/points.series`. Creates outDir. Returns the .series path.
+ */
+std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions& sampling,
+                                 const std::string& outDir,
+                                 const SequenceWriteOptions& writing = {});
+
+/** Length of the diagonal of the bounding box of x y z triples. */
+double boundingBoxDiagonal(const std::vector<double>& positions);
+
+} // namespace dp

@@ -1,0 +1,351 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Plain-text point formats (XYZ, PTS, CSV, TXT) and Wavefront OBJ.
+#include "dp/PointCloudIO.h"
+#include "dp/detail/FileText.h"
+
+#include <algorithm>
+#include <cstring>
+
+namespace dp
+{
+namespace
+{
+
+bool isCommentLine(std::string_view line)
+{
+  detail::skipSeparators(line);
+  return line.empty() || line[0] == '#' || line.substr(0, 2) == "//";
+}
+
+// Meaning of a column: a coordinate, a normal component, a colour channel or an attribute.
+int columnRole(const std::string& name)
+{
+  static const char* const roles[] = {"x",  "y",   "z",     "nx",   "ny", "nz",
+                                      "r",  "g",   "b",     "red",  "green", "blue",
+                                      "normal_x", "normal_y", "normal_z"};
+  const int map[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 6, 7, 8, 3, 4, 5};
+  for (std::size_t k = 0; k < std::size(roles); ++k)
+    if (name == roles[k])
+      return map[k];
+  return -1;
+}
+
+} // namespace
+
+PointCloud readTextPoints(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  const bool isPts = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
+  std::string_view text(bytes);
+  std::string_view line;
+  std::vector<std::string> header;
+  std::size_t columns = 0;
+  std::size_t lineNumber = 0;
+  std::size_t declaredCount = 0;
+  bool sawData = false;
+  std::vector<double> values;
+  std::vector<double> row;
+
+  while (detail::nextLine(text, line))
+  {
+    ++lineNumber;
+    if (isCommentLine(line))
+      continue;
+    const bool comma = line.find(',') != std::string_view::npos;
+    row.clear();
+    std::string_view rest = line;
+    bool numeric = true;
+    std::vector<std::string> tokens;
+    for (auto t = detail::nextToken(rest, comma); !t.empty(); t = detail::nextToken(rest, comma))
+    {
+      double v = 0;
+      tokens.emplace_back(t);
+      if (detail::parseNumber(t, v))
+        row.push_back(v);
+      else
+        numeric = false;
+    }
+    if (!sawData && !numeric && header.empty())
+    {
+      // A header line naming the columns (CSV style).
+      for (auto& t : tokens)
+        header.push_back(detail::toLower(t));
+      continue;
+    }
+    if (!numeric)
+    {
+      throw FileError(path, "line " + std::to_string(lineNumber) + ": '" + std::string(line) +
+                              "' is not a row of numbers");
+    }
+    // A PTS file starts with a line holding only the point count.
+    if (!sawData && isPts && row.size() == 1 && declaredCount == 0)
+    {
+      declaredCount = static_cast<std::size_t>(row[0]);
+      continue;
+    }
+    if (!sawData)
+    {
+      columns = row.size();
+      if (columns < 3)
+        throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
+                                std::to_string(columns) + " values; at least x y z are needed");
+      if (!header.empty() && header.size() != columns)
+        throw FileError(path, "the header names " + std::to_string(header.size()) +
+                                " columns but line " + std::to_string(lineNumber) + " has " +
+                                std::to_string(columns));
+      sawData = true;
+    }
+    if (row.size() != columns)
+    {
+      throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
+                              std::to_string(row.size()) + " values, earlier lines have " +
+                              std::to_string(columns) + " (truncated or malformed file)");
+    }
+    values.insert(values.end(), row.begin(), row.end());
+  }
+
+  PointCloud cloud;
+  if (columns == 0)
+    return cloud; // an empty frame; the caller decides whether that is an error
+  const std::size_t n = values.size() / columns;
+  if (declaredCount != 0 && declaredCount != n)
+    throw FileError(path, "the PTS header declares " + std::to_string(declaredCount) +
+                            " points but the file holds " + std::to_string(n) +
+                            " (truncated file?)");
+
+  // Assign a role to each column: from the header names, else by the column count.
+  std::vector<int> role(columns, -1);
+  std::vector<std::string> names(columns);
+  for (std::size_t c = 0; c < columns; ++c)
+    names[c] = c < header.size() ? header[c] : "Column" + std::to_string(c);
+  if (!header.empty())
+  {
+    for (std::size_t c = 0; c < columns; ++c)
+      role[c] = columnRole(header[c]);
+    bool hasXYZ[3] = {false, false, false};
+    for (int r : role)
+      if (r >= 0 && r < 3)
+        hasXYZ[r] = true;
+    if (!hasXYZ[0] || !hasXYZ[1] || !hasXYZ[2])
+      throw FileError(path, "the header line does not name columns x, y and z");
+  }
+  else
+  {
+    role[0] = 0, role[1] = 1, role[2] = 2;
+    if (isPts && (columns == 4 || columns == 7))
+    {
+      names[3] = "Intensity"; // Leica PTS: x y z intensity [r g b]
+      if (columns == 7)
+        role[4] = 6, role[5] = 7, role[6] = 8;
+    }
+    else if (columns >= 6)
+    {
+      role[3] = 3, role[4] = 4, role[5] = 5;
+    }
+  }
+
+  bool hasNormals = false, hasColors = false;
+  for (int r : role)
+  {
+    hasNormals = hasNormals || (r >= 3 && r < 6);
+    hasColors = hasColors || r >= 6;
+  }
+  cloud.points.resize(3 * n);
+  if (hasNormals)
+    cloud.normals.resize(3 * n);
+  if (hasColors)
+  {
+    cloud.colorComponents = 3;
+    cloud.colors.resize(3 * n);
+  }
+  std::vector<int> attribute(columns, -1);
+  for (std::size_t c = 0; c < columns; ++c)
+    if (role[c] < 0)
+    {
+      attribute[c] = static_cast<int>(cloud.attributes.size());
+      cloud.attributes.push_back({names[c], 1, std::vector<float>(n)});
+    }
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t c = 0; c < columns; ++c)
+    {
+      const double v = values[i * columns + c];
+      const int r = role[c];
+      if (r >= 0 && r < 3)
+        cloud.points[3 * i + r] = v;
+      else if (r >= 3 && r < 6)
+        cloud.normals[3 * i + r - 3] = static_cast<float>(v);
+      else if (r >= 6)
+        cloud.colors[3 * i + r - 6] = static_cast<std::uint8_t>(v < 0 ? 0 : v > 255 ? 255 : v);
+      else
+        cloud.attributes[attribute[c]].values[i] = static_cast<float>(v);
+    }
+  return cloud;
+}
+
+void writeTextPoints(const std::string& path, const PointCloud& cloud)
+{
+  cloud.validate();
+  const bool csv = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".csv";
+  const char separator = csv ? ',' : ' ';
+  std::string out;
+  if (csv)
+    out = cloud.hasNormals() ? "x,y,z,nx,ny,nz\n" : "x,y,z\n";
+  char buffer[32];
+  for (std::size_t i = 0; i < cloud.numberOfPoints(); ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+    {
+      out.append(buffer, std::to_chars(buffer, buffer + 32, cloud.points[3 * i + c]).ptr);
+      out += separator;
+    }
+    if (cloud.hasNormals())
+      for (int c = 0; c < 3; ++c)
+      {
+        out.append(buffer, std::to_chars(buffer, buffer + 32, cloud.normals[3 * i + c]).ptr);
+        out += separator;
+      }
+    out.back() = '\n';
+  }
+  detail::writeWholeFile(path, out);
+}
+
+PointCloud readOBJ(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  std::string_view text(bytes);
+  std::string_view line;
+  PointCloud cloud;
+  std::vector<float> normalList;            // vn entries, as listed
+  std::vector<std::int64_t> normalOfVertex; // vn index used by each vertex (-1: none)
+  std::vector<std::int64_t> face;
+  std::size_t lineNumber = 0;
+  auto fail = [&](const std::string& why)
+  { throw FileError(path, "OBJ line " + std::to_string(lineNumber) + ": " + why); };
+
+  while (detail::nextLine(text, line))
+  {
+    ++lineNumber;
+    std::string_view rest = line;
+    const std::string_view keyword = detail::nextToken(rest);
+    if (keyword == "v" || keyword == "vn")
+    {
+      double xyz[6];
+      int count = 0;
+      for (auto t = detail::nextToken(rest); !t.empty() && count < 6; t = detail::nextToken(rest))
+        if (!detail::parseNumber(t, xyz[count++]))
+          fail("'" + std::string(t) + "' is not a number");
+      if (count < 3)
+        fail("expected 3 coordinates (truncated file?)");
+      if (keyword == "v")
+      {
+        cloud.points.insert(cloud.points.end(), xyz, xyz + 3);
+        if (count == 6) // "v x y z r g b", colours in [0,1]
+        {
+          if (cloud.colors.empty() && cloud.numberOfPoints() == 1)
+            cloud.colorComponents = 3;
+          if (cloud.colorComponents == 3 && cloud.colors.size() == 3 * (cloud.numberOfPoints() - 1))
+            for (int c = 3; c < 6; ++c)
+              cloud.colors.push_back(
+                static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, xyz[c] * 255.0 + 0.5))));
+        }
+        normalOfVertex.push_back(-1);
+      }
+      else
+      {
+        for (int c = 0; c < 3; ++c)
+          normalList.push_back(static_cast<float>(xyz[c]));
+      }
+    }
+    else if (keyword == "f")
+    {
+      face.clear();
+      const auto nv = static_cast<std::int64_t>(cloud.numberOfPoints());
+      const auto nn = static_cast<std::int64_t>(normalList.size() / 3);
+      for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
+      {
+        // v, v/vt, v//vn or v/vt/vn; negative indices count back from the end.
+        const std::size_t slash = t.find('/');
+        double v = 0;
+        if (!detail::parseNumber(t.substr(0, slash), v) || v == 0)
+          fail("bad face vertex '" + std::string(t) + "'");
+        auto index = static_cast<std::int64_t>(v);
+        index = index > 0 ? index - 1 : nv + index;
+        if (index < 0 || index >= nv)
+          fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +
+               " vertices are defined so far");
+        face.push_back(index);
+        const std::size_t lastSlash = t.rfind('/');
+        if (slash != std::string_view::npos && lastSlash > slash) // v//vn or v/vt/vn
+        {
+          double vn = 0;
+          if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0)
+          {
+            auto n = static_cast<std::int64_t>(vn);
+            n = n > 0 ? n - 1 : nn + n;
+            if (n >= 0 && n < nn)
+              normalOfVertex[index] = n;
+          }
+        }
+      }
+      if (face.size() < 3)
+        fail("a face needs at least 3 vertices");
+      cloud.addFace(face.data(), face.size());
+    }
+    // Other statements (vt, g, o, s, usemtl, mtllib, l, p, comments) carry nothing we keep.
+  }
+  if (cloud.colorComponents == 3 && cloud.colors.size() != 3 * cloud.numberOfPoints())
+  {
+    cloud.colors.clear(); // only some vertices had colours
+    cloud.colorComponents = 0;
+  }
+  // Normals: through the faces' v//vn references, or one vn per v in order.
+  const std::size_t n = cloud.numberOfPoints();
+  const bool referenced =
+    std::any_of(normalOfVertex.begin(), normalOfVertex.end(), [](auto i) { return i >= 0; });
+  if (referenced || (n > 0 && normalList.size() == 3 * n))
+  {
+    cloud.normals.assign(3 * n, 0.0f);
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const std::int64_t k = referenced ? normalOfVertex[i] : static_cast<std::int64_t>(i);
+      if (k >= 0)
+        std::memcpy(&cloud.normals[3 * i], &normalList[3 * k], 3 * sizeof(float));
+    }
+  }
+  return cloud;
+}
+
+void writeOBJ(const std::string& path, const PointCloud& cloud)
+{
+  cloud.validate();
+  std::string out = "# written by DynamicPoints\n";
+  char buffer[32];
+  auto triple = [&](const char* key, auto* v)
+  {
+    out += key;
+    for (int c = 0; c < 3; ++c)
+    {
+      out += ' ';
+      out.append(buffer, std::to_chars(buffer, buffer + 32, v[c]).ptr);
+    }
+    out += '\n';
+  };
+  for (std::size_t i = 0; i < cloud.numberOfPoints(); ++i)
+    triple("v", &cloud.points[3 * i]);
+  if (cloud.hasNormals())
+    for (std::size_t i = 0; i < cloud.numberOfPoints(); ++i)
+      triple("vn", &cloud.normals[3 * i]);
+  for (std::size_t f = 0; f < cloud.numberOfFaces(); ++f)
+  {
+    out += 'f';
+    for (auto k = cloud.faceOffsets[f]; k < cloud.faceOffsets[f + 1]; ++k)
+    {
+      const std::string id = std::to_string(cloud.faceConnectivity[k] + 1);
+      out += ' ' + id + (cloud.hasNormals() ? "//" + id : "");
+    }
+    out += '\n';
+  }
+  detail::writeWholeFile(path, out);
+}
+
+} // namespace dp
