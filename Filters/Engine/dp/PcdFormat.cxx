@@ -151,7 +151,8 @@ PointCloud readPCD(const std::string& path)
     }
     ++lineNumber;
     std::string_view rest = line;
-    const std::string keyword = detail::toLower(detail::nextToken(rest));
+    const std::string_view written = detail::nextToken(rest);
+    const std::string keyword = detail::toLower(written);
     if (keyword.empty() || keyword[0] == '#')
       continue;
     std::vector<std::string_view> values;
@@ -160,13 +161,13 @@ PointCloud readPCD(const std::string& path)
     auto numbers = [&](auto assign)
     {
       if (values.size() != fields.size())
-        fail(keyword + " has " + std::to_string(values.size()) + " entries for " +
+        fail(std::string(written) + " has " + std::to_string(values.size()) + " entries for " +
              std::to_string(fields.size()) + " fields");
       for (std::size_t k = 0; k < values.size(); ++k)
       {
         double v = 0;
         if (!detail::parseNumber(values[k], v) || v <= 0)
-          fail("bad " + keyword + " entry '" + std::string(values[k]) + "'");
+          fail("bad " + std::string(written) + " entry '" + std::string(values[k]) + "'");
         assign(fields[k], static_cast<int>(v));
       }
     };
@@ -201,7 +202,7 @@ PointCloud readPCD(const std::string& path)
     {
       double v = -1;
       if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0)
-        fail("bad " + keyword + " value");
+        fail("bad " + std::string(written) + " value");
       const auto count = static_cast<std::size_t>(v);
       if (keyword == "width")
         width = count, haveWidth = true;
@@ -215,7 +216,7 @@ PointCloud readPCD(const std::string& path)
       data = values.empty() ? "?" : detail::toLower(values[0]);
     }
     else
-      fail("unknown keyword '" + keyword + "'");
+      fail("unknown keyword '" + std::string(written) + "'");
   }
   if (!havePoints)
   {

@@ -94,12 +94,23 @@ public:
     const double target = random.uniform() * Cumulative.back();
     const auto it = std::upper_bound(Cumulative.begin(), Cumulative.end(), target);
     const std::size_t t = std::min<std::size_t>(it - Cumulative.begin(), Cumulative.size() - 1);
+    return inTriangle(t, random);
+  }
+  // A point of a triangle chosen by index alone, so the same random numbers pick the same
+  // material point in every frame, however the areas change.
+  SurfacePoint drawMaterialPoint(Random& random) const
+  {
+    const auto t = static_cast<std::size_t>(random.uniform() * static_cast<double>(Cumulative.size()));
+    return inTriangle(std::min(t, Cumulative.size() - 1), random);
+  }
+
+private:
+  static SurfacePoint inTriangle(std::size_t t, Random& random)
+  {
     // Uniform in the triangle: the square-root warp of two uniforms.
     const double r1 = std::sqrt(random.uniform()), r2 = random.uniform();
     return {t, 1 - r1, r1 * (1 - r2), r1 * r2};
   }
-
-private:
   std::vector<double> Cumulative;
 };
 
@@ -133,7 +144,30 @@ std::vector<double> vertexNormals(const std::vector<double>& positions,
   return normals;
 }
 
+// Holes: material points drawn from their own stream, so they do not depend on the sampling;
+// with fixed holes the stream is the same in every frame, so a hole stays on the same material.
+std::vector<Vec3> drawHoles(const AreaTable& areas, const std::vector<double>& positions,
+                            const std::vector<std::int64_t>& triangles,
+                            const SamplerOptions& options, std::size_t frame)
+{
+  std::vector<Vec3> centres;
+  Random holeRandom(options.seed, options.holesMove ? 2 * frame + 2 : 0);
+  for (std::size_t h = 0; h < options.holes; ++h)
+    centres.push_back(evaluate(positions, triangles, areas.drawMaterialPoint(holeRandom)));
+  return centres;
+}
+
 } // namespace
+
+std::vector<double> holeCentres(const std::vector<double>& positions,
+                                const std::vector<std::int64_t>& triangles,
+                                const SamplerOptions& options, std::size_t frame)
+{
+  std::vector<double> out;
+  for (const Vec3& c : drawHoles(AreaTable(positions, triangles), positions, triangles, options, frame))
+    out.insert(out.end(), {c.x, c.y, c.z});
+  return out;
+}
 
 PointCloud sampleSurface(const std::vector<double>& positions,
                          const std::vector<std::int64_t>& triangles, const SamplerOptions& options,
@@ -145,12 +179,7 @@ PointCloud sampleSurface(const std::vector<double>& positions,
     throw std::invalid_argument("noise and hole radius must not be negative");
   const AreaTable areas(positions, triangles);
   Random random(options.seed, 2 * frame + 1);
-
-  // Holes: material points drawn from their own stream so they do not depend on the sampling.
-  std::vector<Vec3> holeCentres;
-  Random holeRandom(options.seed, options.holesMove ? 2 * frame + 2 : 0);
-  for (std::size_t h = 0; h < options.holes; ++h)
-    holeCentres.push_back(evaluate(positions, triangles, areas.draw(holeRandom)));
+  const std::vector<Vec3> holes = drawHoles(areas, positions, triangles, options, frame);
   const double r2 = options.holeRadius * options.holeRadius;
 
   const std::vector<double> normals =
@@ -163,7 +192,7 @@ PointCloud sampleSurface(const std::vector<double>& positions,
     Vec3 p = evaluate(positions, triangles, s);
     // Draw the noise even for points dropped later, so the stream does not depend on holes.
     const Vec3 noise{random.gaussian(), random.gaussian(), random.gaussian()};
-    const bool inHole = std::any_of(holeCentres.begin(), holeCentres.end(), [&](const Vec3& c) {
+    const bool inHole = std::any_of(holes.begin(), holes.end(), [&](const Vec3& c) {
       const Vec3 d = p - c;
       return d.x * d.x + d.y * d.y + d.z * d.z < r2;
     });

@@ -44,6 +44,11 @@ PointCloud sampleSurface(const std::vector<double>& positions,
                          const std::vector<std::int64_t>& triangles, const SamplerOptions& options,
                          std::size_t frame);
 
+/** The centres (x y z each) of the holes sampleSurface() cuts into this frame. */
+std::vector<double> holeCentres(const std::vector<double>& positions,
+                                const std::vector<std::int64_t>& triangles,
+                                const SamplerOptions& options, std::size_t frame);
+
 struct SequenceWriteOptions
 {
   std::string filePrefix = "frame_";

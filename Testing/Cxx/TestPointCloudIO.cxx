@@ -1,0 +1,308 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Engine readers and writers: every format, both directions, and every kind of bad file.
+#include "TestUtilities.h"
+
+#include "dp/PointCloudIO.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+namespace
+{
+
+using dp::test::TempDir;
+using dp::test::expectFileError;
+using dp::test::writeText;
+
+dp::PointCloud sampleCloud(bool withFaces)
+{
+  dp::PointCloud c;
+  c.points = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1.5};
+  c.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1, 1, 0, 0};
+  c.colorComponents = 3;
+  c.colors = {255, 0, 0, 0, 255, 0, 0, 0, 255, 10, 20, 30};
+  c.attributes.push_back({"intensity", 1, {0.5f, 1.5f, 2.5f, 3.5f}});
+  if (withFaces)
+  {
+    const std::int64_t f0[3] = {0, 1, 2}, f1[4] = {0, 1, 3, 2};
+    c.addFace(f0, 3);
+    c.addFace(f1, 4);
+  }
+  return c;
+}
+
+void expectSameCloud(const dp::PointCloud& a, const dp::PointCloud& b, bool colors = true,
+                     bool attributes = true)
+{
+  ASSERT_EQ(a.numberOfPoints(), b.numberOfPoints());
+  for (std::size_t i = 0; i < a.points.size(); ++i)
+    EXPECT_NEAR(a.points[i], b.points[i], 1e-6) << "coordinate " << i;
+  ASSERT_EQ(a.normals.size(), b.normals.size());
+  for (std::size_t i = 0; i < a.normals.size(); ++i)
+    EXPECT_NEAR(a.normals[i], b.normals[i], 1e-6);
+  if (colors)
+  {
+    EXPECT_EQ(a.colorComponents, b.colorComponents);
+    EXPECT_EQ(a.colors, b.colors);
+  }
+  if (attributes)
+  {
+    ASSERT_EQ(a.attributes.size(), b.attributes.size());
+    for (std::size_t k = 0; k < a.attributes.size(); ++k)
+    {
+      EXPECT_EQ(a.attributes[k].name, b.attributes[k].name);
+      EXPECT_EQ(a.attributes[k].values, b.attributes[k].values);
+    }
+  }
+  EXPECT_EQ(a.faceOffsets, b.faceOffsets);
+  EXPECT_EQ(a.faceConnectivity, b.faceConnectivity);
+}
+
+class PlyEncodings : public ::testing::TestWithParam<dp::PlyEncoding>
+{
+};
+
+TEST_P(PlyEncodings, RoundTripKeepsEveryArrayAndFace)
+{
+  TempDir dir;
+  const std::string path = dir.file("cloud.ply");
+  const dp::PointCloud cloud = sampleCloud(true);
+  dp::writePLY(path, cloud, GetParam());
+  expectSameCloud(cloud, dp::readPLY(path));
+}
+
+INSTANTIATE_TEST_SUITE_P(AllEncodings, PlyEncodings,
+                         ::testing::Values(dp::PlyEncoding::Ascii,
+                                           dp::PlyEncoding::BinaryLittleEndian,
+                                           dp::PlyEncoding::BinaryBigEndian));
+
+TEST(PLY, ReadsHandWrittenAsciiWithDoublesListsAndExtraElements)
+{
+  TempDir dir;
+  const std::string path = dir.file("hand.ply");
+  writeText(path, "ply\r\nformat ascii 1.0\r\ncomment made by hand\r\n"
+                  "element vertex 3\r\nproperty double x\r\nproperty double y\r\n"
+                  "property double z\r\nproperty list uchar int extra\r\n"
+                  "property float quality\r\n"
+                  "element face 1\r\nproperty list uchar uint vertex_index\r\n"
+                  "element edge 1\r\nproperty int vertex1\r\nproperty int vertex2\r\n"
+                  "end_header\r\n"
+                  "0.25 0 0 2 7 8 0.5\r\n1 0 0 0 1.5\r\n0 1 -3e2 1 9 2.5\r\n3 0 1 2\r\n0 1\r\n");
+  const dp::PointCloud c = dp::readPLY(path);
+  ASSERT_EQ(c.numberOfPoints(), 3u);
+  EXPECT_DOUBLE_EQ(c.points[0], 0.25);
+  EXPECT_DOUBLE_EQ(c.points[8], -300.0);
+  ASSERT_EQ(c.attributes.size(), 1u);
+  EXPECT_EQ(c.attributes[0].name, "quality");
+  EXPECT_FLOAT_EQ(c.attributes[0].values[2], 2.5f);
+  ASSERT_EQ(c.numberOfFaces(), 1u);
+  EXPECT_EQ(c.faceConnectivity, (std::vector<std::int64_t>{0, 1, 2}));
+}
+
+TEST(PLY, TruncatedBinaryBodyIsAnErrorNamingTheFile)
+{
+  TempDir dir;
+  const std::string path = dir.file("cut.ply");
+  dp::writePLY(path, sampleCloud(true), dp::PlyEncoding::BinaryLittleEndian);
+  const std::string whole = dp::test::readText(path);
+  // Cut inside the vertex block, then inside the face block.
+  for (std::size_t cut : {whole.size() - 30, whole.size() - 3})
+  {
+    writeText(path, whole.substr(0, cut));
+    expectFileError([&] { dp::readPLY(path); }, path, "truncated");
+  }
+}
+
+TEST(PLY, TruncatedAsciiBodyIsAnError)
+{
+  TempDir dir;
+  const std::string path = dir.file("cut.ply");
+  writeText(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                  "property float z\nend_header\n0 0 0\n1 1 1\n");
+  expectFileError([&] { dp::readPLY(path); }, path, "truncated");
+}
+
+TEST(PLY, MalformedFilesAreErrorsNamingTheFile)
+{
+  TempDir dir;
+  const std::string path = dir.file("bad.ply");
+  const std::pair<std::string, std::string> cases[] = {
+    {"not a ply at all", "not a PLY file"},
+    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "end_header"},
+    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n",
+     "lacks one of the properties x, y, z"},
+    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quaternion x\nend_header\n", "unknown property type"},
+    {"ply\nformat ebcdic 1.0\nend_header\n", "unknown format"},
+    {"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 1 1\n3 0 1 7\n",
+     "uses vertex 7"},
+    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+     "end_header\n0 zero 0\n", "is not a number"},
+  };
+  for (const auto& [text, expected] : cases)
+  {
+    writeText(path, text);
+    expectFileError([&] { dp::readPLY(path); }, path, expected);
+  }
+}
+
+TEST(Reading, MissingFileAndDirectoryAreErrorsNamingThem)
+{
+  TempDir dir;
+  expectFileError([&] { dp::readPointCloud(dir.file("absent.ply")); }, dir.file("absent.ply"),
+                  "cannot open");
+  std::filesystem::create_directory(dir.file("folder.ply"));
+  expectFileError([&] { dp::readPointCloud(dir.file("folder.ply")); }, dir.file("folder.ply"), "");
+  expectFileError([&] { dp::readPointCloud(dir.file("points.las")); }, dir.file("points.las"),
+                  "unknown file extension");
+}
+
+TEST(Reading, NonFinitePointsAreDroppedAndCountedWithTheirAttributesAndFaces)
+{
+  TempDir dir;
+  const std::string path = dir.file("nan.ply");
+  dp::PointCloud cloud = sampleCloud(true);
+  cloud.points[3] = std::numeric_limits<double>::quiet_NaN();     // point 1
+  cloud.points[11] = std::numeric_limits<double>::infinity();     // point 3
+  dp::writePLY(path, cloud, dp::PlyEncoding::BinaryBigEndian);
+  dp::ReadReport report;
+  const dp::PointCloud read = dp::readPointCloud(path, &report);
+  EXPECT_EQ(report.droppedNonFinite, 2u);
+  ASSERT_EQ(read.numberOfPoints(), 2u);
+  EXPECT_EQ(read.attributes[0].values, (std::vector<float>{0.5f, 2.5f}));
+  EXPECT_EQ(read.colors, (std::vector<std::uint8_t>{255, 0, 0, 0, 0, 255}));
+  EXPECT_EQ(read.numberOfFaces(), 0u); // both faces used a dropped point
+}
+
+TEST(PCD, AsciiAndBinaryRoundTrip)
+{
+  TempDir dir;
+  dp::PointCloud cloud = sampleCloud(false);
+  cloud.attributes.clear();
+  for (bool binary : {false, true})
+  {
+    const std::string path = dir.file(binary ? "b.pcd" : "a.pcd");
+    dp::writePCD(path, cloud, binary);
+    expectSameCloud(cloud, dp::readPCD(path));
+  }
+}
+
+TEST(PCD, ReadsPclStyleHeaderWithPackedRgbCountsAndPadding)
+{
+  TempDir dir;
+  const std::string path = dir.file("pcl.pcd");
+  // rgb as an unsigned packed integer, a 2-component field and a padding field.
+  writeText(path, "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n"
+                  "FIELDS x y z rgb hist _\nSIZE 4 4 4 4 4 1\nTYPE F F F U F U\nCOUNT 1 1 1 1 2 1\n"
+                  "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+                  "1 2 3 16711680 0.5 0.25 0\nnan nan nan 255 1 2 0\n");
+  dp::ReadReport report;
+  const dp::PointCloud c = dp::readPointCloud(path, &report);
+  EXPECT_EQ(report.droppedNonFinite, 1u);
+  ASSERT_EQ(c.numberOfPoints(), 1u);
+  EXPECT_EQ(c.colors, (std::vector<std::uint8_t>{255, 0, 0}));
+  ASSERT_EQ(c.attributes.size(), 1u);
+  EXPECT_EQ(c.attributes[0].name, "hist");
+  EXPECT_EQ(c.attributes[0].components, 2);
+  EXPECT_EQ(c.attributes[0].values, (std::vector<float>{0.5f, 0.25f}));
+}
+
+TEST(PCD, TruncatedAndMalformedFilesAreErrors)
+{
+  TempDir dir;
+  const std::string path = dir.file("cut.pcd");
+  dp::writePCD(path, sampleCloud(false), true);
+  const std::string whole = dp::test::readText(path);
+  writeText(path, whole.substr(0, whole.size() - 5));
+  expectFileError([&] { dp::readPCD(path); }, path, "truncated");
+  writeText(path, "VERSION 0.7\nFIELDS x y z\nSIZE 4 4\n");
+  expectFileError([&] { dp::readPCD(path); }, path, "SIZE has 2 entries");
+  writeText(path, "VERSION 0.7\nFIELDS x y\nSIZE 4 4\nTYPE F F\nPOINTS 0\nDATA ascii\n");
+  expectFileError([&] { dp::readPCD(path); }, path, "lacks one of the fields x, y, z");
+  writeText(path, "VERSION 0.7\nFIELDS x y z\nPOINTS 1\nDATA binary_compressed\n\x05");
+  expectFileError([&] { dp::readPCD(path); }, path, "binary_compressed");
+}
+
+TEST(Text, XyzWithNormalsCsvWithHeaderAndPtsWithCount)
+{
+  TempDir dir;
+  writeText(dir.file("a.xyz"), "# comment\n0 0 0 0 0 1\n1 2 3 0 1 0\n");
+  dp::PointCloud a = dp::readTextPoints(dir.file("a.xyz"));
+  ASSERT_EQ(a.numberOfPoints(), 2u);
+  EXPECT_EQ(a.normals[4], 1.0f);
+
+  writeText(dir.file("b.csv"), "X,Y,Z,temperature\n1,2,3,20.5\n4,5,6,21.5\n");
+  dp::PointCloud b = dp::readTextPoints(dir.file("b.csv"));
+  ASSERT_EQ(b.numberOfPoints(), 2u);
+  EXPECT_EQ(b.points[3], 4.0);
+  ASSERT_EQ(b.attributes.size(), 1u);
+  EXPECT_EQ(b.attributes[0].name, "temperature");
+
+  writeText(dir.file("c.pts"), "2\n1 2 3 -500 10 20 30\n4 5 6 100 40 50 60\n");
+  dp::PointCloud c = dp::readTextPoints(dir.file("c.pts"));
+  ASSERT_EQ(c.numberOfPoints(), 2u);
+  EXPECT_EQ(c.colors, (std::vector<std::uint8_t>{10, 20, 30, 40, 50, 60}));
+  EXPECT_EQ(c.attributes[0].name, "Intensity");
+
+  // Round trip through our writer, csv flavour included.
+  dp::writeTextPoints(dir.file("d.csv"), a);
+  expectSameCloud(a, dp::readTextPoints(dir.file("d.csv")));
+}
+
+TEST(Text, RaggedOrNonNumericLinesAreErrorsWithTheLineNumber)
+{
+  TempDir dir;
+  const std::string path = dir.file("bad.xyz");
+  writeText(path, "0 0 0\n1 1 1\n2 2\n");
+  expectFileError([&] { dp::readTextPoints(path); }, path, "line 3 has 2 values");
+  writeText(path, "0 0 0\n1 one 1\n");
+  expectFileError([&] { dp::readTextPoints(path); }, path, "line 2");
+  writeText(dir.file("short.pts"), "5\n1 2 3\n");
+  expectFileError([&] { dp::readTextPoints(dir.file("short.pts")); }, dir.file("short.pts"),
+                  "declares 5 points");
+}
+
+TEST(Text, EmptyFileGivesAnEmptyCloud)
+{
+  TempDir dir;
+  writeText(dir.file("empty.xyz"), "# nothing here\n");
+  EXPECT_EQ(dp::readTextPoints(dir.file("empty.xyz")).numberOfPoints(), 0u);
+}
+
+TEST(OBJ, ReadsVerticesNormalsThroughFacesAndNegativeIndices)
+{
+  TempDir dir;
+  writeText(dir.file("m.obj"), "mtllib x.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0 1 0 0\nvn 0 0 1\n"
+                               "vt 0 0\ng part\nf 1//1 2//1 -1//1\nf 1/1 2/1 3/1\n");
+  const dp::PointCloud m = dp::readOBJ(dir.file("m.obj"));
+  ASSERT_EQ(m.numberOfPoints(), 3u);
+  EXPECT_EQ(m.numberOfFaces(), 2u);
+  EXPECT_EQ(m.faceConnectivity, (std::vector<std::int64_t>{0, 1, 2, 0, 1, 2}));
+  EXPECT_EQ(m.normals[2], 1.0f);
+  EXPECT_TRUE(m.colors.empty()); // only one vertex had a colour
+
+  dp::PointCloud cloud = sampleCloud(true);
+  dp::writeOBJ(dir.file("r.obj"), cloud);
+  expectSameCloud(cloud, dp::readOBJ(dir.file("r.obj")), false, false);
+}
+
+TEST(OBJ, BadFaceIndexIsAnError)
+{
+  TempDir dir;
+  writeText(dir.file("bad.obj"), "v 0 0 0\nv 1 0 0\nf 1 2 3\n");
+  expectFileError([&] { dp::readOBJ(dir.file("bad.obj")); }, dir.file("bad.obj"), "line 3");
+}
+
+TEST(Formats, ExtensionsMapToFormats)
+{
+  EXPECT_EQ(dp::formatFromFileName("a/b.PLY"), dp::PointFileFormat::PLY);
+  EXPECT_EQ(dp::formatFromFileName("x.pts"), dp::PointFileFormat::Text);
+  EXPECT_EQ(dp::formatFromFileName("x.vtu"), dp::PointFileFormat::VTKXMLUnstructuredGrid);
+  EXPECT_EQ(dp::formatFromFileName("dir.ply/noext"), dp::PointFileFormat::Unknown);
+  EXPECT_FALSE(dp::isEngineFormat(dp::PointFileFormat::VTKLegacy));
+}
+
+} // namespace
