@@ -8,6 +8,7 @@
 #include "vtkCellArrayIterator.h"
 #include "vtkCommand.h"
 #include "vtkDoubleArray.h"
+#include "vtkErrorCode.h"
 #include "vtkExecutive.h"
 #include "vtkFieldData.h"
 #include "vtkFloatArray.h"
@@ -25,8 +26,7 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
-#include "vtkXMLPolyDataReader.h"
-#include "vtkXMLUnstructuredGridReader.h"
+#include "vtkDPXMLReaders.h"
 
 #include <cmath>
 #include <fstream>
@@ -149,13 +149,13 @@ vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPo
   vtkSmartPointer<vtkAlgorithm> reader;
   if (format == dp::PointFileFormat::VTKXMLPolyData)
   {
-    auto r = vtkSmartPointer<vtkXMLPolyDataReader>::New();
+    auto r = vtkSmartPointer<vtkDPXMLPolyDataReader>::New();
     r->SetFileName(path.c_str());
     reader = r;
   }
   else if (format == dp::PointFileFormat::VTKXMLUnstructuredGrid)
   {
-    auto r = vtkSmartPointer<vtkXMLUnstructuredGridReader>::New();
+    auto r = vtkSmartPointer<vtkDPXMLUnstructuredGridReader>::New();
     r->SetFileName(path.c_str());
     reader = r;
   }
@@ -395,6 +395,7 @@ int vtkPointSequenceSource::RequestData(
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
   this->NumberOfDroppedPoints = 0;
+  this->SetErrorCode(vtkErrorCode::NoError);
   if (!this->BuildSequence())
     return 0;
   const dp::FrameSequence& sequence = this->Internal->Sequence;
@@ -430,6 +431,7 @@ int vtkPointSequenceSource::RequestData(
   {
     output->Initialize();
     output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frame.time);
+    this->SetErrorCode(vtkErrorCode::FileFormatError);
     vtkErrorMacro(<< "frame " << index << ": " << e.what());
     return 0;
   }

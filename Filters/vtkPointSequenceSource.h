@@ -29,7 +29,8 @@
  *
  * @warning Points with a NaN or infinite coordinate are dropped with a warning that counts them
  * (GetNumberOfDroppedPoints()). A missing, unreadable, truncated or malformed file, or an
- * unknown extension, is an error naming the file (ErrorEvent, empty output); an empty frame
+ * unknown extension, is an error naming the file (ErrorEvent, GetErrorCode() set to
+ * vtkErrorCode::FileFormatError, empty output, the request fails); an empty frame
  * is a warning and an empty output, so a downstream tracker can carry on.
  */
 #ifndef vtkPointSequenceSource_h

@@ -1,0 +1,73 @@
+"""Shared helpers for the Python tests: where the build put things, and an error recorder."""
+import os
+import subprocess
+import tempfile
+import unittest
+
+from vtkmodules.vtkCommonCore import vtkCommand
+
+BIN_DIR = os.environ.get("DP_BIN_DIR", "")
+PLUGIN = os.environ.get("DP_PLUGIN", "")
+
+
+def tool(name):
+    """Full path of one of the product's command-line tools."""
+    path = os.path.join(BIN_DIR, name)
+    if not os.path.exists(path):
+        raise AssertionError(f"{path} not found: run the tests through ctest (it sets DP_BIN_DIR)")
+    return path
+
+
+def run_tool(name, *args, check=True):
+    """Runs a tool; returns the CompletedProcess (text output)."""
+    result = subprocess.run([tool(name), *map(str, args)], capture_output=True, text=True,
+                            timeout=300)
+    if check and result.returncode != 0:
+        raise AssertionError(f"{name} {args} failed ({result.returncode}):\n{result.stderr}")
+    return result
+
+
+class MessageRecorder:
+    """Collects ErrorEvent / WarningEvent texts of a VTK object instead of printing them."""
+
+    def __init__(self, obj):
+        self.errors = []
+        self.warnings = []
+        from vtkmodules.util.misc import calldata_type
+        from vtkmodules.util.vtkConstants import VTK_STRING
+
+        @calldata_type(VTK_STRING)
+        def on_error(_obj, _event, text):
+            self.errors.append(text)
+
+        @calldata_type(VTK_STRING)
+        def on_warning(_obj, _event, text):
+            self.warnings.append(text)
+
+        obj.AddObserver(vtkCommand.ErrorEvent, on_error)
+        obj.AddObserver(vtkCommand.WarningEvent, on_warning)
+        self._keep = (on_error, on_warning)
+
+    def clear(self):
+        self.errors.clear()
+        self.warnings.clear()
+
+    @property
+    def error_text(self):
+        return "\n".join(self.errors)
+
+    @property
+    def warning_text(self):
+        return "\n".join(self.warnings)
+
+
+class TempDirTestCase(unittest.TestCase):
+    def setUp(self):
+        self._tmp = tempfile.TemporaryDirectory(prefix="dp-pytest-")
+        self.tmp = self._tmp.name
+
+    def tearDown(self):
+        self._tmp.cleanup()
+
+    def path(self, *parts):
+        return os.path.join(self.tmp, *parts)

@@ -1,0 +1,62 @@
+"""pvpython: the plugin loads, ParaView's reader factory picks the Point Sequence Reader for a
+.series file, and the reader answers every time step with that frame's points."""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+
+from paraview.simple import (LoadPlugin, OpenDataFile, GetAnimationScene, GetTimeKeeper,
+                             servermanager)
+
+
+def ply_vertex_count(path):
+    with open(path, "rb") as f:
+        header = f.read(512).split(b"end_header")[0].decode("ascii")
+    return int(re.search(r"element vertex (\d+)", header).group(1))
+
+
+def main():
+    plugin = os.environ["DP_PLUGIN"]
+    sampler = os.path.join(os.environ["DP_BIN_DIR"], "dynamicpoints-sample")
+    ns = {"__name__": "dp_plugin_proxies"}  # LoadPlugin fills a non-empty namespace only
+    LoadPlugin(plugin, remote=False, ns=ns)
+    assert "PointSequenceReader" in ns and "PointSequenceFolder" in ns, sorted(ns)
+
+    with tempfile.TemporaryDirectory(prefix="dp-pv-") as tmp:
+        subprocess.run([sampler, "--mesh", "sheet", "--frames", "5", "--points", "800",
+                        "--holes", "1", "--hole-radius", "0.25", "--moving-holes",
+                        "--interval", "0.5", tmp], check=True, capture_output=True)
+        frames = sorted(f for f in os.listdir(tmp) if f.endswith(".ply"))
+        expected = [ply_vertex_count(os.path.join(tmp, f)) for f in frames]
+        assert len(set(expected)) > 1, expected
+
+        reader = OpenDataFile(os.path.join(tmp, "points.series"))
+        assert reader is not None and reader.GetXMLName() == "PointSequenceReader", reader
+        assert list(reader.TimestepValues) == [0.0, 0.5, 1.0, 1.5, 2.0], reader.TimestepValues
+        doc = reader.GetProperty("FrameInterval").GetDocumentation().GetDescription()
+        assert "positive" in doc, doc
+
+        scene = GetAnimationScene()
+        scene.UpdateAnimationUsingDataTimeSteps()
+        assert len(GetTimeKeeper().TimestepValues) == 5
+        for t, count in zip(reader.TimestepValues, expected):
+            reader.UpdatePipeline(t)
+            data = servermanager.Fetch(reader)
+            assert data.GetNumberOfPoints() == count, (t, data.GetNumberOfPoints(), count)
+            assert data.GetPointData().GetNormals() is not None
+
+        # The file dialog passes a numbered group as a list; the folder proxy takes a pattern.
+        listed = ns["PointSequenceReader"](FileNames=[os.path.join(tmp, f) for f in frames])
+        listed.UpdatePipeline(4.0)
+        assert servermanager.Fetch(listed).GetNumberOfPoints() == expected[4]
+        folder = ns["PointSequenceFolder"](DirectoryName=tmp, FilePattern="frame_000[0-2].ply")
+        assert list(folder.TimestepValues) == [0.0, 1.0, 2.0], folder.TimestepValues
+        folder.UpdatePipeline(2.0)
+        assert servermanager.Fetch(folder).GetNumberOfPoints() == expected[2]
+    print("pvpython point sequence test passed")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
