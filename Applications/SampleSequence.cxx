@@ -84,7 +84,8 @@ int run(int argc, char** argv)
       writing.extension = optionValue(argc, argv, i);
       if (writing.extension != "ply" && writing.extension != "pcd" && writing.extension != "xyz" &&
           writing.extension != "csv" && writing.extension != "obj")
-        throw UsageError("option --format: '" + writing.extension + "' is not one of ply pcd xyz csv obj");
+        throw UsageError("option --format: '" + writing.extension +
+                         "' is not one of ply pcd xyz csv obj");
     }
     else if (arg == "--interval")
       writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);
@@ -115,7 +116,8 @@ int run(int argc, char** argv)
   }
   else
   {
-    animation = std::make_unique<dp::MeshSequenceFiles>(dp::FrameSequence::fromDirectory(mesh, pattern));
+    animation =
+        std::make_unique<dp::MeshSequenceFiles>(dp::FrameSequence::fromDirectory(mesh, pattern));
   }
   const double diagonal = dp::boundingBoxDiagonal(animation->positions(0));
   sampling.noiseStdDev = noise * diagonal;

@@ -7,6 +7,7 @@
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkCommand.h"
+#include "vtkDPXMLReaders.h"
 #include "vtkDoubleArray.h"
 #include "vtkErrorCode.h"
 #include "vtkExecutive.h"
@@ -26,7 +27,6 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
-#include "vtkDPXMLReaders.h"
 
 #include <cmath>
 #include <fstream>
@@ -248,13 +248,12 @@ bool isSeriesFile(const std::string& name)
 dp::FrameSequence sequenceFromOneFile(const std::string& name, double frameInterval)
 {
   return isSeriesFile(name) ? dp::FrameSequence::fromSeriesFile(name)
-                            : dp::FrameSequence::fromFiles({ name }, frameInterval);
+                            : dp::FrameSequence::fromFiles({name}, frameInterval);
 }
 
 } // namespace
 
-vtkPointSequenceSource::vtkPointSequenceSource()
-  : Internal(new Internals)
+vtkPointSequenceSource::vtkPointSequenceSource() : Internal(new Internals)
 {
   this->SetNumberOfInputPorts(0);
   this->SetFilePattern("*");
@@ -330,7 +329,7 @@ bool vtkPointSequenceSource::BuildSequence()
     else if (this->DirectoryName && *this->DirectoryName)
     {
       in.Sequence = dp::FrameSequence::fromDirectory(
-        this->DirectoryName, this->FilePattern ? this->FilePattern : "*", this->FrameInterval);
+          this->DirectoryName, this->FilePattern ? this->FilePattern : "*", this->FrameInterval);
     }
     else
     {
@@ -371,8 +370,8 @@ double vtkPointSequenceSource::GetFrameTime(int frame)
   return s[frame].time;
 }
 
-int vtkPointSequenceSource::RequestInformation(
-  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+int vtkPointSequenceSource::RequestInformation(vtkInformation*, vtkInformationVector**,
+                                               vtkInformationVector* outputVector)
 {
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
@@ -382,15 +381,15 @@ int vtkPointSequenceSource::RequestInformation(
   std::vector<double> times;
   for (const auto& frame : this->Internal->Sequence.frames())
     times.push_back(frame.time);
-  outInfo->Set(
-    vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(), static_cast<int>(times.size()));
-  const double range[2] = { times.front(), times.back() };
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(),
+               static_cast<int>(times.size()));
+  const double range[2] = {times.front(), times.back()};
   outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
   return 1;
 }
 
-int vtkPointSequenceSource::RequestData(
-  vtkInformation*, vtkInformationVector**, vtkInformationVector* outputVector)
+int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
+                                        vtkInformationVector* outputVector)
 {
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
@@ -402,7 +401,8 @@ int vtkPointSequenceSource::RequestData(
   std::size_t index = 0;
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
   {
-    index = sequence.frameAtTime(outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+    index =
+        sequence.frameAtTime(outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
   }
   const dp::Frame& frame = sequence[index];
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frame.time);

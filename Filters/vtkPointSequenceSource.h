@@ -92,7 +92,8 @@ public:
    */
   int GetNumberOfFrames();
 
-  /** The file and the time of frame i (after GetNumberOfFrames()); nullptr / 0 when out of range. */
+  /** The file and the time of frame i (after GetNumberOfFrames()); nullptr / 0 when out of range.
+   */
   const char* GetFramePath(int frame);
   double GetFrameTime(int frame);
 

@@ -11,11 +11,14 @@
 namespace
 {
 
-using dp::test::TempDir;
 using dp::test::expectFileError;
+using dp::test::TempDir;
 using dp::test::writeText;
 
-std::string name(const std::string& path) { return std::filesystem::path(path).filename().string(); }
+std::string name(const std::string& path)
+{
+  return std::filesystem::path(path).filename().string();
+}
 
 TEST(NaturalOrder, NumbersCompareByValue)
 {
@@ -95,12 +98,12 @@ TEST(FrameSequence, BadSeriesFilesAreErrorsNamingTheFile)
   TempDir dir;
   const std::string series = dir.file("bad.series");
   const std::pair<std::string, std::string> cases[] = {
-    {"{not json", "not valid JSON"},
-    {R"({"file-series-version":"1.0"})", "\"files\" array"},
-    {R"({"files":[]})", "lists no files"},
-    {R"({"files":[{"time":1}]})", "has no \"name\""},
-    {R"({"files":[{"name":"a.ply","time":"soon"}]})", "non-numeric"},
-    {R"({"files":[{"name":"a.ply","time":1},{"name":"b.ply","time":1}]})", "share the time"},
+      {"{not json", "not valid JSON"},
+      {R"({"file-series-version":"1.0"})", "\"files\" array"},
+      {R"({"files":[]})", "lists no files"},
+      {R"({"files":[{"time":1}]})", "has no \"name\""},
+      {R"({"files":[{"name":"a.ply","time":"soon"}]})", "non-numeric"},
+      {R"({"files":[{"name":"a.ply","time":1},{"name":"b.ply","time":1}]})", "share the time"},
   };
   for (const auto& [text, expected] : cases)
   {

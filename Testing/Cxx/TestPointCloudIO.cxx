@@ -13,8 +13,8 @@
 namespace
 {
 
-using dp::test::TempDir;
 using dp::test::expectFileError;
+using dp::test::TempDir;
 using dp::test::writeText;
 
 dp::PointCloud sampleCloud(bool withFaces)
@@ -130,17 +130,23 @@ TEST(PLY, MalformedFilesAreErrorsNamingTheFile)
   TempDir dir;
   const std::string path = dir.file("bad.ply");
   const std::pair<std::string, std::string> cases[] = {
-    {"not a ply at all", "not a PLY file"},
-    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "end_header"},
-    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 2\n",
-     "lacks one of the properties x, y, z"},
-    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quaternion x\nend_header\n", "unknown property type"},
-    {"ply\nformat ebcdic 1.0\nend_header\n", "unknown format"},
-    {"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
-     "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 1 1\n3 0 1 7\n",
-     "uses vertex 7"},
-    {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-     "end_header\n0 zero 0\n", "is not a number"},
+      {"not a ply at all", "not a PLY file"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "end_header"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nend_header\n1 "
+       "2\n",
+       "lacks one of the properties x, y, z"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quaternion x\nend_header\n",
+       "unknown property type"},
+      {"ply\nformat ebcdic 1.0\nend_header\n", "unknown format"},
+      {"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty "
+       "float z\n"
+       "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 1 1\n3 0 1 "
+       "7\n",
+       "uses vertex 7"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty "
+       "float z\n"
+       "end_header\n0 zero 0\n",
+       "is not a number"},
   };
   for (const auto& [text, expected] : cases)
   {
@@ -165,8 +171,8 @@ TEST(Reading, NonFinitePointsAreDroppedAndCountedWithTheirAttributesAndFaces)
   TempDir dir;
   const std::string path = dir.file("nan.ply");
   dp::PointCloud cloud = sampleCloud(true);
-  cloud.points[3] = std::numeric_limits<double>::quiet_NaN();     // point 1
-  cloud.points[11] = std::numeric_limits<double>::infinity();     // point 3
+  cloud.points[3] = std::numeric_limits<double>::quiet_NaN(); // point 1
+  cloud.points[11] = std::numeric_limits<double>::infinity(); // point 3
   dp::writePLY(path, cloud, dp::PlyEncoding::BinaryBigEndian);
   dp::ReadReport report;
   const dp::PointCloud read = dp::readPointCloud(path, &report);

@@ -144,7 +144,8 @@ TEST(PointSequenceSource, ABadFrameIsAnErrorNamingItAndTheOtherFramesStillRead)
   f.source->SetDirectoryName(nullptr);
   f.source->SetFileName(f.dir.file("odd.series").c_str());
   f.at(0);
-  EXPECT_NE(f.log->Errors.find("f0.las: unknown file extension"), std::string::npos) << f.log->Errors;
+  EXPECT_NE(f.log->Errors.find("f0.las: unknown file extension"), std::string::npos)
+      << f.log->Errors;
 }
 
 TEST(PointSequenceSource, NaNsAreDroppedWithACountAndEmptyFramesWarn)
@@ -158,7 +159,8 @@ TEST(PointSequenceSource, NaNsAreDroppedWithACountAndEmptyFramesWarn)
   f.source->SetDirectoryName(f.dir.path().c_str());
   EXPECT_EQ(f.at(0)->GetNumberOfPoints(), 4);
   EXPECT_EQ(f.source->GetNumberOfDroppedPoints(), 2);
-  EXPECT_NE(f.log->Warnings.find("dropped 2 point(s) with NaN"), std::string::npos) << f.log->Warnings;
+  EXPECT_NE(f.log->Warnings.find("dropped 2 point(s) with NaN"), std::string::npos)
+      << f.log->Warnings;
   EXPECT_EQ(f.at(1)->GetNumberOfPoints(), 0);
   EXPECT_EQ(f.log->Errors, "");
   EXPECT_NE(f.log->Warnings.find("a1.xyz: empty frame"), std::string::npos) << f.log->Warnings;
@@ -172,7 +174,8 @@ TEST(PointSequenceSource, NoInputAndMissingFolderAreErrors)
   f.log->Errors.clear();
   f.source->SetDirectoryName(f.dir.file("nowhere").c_str());
   EXPECT_EQ(f.source->GetNumberOfFrames(), -1);
-  EXPECT_NE(f.log->Errors.find("nowhere: folder does not exist"), std::string::npos) << f.log->Errors;
+  EXPECT_NE(f.log->Errors.find("nowhere: folder does not exist"), std::string::npos)
+      << f.log->Errors;
 }
 
 TEST(PointSequenceSource, VtkXmlFramesKeepTheirArraysAndPolygons)
@@ -206,7 +209,8 @@ TEST(PointSequenceSource, VtkXmlFramesKeepTheirArraysAndPolygons)
   writeText(f.dir.file("broken.vtp"), "<VTKFile type=\"PolyData\"><PolyData><Piece Number");
   f.source->SetFileName(f.dir.file("broken.vtp").c_str());
   f.at(0);
-  EXPECT_EQ(f.log->Errors.find(f.dir.file("broken.vtp")) != std::string::npos, true) << f.log->Errors;
+  EXPECT_EQ(f.log->Errors.find(f.dir.file("broken.vtp")) != std::string::npos, true)
+      << f.log->Errors;
 }
 
 } // namespace

@@ -35,7 +35,8 @@ double signedVolume(const std::vector<double>& p, const std::vector<std::int64_t
 }
 
 // Directed edge -> count; a closed, consistently oriented surface has each edge once each way.
-std::map<std::pair<std::int64_t, std::int64_t>, int> directedEdges(const std::vector<std::int64_t>& t)
+std::map<std::pair<std::int64_t, std::int64_t>, int>
+directedEdges(const std::vector<std::int64_t>& t)
 {
   std::map<std::pair<std::int64_t, std::int64_t>, int> edges;
   for (std::size_t k = 0; k < t.size(); k += 3)
@@ -198,9 +199,9 @@ TEST(Sampler, HolesRemoveEveryPointNearTheirCentresAndFollowTheMaterial)
       std::size_t inside = 0;
       for (std::size_t i = 0; i < c.numberOfPoints(); ++i)
         for (std::size_t h = 0; h < 3; ++h)
-          inside += std::hypot(c.points[3 * i] - centres[3 * h],
-                               c.points[3 * i + 1] - centres[3 * h + 1],
-                               c.points[3 * i + 2] - centres[3 * h + 2]) < o.holeRadius;
+          inside +=
+              std::hypot(c.points[3 * i] - centres[3 * h], c.points[3 * i + 1] - centres[3 * h + 1],
+                         c.points[3 * i + 2] - centres[3 * h + 2]) < o.holeRadius;
       return inside;
     };
     const auto holed = dp::sampleSurface(p, sheet.triangles(), o, frame);
@@ -222,10 +223,13 @@ TEST(Sampler, HolesRemoveEveryPointNearTheirCentresAndFollowTheMaterial)
 TEST(Sampler, RejectsMeshesWithoutAreaAndBadIndices)
 {
   dp::SamplerOptions o;
-  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 2, 0, 0}, {0, 1, 2}, o, 0), std::invalid_argument);
-  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 3}, o, 0), std::invalid_argument);
+  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 2, 0, 0}, {0, 1, 2}, o, 0),
+               std::invalid_argument);
+  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 3}, o, 0),
+               std::invalid_argument);
   o.noiseStdDev = -1;
-  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2}, o, 0), std::invalid_argument);
+  EXPECT_THROW(dp::sampleSurface({0, 0, 0, 1, 0, 0, 0, 1, 0}, {0, 1, 2}, o, 0),
+               std::invalid_argument);
 }
 
 TEST(Sampler, WritesASequenceTheFrameListReadsBackWithGroundTruth)
@@ -269,11 +273,12 @@ TEST(MeshSequenceFiles, FramesWithAnotherVertexCountAreErrors)
   dp::writePLY(dir.file("m1.ply"), other);
   dp::MeshSequenceFiles files(dp::FrameSequence::fromDirectory(dir.path()));
   EXPECT_NO_THROW(files.positions(0));
-  dp::test::expectFileError([&] { files.positions(1); }, dir.file("m1.ply"), "not one animated mesh");
+  dp::test::expectFileError([&] { files.positions(1); }, dir.file("m1.ply"),
+                            "not one animated mesh");
   // A first frame without faces cannot define the connectivity.
   dp::test::expectFileError(
-    [&] { dp::MeshSequenceFiles(dp::FrameSequence::fromFiles({dir.file("m1.ply")})); },
-    dir.file("m1.ply"), "has no faces");
+      [&] { dp::MeshSequenceFiles(dp::FrameSequence::fromFiles({dir.file("m1.ply")})); },
+      dir.file("m1.ply"), "has no faces");
 }
 
 } // namespace

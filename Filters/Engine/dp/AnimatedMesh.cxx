@@ -36,8 +36,7 @@ PointCloud AnimatedMesh::frameMesh(std::size_t frame) const
   return mesh;
 }
 
-BendingTube::BendingTube(const Options& options)
-  : Opts(options)
+BendingTube::BendingTube(const Options& options) : Opts(options)
 {
   if (Opts.rings < 2 || Opts.segments < 3 || !(Opts.radius > 0) || !(Opts.length > 0))
     throw std::invalid_argument("BendingTube needs rings >= 2, segments >= 3 and positive sizes");
@@ -105,8 +104,7 @@ std::vector<double> BendingTube::positions(std::size_t frame) const
   return out;
 }
 
-WavingSheet::WavingSheet(const Options& options)
-  : Opts(options)
+WavingSheet::WavingSheet(const Options& options) : Opts(options)
 {
   if (Opts.columns < 2 || Opts.rows < 2 || !(Opts.width > 0) || !(Opts.height > 0) ||
       !(Opts.wavelength > 0))
@@ -156,8 +154,7 @@ std::vector<std::int64_t> triangulateFaces(const PointCloud& mesh)
   return tris;
 }
 
-MeshSequenceFiles::MeshSequenceFiles(FrameSequence frames)
-  : Frames(std::move(frames))
+MeshSequenceFiles::MeshSequenceFiles(FrameSequence frames) : Frames(std::move(frames))
 {
   if (Frames.empty())
     throw std::invalid_argument("MeshSequenceFiles needs at least one frame");
@@ -176,9 +173,9 @@ std::vector<double> MeshSequenceFiles::positions(std::size_t frame) const
   if (mesh.numberOfPoints() != VertexCount || report.droppedNonFinite > 0)
     throw FileError(Frames[frame].path,
                     "has " + std::to_string(mesh.numberOfPoints() + report.droppedNonFinite) +
-                      " vertices (" + std::to_string(report.droppedNonFinite) +
-                      " non-finite), frame 0 has " + std::to_string(VertexCount) +
-                      ": not one animated mesh");
+                        " vertices (" + std::to_string(report.droppedNonFinite) +
+                        " non-finite), frame 0 has " + std::to_string(VertexCount) +
+                        ": not one animated mesh");
   return std::move(mesh.points);
 }
 

@@ -47,18 +47,15 @@ public:
   struct Options
   {
     std::size_t frames = 30;
-    std::size_t rings = 40;      // vertex rings along the axis
-    std::size_t segments = 24;   // vertices around each ring
+    std::size_t rings = 40;    // vertex rings along the axis
+    std::size_t segments = 24; // vertices around each ring
     double length = 1.0;
     double radius = 0.12;
     double maxBendRadians = 1.6; // bend angle at the peak of the motion
     double maxTwistRadians = 0.8;
   };
   explicit BendingTube(const Options& options);
-  BendingTube()
-    : BendingTube(Options{})
-  {
-  }
+  BendingTube() : BendingTube(Options{}) {}
   std::size_t numberOfFrames() const override { return Opts.frames; }
   std::size_t numberOfVertices() const override { return Rest.size() / 3; }
   const std::vector<std::int64_t>& triangles() const override { return Triangles; }
@@ -85,10 +82,7 @@ public:
     double wavelength = 0.8;
   };
   explicit WavingSheet(const Options& options);
-  WavingSheet()
-    : WavingSheet(Options{})
-  {
-  }
+  WavingSheet() : WavingSheet(Options{}) {}
   std::size_t numberOfFrames() const override { return Opts.frames; }
   std::size_t numberOfVertices() const override { return Opts.columns * Opts.rows; }
   const std::vector<std::int64_t>& triangles() const override { return Triangles; }

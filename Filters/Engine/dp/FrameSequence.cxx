@@ -121,14 +121,14 @@ bool globMatch(const std::string& pattern, const std::string& name)
   return p == pattern.size();
 }
 
-FrameSequence FrameSequence::fromDirectory(const std::string& directory,
-                                           const std::string& pattern, double frameInterval)
+FrameSequence FrameSequence::fromDirectory(const std::string& directory, const std::string& pattern,
+                                           double frameInterval)
 {
   std::error_code ec;
   if (!fs::is_directory(directory, ec))
   {
-    throw FileError(directory, fs::exists(directory, ec) ? "is not a folder"
-                                                         : "folder does not exist");
+    throw FileError(directory,
+                    fs::exists(directory, ec) ? "is not a folder" : "folder does not exist");
   }
   std::vector<std::string> names;
   for (fs::directory_iterator it(directory, ec), end; !ec && it != end; it.increment(ec))
@@ -148,8 +148,9 @@ FrameSequence FrameSequence::fromDirectory(const std::string& directory,
   }
   if (names.empty())
   {
-    throw FileError(directory, "no point files match the pattern '" + pattern +
-                                 "' (readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk)");
+    throw FileError(directory,
+                    "no point files match the pattern '" + pattern +
+                        "' (readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk)");
   }
   std::sort(names.begin(), names.end(), naturalLess);
   std::vector<std::string> paths;
@@ -182,7 +183,8 @@ FrameSequence FrameSequence::fromSeriesFile(const std::string& seriesPath)
   {
     if (!entry.is_object() || !entry.contains("name") || !entry["name"].is_string())
     {
-      throw FileError(seriesPath, "entry " + std::to_string(index) + " of \"files\" has no \"name\"");
+      throw FileError(seriesPath,
+                      "entry " + std::to_string(index) + " of \"files\" has no \"name\"");
     }
     Frame frame;
     const fs::path name = entry["name"].get<std::string>();
@@ -191,7 +193,8 @@ FrameSequence FrameSequence::fromSeriesFile(const std::string& seriesPath)
     if (entry.contains("time"))
     {
       if (!entry["time"].is_number() || !std::isfinite(entry["time"].get<double>()))
-        throw FileError(seriesPath, "entry " + std::to_string(index) + " has a non-numeric \"time\"");
+        throw FileError(seriesPath,
+                        "entry " + std::to_string(index) + " has a non-numeric \"time\"");
       frame.time = entry["time"].get<double>();
     }
     sequence.Frames.push_back(frame);
@@ -207,8 +210,8 @@ FrameSequence FrameSequence::fromSeriesFile(const std::string& seriesPath)
   for (std::size_t i = 1; i < sequence.Frames.size(); ++i)
   {
     if (sequence.Frames[i].time == sequence.Frames[i - 1].time)
-      throw FileError(seriesPath, "two files share the time " +
-                                    std::to_string(sequence.Frames[i].time));
+      throw FileError(seriesPath,
+                      "two files share the time " + std::to_string(sequence.Frames[i].time));
   }
   return sequence;
 }

@@ -31,8 +31,7 @@ class FrameSequence
 {
 public:
   /** Files in `directory` whose names match `pattern` and have a readable extension. */
-  static FrameSequence fromDirectory(const std::string& directory,
-                                     const std::string& pattern = "*",
+  static FrameSequence fromDirectory(const std::string& directory, const std::string& pattern = "*",
                                      double frameInterval = 1.0);
   /** Frames and times listed in a ParaView .series JSON file. */
   static FrameSequence fromSeriesFile(const std::string& seriesPath);

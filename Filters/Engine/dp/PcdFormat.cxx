@@ -24,67 +24,67 @@ double decodeField(const char* p, const PcdField& f)
 {
   switch (f.type)
   {
-    case 'F':
-      if (f.size == 4)
-      {
-        float v;
-        std::memcpy(&v, p, 4);
-        return v;
-      }
-      else
-      {
-        double v;
-        std::memcpy(&v, p, 8);
-        return v;
-      }
-    case 'I':
-      switch (f.size)
-      {
-        case 1:
-          return static_cast<std::int8_t>(*p);
-        case 2:
-        {
-          std::int16_t v;
-          std::memcpy(&v, p, 2);
-          return v;
-        }
-        case 4:
-        {
-          std::int32_t v;
-          std::memcpy(&v, p, 4);
-          return v;
-        }
-        default:
-        {
-          std::int64_t v;
-          std::memcpy(&v, p, 8);
-          return static_cast<double>(v);
-        }
-      }
+  case 'F':
+    if (f.size == 4)
+    {
+      float v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    else
+    {
+      double v;
+      std::memcpy(&v, p, 8);
+      return v;
+    }
+  case 'I':
+    switch (f.size)
+    {
+    case 1:
+      return static_cast<std::int8_t>(*p);
+    case 2:
+    {
+      std::int16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case 4:
+    {
+      std::int32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
     default:
-      switch (f.size)
-      {
-        case 1:
-          return static_cast<std::uint8_t>(*p);
-        case 2:
-        {
-          std::uint16_t v;
-          std::memcpy(&v, p, 2);
-          return v;
-        }
-        case 4:
-        {
-          std::uint32_t v;
-          std::memcpy(&v, p, 4);
-          return v;
-        }
-        default:
-        {
-          std::uint64_t v;
-          std::memcpy(&v, p, 8);
-          return static_cast<double>(v);
-        }
-      }
+    {
+      std::int64_t v;
+      std::memcpy(&v, p, 8);
+      return static_cast<double>(v);
+    }
+    }
+  default:
+    switch (f.size)
+    {
+    case 1:
+      return static_cast<std::uint8_t>(*p);
+    case 2:
+    {
+      std::uint16_t v;
+      std::memcpy(&v, p, 2);
+      return v;
+    }
+    case 4:
+    {
+      std::uint32_t v;
+      std::memcpy(&v, p, 4);
+      return v;
+    }
+    default:
+    {
+      std::uint64_t v;
+      std::memcpy(&v, p, 8);
+      return static_cast<double>(v);
+    }
+    }
   }
 }
 
@@ -233,8 +233,8 @@ PointCloud readPCD(const std::string& path)
   {
     PcdField& f = fields[k];
     if (f.type == 'F' && f.size != 4 && f.size != 8)
-      throw FileError(path, "PCD field '" + f.name + "' is a float of size " +
-                              std::to_string(f.size));
+      throw FileError(path,
+                      "PCD field '" + f.name + "' is a float of size " + std::to_string(f.size));
     f.offset = recordSize;
     recordSize += static_cast<std::size_t>(f.size) * f.count;
     const std::string& n = f.name;
@@ -262,8 +262,8 @@ PointCloud readPCD(const std::string& path)
   auto truncatedError = [&](std::size_t got)
   {
     throw FileError(path, "PCD data ends early (truncated file): the header declares " +
-                            std::to_string(points) + " points but the data holds " +
-                            std::to_string(got));
+                              std::to_string(points) + " points but the data holds " +
+                              std::to_string(got));
   };
   std::vector<std::uint32_t> packedColor(rgb >= 0 ? points : 0);
 
@@ -282,7 +282,7 @@ PointCloud readPCD(const std::string& path)
           double v = 0;
           if (!detail::parseNumber(token, v))
             throw FileError(path, "PCD point " + std::to_string(i) + ": '" + std::string(token) +
-                                    "' is not a number");
+                                      "' is not a number");
           values[i * valuesPerPoint + firstValue[k] + c] = v;
           if (static_cast<int>(k) == rgb && c == 0)
           {
@@ -317,9 +317,9 @@ PointCloud readPCD(const std::string& path)
       std::memcpy(sizes, body.data(), 8);
       if (sizes[1] != points * recordSize)
         throw FileError(path, "PCD binary_compressed: uncompressed size " +
-                                std::to_string(sizes[1]) + " does not match " +
-                                std::to_string(points) + " points of " +
-                                std::to_string(recordSize) + " bytes");
+                                  std::to_string(sizes[1]) + " does not match " +
+                                  std::to_string(points) + " points of " +
+                                  std::to_string(recordSize) + " bytes");
       if (body.size() - 8 < sizes[0])
         throw FileError(path, "PCD binary_compressed data ends early (truncated file)");
       decompressed.resize(sizes[1]);
@@ -335,8 +335,8 @@ PointCloud readPCD(const std::string& path)
       const PcdField& f = fields[k];
       for (std::size_t i = 0; i < points; ++i)
       {
-        const char* base = fieldMajor ? raw + fieldStart + i * f.size * f.count
-                                      : raw + i * recordSize + f.offset;
+        const char* base =
+            fieldMajor ? raw + fieldStart + i * f.size * f.count : raw + i * recordSize + f.offset;
         for (int c = 0; c < f.count; ++c)
         {
           values[i * valuesPerPoint + firstValue[k] + c] = decodeField(base + c * f.size, f);
@@ -398,7 +398,7 @@ PointCloud readPCD(const std::string& path)
     for (std::size_t i = 0; i < points; ++i)
       for (int c = 0; c < a.components; ++c)
         a.values[i * a.components + c] =
-          static_cast<float>(values[i * valuesPerPoint + firstValue[k] + c]);
+            static_cast<float>(values[i * valuesPerPoint + firstValue[k] + c]);
   }
   return cloud;
 }

@@ -49,18 +49,18 @@ std::size_t sizeOf(PlyType t)
 {
   switch (t)
   {
-    case PlyType::Int8:
-    case PlyType::UInt8:
-      return 1;
-    case PlyType::Int16:
-    case PlyType::UInt16:
-      return 2;
-    case PlyType::Int32:
-    case PlyType::UInt32:
-    case PlyType::Float32:
-      return 4;
-    case PlyType::Float64:
-      return 8;
+  case PlyType::Int8:
+  case PlyType::UInt8:
+    return 1;
+  case PlyType::Int16:
+  case PlyType::UInt16:
+    return 2;
+  case PlyType::Int32:
+  case PlyType::UInt32:
+  case PlyType::Float32:
+    return 4;
+  case PlyType::Float64:
+    return 8;
   }
   return 0;
 }
@@ -83,22 +83,22 @@ double decode(const char* p, PlyType t, bool swap)
 {
   switch (t)
   {
-    case PlyType::Int8:
-      return static_cast<std::int8_t>(*p);
-    case PlyType::UInt8:
-      return static_cast<std::uint8_t>(*p);
-    case PlyType::Int16:
-      return loadSwapped<std::int16_t>(p, swap);
-    case PlyType::UInt16:
-      return loadSwapped<std::uint16_t>(p, swap);
-    case PlyType::Int32:
-      return loadSwapped<std::int32_t>(p, swap);
-    case PlyType::UInt32:
-      return loadSwapped<std::uint32_t>(p, swap);
-    case PlyType::Float32:
-      return loadSwapped<float>(p, swap);
-    case PlyType::Float64:
-      return loadSwapped<double>(p, swap);
+  case PlyType::Int8:
+    return static_cast<std::int8_t>(*p);
+  case PlyType::UInt8:
+    return static_cast<std::uint8_t>(*p);
+  case PlyType::Int16:
+    return loadSwapped<std::int16_t>(p, swap);
+  case PlyType::UInt16:
+    return loadSwapped<std::uint16_t>(p, swap);
+  case PlyType::Int32:
+    return loadSwapped<std::int32_t>(p, swap);
+  case PlyType::UInt32:
+    return loadSwapped<std::uint32_t>(p, swap);
+  case PlyType::Float32:
+    return loadSwapped<float>(p, swap);
+  case PlyType::Float64:
+    return loadSwapped<double>(p, swap);
   }
   return 0.0;
 }
@@ -137,13 +137,22 @@ enum class Slot
 
 Slot slotFor(const std::string& name)
 {
-  static const std::pair<const char*, Slot> names[] = {
-    {"x", Slot::X},         {"y", Slot::Y},          {"z", Slot::Z},
-    {"nx", Slot::NX},       {"ny", Slot::NY},        {"nz", Slot::NZ},
-    {"normal_x", Slot::NX}, {"normal_y", Slot::NY},  {"normal_z", Slot::NZ},
-    {"red", Slot::Red},     {"green", Slot::Green},  {"blue", Slot::Blue},
-    {"alpha", Slot::Alpha}, {"diffuse_red", Slot::Red}, {"diffuse_green", Slot::Green},
-    {"diffuse_blue", Slot::Blue}};
+  static const std::pair<const char*, Slot> names[] = {{"x", Slot::X},
+                                                       {"y", Slot::Y},
+                                                       {"z", Slot::Z},
+                                                       {"nx", Slot::NX},
+                                                       {"ny", Slot::NY},
+                                                       {"nz", Slot::NZ},
+                                                       {"normal_x", Slot::NX},
+                                                       {"normal_y", Slot::NY},
+                                                       {"normal_z", Slot::NZ},
+                                                       {"red", Slot::Red},
+                                                       {"green", Slot::Green},
+                                                       {"blue", Slot::Blue},
+                                                       {"alpha", Slot::Alpha},
+                                                       {"diffuse_red", Slot::Red},
+                                                       {"diffuse_green", Slot::Green},
+                                                       {"diffuse_blue", Slot::Blue}};
   for (const auto& [n, s] : names)
   {
     if (name == n)
@@ -216,8 +225,7 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
       PlyElement element;
       element.name = std::string(detail::nextToken(rest));
       double count = -1;
-      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) ||
-          count < 0)
+      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) || count < 0)
       {
         fail("malformed element line '" + std::string(line) + "'");
       }
@@ -274,9 +282,7 @@ class BodyReader
 {
 public:
   BodyReader(const std::string& path, const std::string& bytes, const PlyHeader& header)
-    : Path(path)
-    , Body(std::string_view(bytes).substr(header.bodyOffset))
-    , Mode(header.encoding)
+      : Path(path), Body(std::string_view(bytes).substr(header.bodyOffset)), Mode(header.encoding)
   {
   }
 
@@ -320,9 +326,9 @@ private:
 [[noreturn]] void truncated(const std::string& path, const PlyElement& element, std::size_t item)
 {
   throw FileError(path, "PLY data ends early (truncated file): the header declares " +
-                          std::to_string(element.count) + " '" + element.name +
-                          "' elements but the data stops inside number " +
-                          std::to_string(item + 1));
+                            std::to_string(element.count) + " '" + element.name +
+                            "' elements but the data stops inside number " +
+                            std::to_string(item + 1));
 }
 
 void readVertices(const std::string& path, const PlyElement& element, BodyReader& reader,
@@ -390,36 +396,36 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
       const Slot slot = slots[p];
       switch (slot)
       {
-        case Slot::X:
-        case Slot::Y:
-        case Slot::Z:
-          cloud.points[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::X)] = value;
-          break;
-        case Slot::NX:
-        case Slot::NY:
-        case Slot::NZ:
-          cloud.normals[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::NX)] =
+      case Slot::X:
+      case Slot::Y:
+      case Slot::Z:
+        cloud.points[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::X)] = value;
+        break;
+      case Slot::NX:
+      case Slot::NY:
+      case Slot::NZ:
+        cloud.normals[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::NX)] =
             static_cast<float>(value);
-          break;
-        case Slot::Red:
-        case Slot::Green:
-        case Slot::Blue:
-        case Slot::Alpha:
+        break;
+      case Slot::Red:
+      case Slot::Green:
+      case Slot::Blue:
+      case Slot::Alpha:
+      {
+        const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
+        if (c < cloud.colorComponents)
         {
-          const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
-          if (c < cloud.colorComponents)
-          {
-            const double scaled = colorIsFloat ? value * 255.0 : value;
-            cloud.colors[cloud.colorComponents * i + c] =
-              static_cast<std::uint8_t>(std::clamp(scaled + (colorIsFloat ? 0.5 : 0.0), 0.0, 255.0));
-          }
-          break;
+          const double scaled = colorIsFloat ? value * 255.0 : value;
+          cloud.colors[cloud.colorComponents * i + c] = static_cast<std::uint8_t>(
+              std::clamp(scaled + (colorIsFloat ? 0.5 : 0.0), 0.0, 255.0));
         }
-        case Slot::Attribute:
-          cloud.attributes[attributeIndex[p]].values[i] = static_cast<float>(value);
-          break;
-        case Slot::Skip:
-          break;
+        break;
+      }
+      case Slot::Attribute:
+        cloud.attributes[attributeIndex[p]].values[i] = static_cast<float>(value);
+        break;
+      case Slot::Skip:
+        break;
       }
     }
   }
@@ -471,9 +477,9 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
           if (value < 0 || value >= numberOfPoints)
           {
             throw FileError(path, "PLY face " + std::to_string(f) + " uses vertex " +
-                                    std::to_string(static_cast<long long>(value)) +
-                                    ", but there are only " +
-                                    std::to_string(cloud.numberOfPoints()) + " vertices");
+                                      std::to_string(static_cast<long long>(value)) +
+                                      ", but there are only " +
+                                      std::to_string(cloud.numberOfPoints()) + " vertices");
           }
           cloud.faceConnectivity.push_back(static_cast<std::int64_t>(value));
         }
@@ -601,7 +607,7 @@ void writePLY(const std::string& path, const PointCloud& cloud, PlyEncoding enco
   cloud.validate();
   const std::size_t n = cloud.numberOfPoints();
   std::string out = "ply\nformat ";
-  out += encoding == PlyEncoding::Ascii              ? "ascii"
+  out += encoding == PlyEncoding::Ascii             ? "ascii"
          : encoding == PlyEncoding::BinaryBigEndian ? "binary_big_endian"
                                                     : "binary_little_endian";
   out += " 1.0\ncomment written by DynamicPoints\n";

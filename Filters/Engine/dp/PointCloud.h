@@ -32,10 +32,10 @@ struct PointAttribute
 /** One frame of points (see file comment). */
 struct PointCloud
 {
-  std::vector<double> points;        // x y z per point
-  std::vector<float> normals;        // empty, or nx ny nz per point
-  std::vector<std::uint8_t> colors;  // empty, or colorComponents per point (0..255)
-  int colorComponents = 0;           // 0, 3 (RGB) or 4 (RGBA)
+  std::vector<double> points;       // x y z per point
+  std::vector<float> normals;       // empty, or nx ny nz per point
+  std::vector<std::uint8_t> colors; // empty, or colorComponents per point (0..255)
+  int colorComponents = 0;          // 0, 3 (RGB) or 4 (RGBA)
   std::vector<PointAttribute> attributes;
   // Polygons in CSR form: face f uses faceConnectivity[faceOffsets[f] .. faceOffsets[f+1]).
   // Either both are empty or faceOffsets has numberOfFaces()+1 entries.
@@ -70,8 +70,7 @@ class FileError : public std::runtime_error
 {
 public:
   FileError(const std::string& path, const std::string& what)
-    : std::runtime_error(path + ": " + what)
-    , Path(path)
+      : std::runtime_error(path + ": " + what), Path(path)
   {
   }
   const std::string& path() const { return Path; }

@@ -22,7 +22,7 @@ std::string readWholeFile(const std::string& path)
     throw FileError(path, "is a folder, not a file");
   }
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"),
-                                                        &std::fclose);
+                                                       &std::fclose);
   if (!file)
   {
     throw FileError(path, std::string("cannot open file (") + std::strerror(errno) + ")");
@@ -47,7 +47,7 @@ std::string readWholeFile(const std::string& path)
   if (std::ferror(file.get()))
   {
     throw FileError(path, std::string("read error (") + std::strerror(errno) +
-                            ") - is it a directory or an unreadable file?");
+                              ") - is it a directory or an unreadable file?");
   }
   return bytes;
 }
@@ -55,7 +55,7 @@ std::string readWholeFile(const std::string& path)
 void writeWholeFile(const std::string& path, const std::string& bytes)
 {
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"),
-                                                        &std::fclose);
+                                                       &std::fclose);
   if (!file)
   {
     throw FileError(path, std::string("cannot create file (") + std::strerror(errno) + ")");
@@ -116,7 +116,7 @@ bool isEngineFormat(PointFileFormat format)
 
 const char* const* supportedExtensions()
 {
-  static const char* const extensions[] = {"ply", "pcd", "xyz", "pts", "csv", "txt",
+  static const char* const extensions[] = {"ply", "pcd", "xyz", "pts", "csv",  "txt",
                                            "obj", "vtp", "vtu", "vtk", nullptr};
   return extensions;
 }
@@ -126,23 +126,23 @@ PointCloud readPointCloud(const std::string& path, ReadReport* report)
   PointCloud cloud;
   switch (formatFromFileName(path))
   {
-    case PointFileFormat::PLY:
-      cloud = readPLY(path);
-      break;
-    case PointFileFormat::PCD:
-      cloud = readPCD(path);
-      break;
-    case PointFileFormat::Text:
-      cloud = readTextPoints(path);
-      break;
-    case PointFileFormat::OBJ:
-      cloud = readOBJ(path);
-      break;
-    case PointFileFormat::Unknown:
-      throw FileError(path, "unknown file extension; expected one of .ply .pcd .xyz .pts .csv "
-                            ".txt .obj .vtp .vtu .vtk");
-    default:
-      throw FileError(path, "VTK formats are read by the VTK layer, not by the engine");
+  case PointFileFormat::PLY:
+    cloud = readPLY(path);
+    break;
+  case PointFileFormat::PCD:
+    cloud = readPCD(path);
+    break;
+  case PointFileFormat::Text:
+    cloud = readTextPoints(path);
+    break;
+  case PointFileFormat::OBJ:
+    cloud = readOBJ(path);
+    break;
+  case PointFileFormat::Unknown:
+    throw FileError(path, "unknown file extension; expected one of .ply .pcd .xyz .pts .csv "
+                          ".txt .obj .vtp .vtu .vtk");
+  default:
+    throw FileError(path, "VTK formats are read by the VTK layer, not by the engine");
   }
   const std::size_t dropped = dropNonFinitePoints(cloud);
   if (report)
@@ -156,16 +156,16 @@ void writePointCloud(const std::string& path, const PointCloud& cloud)
 {
   switch (formatFromFileName(path))
   {
-    case PointFileFormat::PLY:
-      return writePLY(path, cloud);
-    case PointFileFormat::PCD:
-      return writePCD(path, cloud);
-    case PointFileFormat::Text:
-      return writeTextPoints(path, cloud);
-    case PointFileFormat::OBJ:
-      return writeOBJ(path, cloud);
-    default:
-      throw FileError(path, "cannot write this extension; use .ply .pcd .xyz .csv .txt or .obj");
+  case PointFileFormat::PLY:
+    return writePLY(path, cloud);
+  case PointFileFormat::PCD:
+    return writePCD(path, cloud);
+  case PointFileFormat::Text:
+    return writeTextPoints(path, cloud);
+  case PointFileFormat::OBJ:
+    return writeOBJ(path, cloud);
+  default:
+    throw FileError(path, "cannot write this extension; use .ply .pcd .xyz .csv .txt or .obj");
   }
 }
 

@@ -26,7 +26,7 @@ class Random
 {
 public:
   Random(std::uint64_t seed, std::uint64_t stream)
-    : Engine(mix(seed ^ mix(stream + 0x9E3779B97F4A7C15ULL)))
+      : Engine(mix(seed ^ mix(stream + 0x9E3779B97F4A7C15ULL)))
   {
   }
   double uniform() { return static_cast<double>(Engine() >> 11) * 0x1.0p-53; } // [0,1)
@@ -51,14 +51,23 @@ struct Vec3
 {
   double x, y, z;
 };
-Vec3 operator-(Vec3 a, Vec3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Vec3 operator-(Vec3 a, Vec3 b)
+{
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
 Vec3 cross(Vec3 a, Vec3 b)
 {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-double norm(Vec3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
+double norm(Vec3 a)
+{
+  return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z);
+}
 
-Vec3 vertex(const std::vector<double>& p, std::int64_t i) { return {p[3 * i], p[3 * i + 1], p[3 * i + 2]}; }
+Vec3 vertex(const std::vector<double>& p, std::int64_t i)
+{
+  return {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+}
 
 // A point on the surface: triangle index and barycentric weights of its corners.
 struct SurfacePoint
@@ -100,7 +109,8 @@ public:
   // material point in every frame, however the areas change.
   SurfacePoint drawMaterialPoint(Random& random) const
   {
-    const auto t = static_cast<std::size_t>(random.uniform() * static_cast<double>(Cumulative.size()));
+    const auto t =
+        static_cast<std::size_t>(random.uniform() * static_cast<double>(Cumulative.size()));
     return inTriangle(std::min(t, Cumulative.size() - 1), random);
   }
 
@@ -164,7 +174,8 @@ std::vector<double> holeCentres(const std::vector<double>& positions,
                                 const SamplerOptions& options, std::size_t frame)
 {
   std::vector<double> out;
-  for (const Vec3& c : drawHoles(AreaTable(positions, triangles), positions, triangles, options, frame))
+  for (const Vec3& c :
+       drawHoles(AreaTable(positions, triangles), positions, triangles, options, frame))
     out.insert(out.end(), {c.x, c.y, c.z});
   return out;
 }
@@ -183,7 +194,7 @@ PointCloud sampleSurface(const std::vector<double>& positions,
   const double r2 = options.holeRadius * options.holeRadius;
 
   const std::vector<double> normals =
-    options.normals ? vertexNormals(positions, triangles) : std::vector<double>{};
+      options.normals ? vertexNormals(positions, triangles) : std::vector<double>{};
   PointCloud cloud;
   cloud.points.reserve(3 * options.pointsPerFrame);
   for (std::size_t i = 0; i < options.pointsPerFrame; ++i)
@@ -192,10 +203,12 @@ PointCloud sampleSurface(const std::vector<double>& positions,
     Vec3 p = evaluate(positions, triangles, s);
     // Draw the noise even for points dropped later, so the stream does not depend on holes.
     const Vec3 noise{random.gaussian(), random.gaussian(), random.gaussian()};
-    const bool inHole = std::any_of(holes.begin(), holes.end(), [&](const Vec3& c) {
-      const Vec3 d = p - c;
-      return d.x * d.x + d.y * d.y + d.z * d.z < r2;
-    });
+    const bool inHole = std::any_of(holes.begin(), holes.end(),
+                                    [&](const Vec3& c)
+                                    {
+                                      const Vec3 d = p - c;
+                                      return d.x * d.x + d.y * d.y + d.z * d.z < r2;
+                                    });
     if (inHole)
       continue;
     p.x += options.noiseStdDev * noise.x;
@@ -260,7 +273,8 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
       writePLY((fs::path(outDir) / "truth" / (writing.filePrefix + number + ".ply")).string(),
                truth);
     }
-    series["files"].push_back({{"name", name}, {"time", static_cast<double>(f) * writing.frameInterval}});
+    series["files"].push_back(
+        {{"name", name}, {"time", static_cast<double>(f) * writing.frameInterval}});
   }
   const std::string seriesPath = (fs::path(outDir) / "points.series").string();
   std::ofstream out(seriesPath);

@@ -29,11 +29,11 @@ struct SamplerOptions
 {
   std::size_t pointsPerFrame = 20000; // samples drawn before holes are cut
   std::uint64_t seed = 1;
-  double noiseStdDev = 0.0;   // Gaussian noise per coordinate, in the mesh's units
-  std::size_t holes = 0;      // number of holes per frame
-  double holeRadius = 0.0;    // in the mesh's units
-  bool holesMove = false;     // new hole positions in every frame
-  bool normals = true;        // write interpolated vertex normals
+  double noiseStdDev = 0.0; // Gaussian noise per coordinate, in the mesh's units
+  std::size_t holes = 0;    // number of holes per frame
+  double holeRadius = 0.0;  // in the mesh's units
+  bool holesMove = false;   // new hole positions in every frame
+  bool normals = true;      // write interpolated vertex normals
 };
 
 /**

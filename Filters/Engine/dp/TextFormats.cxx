@@ -20,9 +20,9 @@ bool isCommentLine(std::string_view line)
 // Meaning of a column: a coordinate, a normal component, a colour channel or an attribute.
 int columnRole(const std::string& name)
 {
-  static const char* const roles[] = {"x",  "y",   "z",     "nx",   "ny", "nz",
-                                      "r",  "g",   "b",     "red",  "green", "blue",
-                                      "normal_x", "normal_y", "normal_z"};
+  static const char* const roles[] = {"x",     "y",    "z",        "nx",       "ny",
+                                      "nz",    "r",    "g",        "b",        "red",
+                                      "green", "blue", "normal_x", "normal_y", "normal_z"};
   const int map[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 6, 7, 8, 3, 4, 5};
   for (std::size_t k = 0; k < std::size(roles); ++k)
     if (name == roles[k])
@@ -75,7 +75,7 @@ PointCloud readTextPoints(const std::string& path)
     if (!numeric)
     {
       throw FileError(path, "line " + std::to_string(lineNumber) + ": '" + std::string(line) +
-                              "' is not a row of numbers");
+                                "' is not a row of numbers");
     }
     // A PTS file starts with a line holding only the point count.
     if (!sawData && isPts && row.size() == 1 && declaredCount == 0)
@@ -88,18 +88,18 @@ PointCloud readTextPoints(const std::string& path)
       columns = row.size();
       if (columns < 3)
         throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
-                                std::to_string(columns) + " values; at least x y z are needed");
+                                  std::to_string(columns) + " values; at least x y z are needed");
       if (!header.empty() && header.size() != columns)
         throw FileError(path, "the header names " + std::to_string(header.size()) +
-                                " columns but line " + std::to_string(lineNumber) + " has " +
-                                std::to_string(columns));
+                                  " columns but line " + std::to_string(lineNumber) + " has " +
+                                  std::to_string(columns));
       sawData = true;
     }
     if (row.size() != columns)
     {
       throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
-                              std::to_string(row.size()) + " values, earlier lines have " +
-                              std::to_string(columns) + " (truncated or malformed file)");
+                                std::to_string(row.size()) + " values, earlier lines have " +
+                                std::to_string(columns) + " (truncated or malformed file)");
     }
     values.insert(values.end(), row.begin(), row.end());
   }
@@ -110,8 +110,8 @@ PointCloud readTextPoints(const std::string& path)
   const std::size_t n = values.size() / columns;
   if (declaredCount != 0 && declaredCount != n)
     throw FileError(path, "the PTS header declares " + std::to_string(declaredCount) +
-                            " points but the file holds " + std::to_string(n) +
-                            " (truncated file?)");
+                              " points but the file holds " + std::to_string(n) +
+                              " (truncated file?)");
 
   // Assign a role to each column: from the header names, else by the column count.
   std::vector<int> role(columns, -1);
@@ -246,7 +246,7 @@ PointCloud readOBJ(const std::string& path)
           if (cloud.colorComponents == 3 && cloud.colors.size() == 3 * (cloud.numberOfPoints() - 1))
             for (int c = 3; c < 6; ++c)
               cloud.colors.push_back(
-                static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, xyz[c] * 255.0 + 0.5))));
+                  static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, xyz[c] * 255.0 + 0.5))));
         }
         normalOfVertex.push_back(-1);
       }
@@ -301,7 +301,7 @@ PointCloud readOBJ(const std::string& path)
   // Normals: through the faces' v//vn references, or one vn per v in order.
   const std::size_t n = cloud.numberOfPoints();
   const bool referenced =
-    std::any_of(normalOfVertex.begin(), normalOfVertex.end(), [](auto i) { return i >= 0; });
+      std::any_of(normalOfVertex.begin(), normalOfVertex.end(), [](auto i) { return i >= 0; });
   if (referenced || (n > 0 && normalList.size() == 3 * n))
   {
     cloud.normals.assign(3 * n, 0.0f);

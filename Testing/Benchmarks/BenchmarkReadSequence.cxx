@@ -1,0 +1,190 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Benchmark: reading a point sequence through vtkPointSequenceSource, against parsing the same
+// files directly with the engine, and the process memory as the sequence plays.
+//
+// Default settings are the foundation issue's: 200 frames of 20k points (binary PLY with
+// normals, made by the sampler on the built-in bending tube). Prints medians of --repeats runs.
+#include "CommandLine.h"
+
+#include "dp/AnimatedMesh.h"
+#include "dp/FrameSequence.h"
+#include "dp/PointCloudIO.h"
+#include "dp/SurfaceSampler.h"
+
+#include "vtkNew.h"
+#include "vtkPointSequenceSource.h"
+#include "vtkPolyData.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <sys/resource.h>
+#include <thread>
+#include <unistd.h>
+#include <vector>
+
+namespace
+{
+
+double seconds()
+{
+  using clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+double median(std::vector<double> v)
+{
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+double residentMiB() // current resident set size
+{
+  long pages = 0, resident = 0;
+  std::ifstream statm("/proc/self/statm");
+  statm >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1 << 20);
+}
+
+double peakMiB()
+{
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_maxrss) / 1024.0;
+}
+
+std::string cpuModel()
+{
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; std::getline(cpuinfo, line);)
+    if (line.rfind("model name", 0) == 0)
+      return line.substr(line.find(':') + 2);
+  return "unknown CPU";
+}
+
+const char* const Usage =
+    R"(Usage: BenchmarkReadSequence [--frames N] [--points N] [--repeats N] [--dir DIR]
+
+Times reading every frame of a binary PLY point sequence through vtkPointSequenceSource,
+against parsing the same files with the engine (dp::readPLY), and reports memory.
+The sequence is generated in DIR (default: /tmp/dynamicpoints-bench-read) if absent.
+)";
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  using namespace dp::cli;
+  std::size_t frames = 200, points = 20000, repeats = 5;
+  std::string dir = "/tmp/dynamicpoints-bench-read";
+  try
+  {
+    for (int i = 1; i < argc; ++i)
+    {
+      const std::string arg = argv[i];
+      if (arg == "--frames")
+        frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+      else if (arg == "--points")
+        points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+      else if (arg == "--repeats")
+        repeats = parseCount(arg, optionValue(argc, argv, i), 1, 1000);
+      else if (arg == "--dir")
+        dir = optionValue(argc, argv, i);
+      else
+      {
+        std::cout << Usage;
+        return arg == "-h" || arg == "--help" ? 0 : 2;
+      }
+    }
+  }
+  catch (const UsageError& e)
+  {
+    std::cerr << e.what() << "\n" << Usage;
+    return 2;
+  }
+
+  dir += "/" + std::to_string(frames) + "x" + std::to_string(points);
+  const std::string series = dir + "/points.series";
+  if (!std::filesystem::exists(series))
+  {
+    std::cout << "generating " << frames << " frames x " << points << " points in " << dir << "\n";
+    dp::BendingTube::Options tube;
+    tube.frames = frames;
+    dp::SamplerOptions sampling;
+    sampling.pointsPerFrame = points;
+    dp::writeSampledSequence(dp::BendingTube(tube), sampling, dir);
+  }
+  const dp::FrameSequence sequence = dp::FrameSequence::fromSeriesFile(series);
+  std::uintmax_t bytes = 0;
+  for (const auto& f : sequence.frames())
+    bytes += std::filesystem::file_size(f.path);
+
+  std::printf("machine: %s, %u hardware threads; single-threaded reads\n", cpuModel().c_str(),
+              std::thread::hardware_concurrency());
+  std::printf("input: %zu frames x %zu points, binary little-endian PLY with normals, %.1f MiB "
+              "(%.0f kB per frame)\n",
+              sequence.size(), points, static_cast<double>(bytes) / (1 << 20),
+              static_cast<double>(bytes) / 1024.0 / static_cast<double>(sequence.size()));
+  std::printf("repeats: %zu (medians shown; the files are in the page cache after the first)\n\n",
+              repeats);
+
+  std::vector<double> parseTimes, sourceTimes, reverseTimes;
+  double rssAfterFirstFrames = 0, rssAtEnd = 0;
+  const double rssBefore = residentMiB();
+  for (std::size_t r = 0; r < repeats; ++r)
+  {
+    double start = seconds();
+    std::size_t total = 0;
+    for (const auto& f : sequence.frames())
+      total += dp::readPLY(f.path).numberOfPoints();
+    parseTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+
+    vtkNew<vtkPointSequenceSource> source;
+    source->SetFileName(series.c_str());
+    source->UpdateInformation();
+    start = seconds();
+    std::size_t viaSource = 0;
+    for (std::size_t f = 0; f < sequence.size(); ++f)
+    {
+      source->UpdateTimeStep(sequence[f].time);
+      viaSource += static_cast<std::size_t>(source->GetOutput()->GetNumberOfPoints());
+      if (r == 0 && f == std::min<std::size_t>(9, sequence.size() - 1))
+        rssAfterFirstFrames = residentMiB();
+    }
+    sourceTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+    if (r == 0)
+      rssAtEnd = residentMiB();
+
+    start = seconds();
+    for (std::size_t f = sequence.size(); f-- > 0;)
+      source->UpdateTimeStep(sequence[f].time);
+    reverseTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+    if (viaSource != total)
+    {
+      std::cerr << "point counts differ: " << viaSource << " via the source, " << total
+                << " parsed directly\n";
+      return 1;
+    }
+  }
+
+  const double parse = median(parseTimes), source = median(sourceTimes),
+               reverse = median(reverseTimes);
+  std::printf("%-44s %10s %10s\n", "per frame", "ms", "frames/s");
+  std::printf("%-44s %10.3f %10.1f\n", "engine parse only (dp::readPLY)", 1e3 * parse, 1 / parse);
+  std::printf("%-44s %10.3f %10.1f\n", "vtkPointSequenceSource, frames in order", 1e3 * source,
+              1 / source);
+  std::printf("%-44s %10.3f %10.1f\n", "vtkPointSequenceSource, frames in reverse", 1e3 * reverse,
+              1 / reverse);
+  std::printf("\nsource / parse time ratio: %.2f (in order), %.2f (reverse)\n", source / parse,
+              reverse / parse);
+  std::printf("memory: resident %.1f MiB before, %.1f MiB after frame 10, %.1f MiB after frame "
+              "%zu (growth over the sequence %.1f MiB); peak %.1f MiB\n",
+              rssBefore, rssAfterFirstFrames, rssAtEnd, sequence.size(),
+              rssAtEnd - rssAfterFirstFrames, peakMiB());
+  return 0;
+}

@@ -1,0 +1,81 @@
+#!/usr/bin/env bash
+# DynamicPoints: install what the build needs (Debian bookworm, as root), build, and run.
+#
+#   bash Utilities/dp.sh main [ARGS...]   the main job (no ARGS: the built-in sample sequence)
+#   bash Utilities/dp.sh test             the whole test suite (ctest)
+#   bash Utilities/dp.sh build            install and build only
+#
+# Idempotent: packages already installed are not fetched again, and an existing build
+# folder is only brought up to date. Environment: DP_BUILD_DIR (default: build).
+set -euo pipefail
+
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+build="${DP_BUILD_DIR:-$root/build}"
+
+# The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev libraries are the ones its CMake
+# package looks for. Debian's libvtk9-dev cannot be installed beside it (see README).
+packages=(
+  cmake ninja-build g++ pkg-config
+  paraview paraview-dev python3-paraview python3-dev python3-numpy python3-mpi4py
+  qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
+  qtxmlpatterns5-dev-tools libopenmpi-dev
+  libdouble-conversion-dev libhdf5-openmpi-dev libnetcdf-dev libgdal-dev libexpat1-dev
+  libfreetype-dev libgl2ps-dev libglew-dev libgl-dev libjpeg-dev liblz4-dev liblzma-dev
+  libxml2-dev libpng-dev libtheora-dev libtiff-dev libx11-dev zlib1g-dev libutfcpp-dev
+  libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
+  libswscale-dev
+  libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
+  python3-open3d xvfb xauth
+)
+
+install_packages() {
+  local missing=()
+  for p in "${packages[@]}"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  if ((${#missing[@]})); then
+    echo "== installing ${#missing[@]} Debian package(s): ${missing[*]}"
+    if [[ $(id -u) -ne 0 ]]; then
+      echo "error: installing packages needs root (run as root, or install them first)" >&2
+      exit 1
+    fi
+    export DEBIAN_FRONTEND=noninteractive
+    apt-get update -qq
+    apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  fi
+}
+
+build_project() {
+  if [[ ! -f "$build/CMakeCache.txt" ]]; then
+    echo "== configuring in $build"
+    cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+      -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
+  fi
+  echo "== building"
+  cmake --build "$build" -j "$(nproc)" -- --quiet
+}
+
+command="${1:-}"
+shift || true
+case "$command" in
+  main)
+    install_packages
+    build_project
+    exec "$build/bin/dynamicpoints" "$@"
+    ;;
+  test)
+    install_packages
+    build_project
+    cd "$build"
+    exec ctest --output-on-failure -j "$(nproc)" "$@"
+    ;;
+  build)
+    install_packages
+    build_project
+    ;;
+  *)
+    sed -n '2,9p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+    [[ "$command" == "-h" || "$command" == "--help" ]] && exit 0
+    exit 2
+    ;;
+esac
