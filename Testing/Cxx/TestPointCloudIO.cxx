@@ -302,6 +302,59 @@ TEST(OBJ, BadFaceIndexIsAnError)
   expectFileError([&] { dp::readOBJ(dir.file("bad.obj")); }, dir.file("bad.obj"), "line 3");
 }
 
+TEST(Robustness, EveryTruncationIsAnErrorOrAShorterCloudNeverACrash)
+{
+  TempDir dir;
+  dp::PointCloud cloud = sampleCloud(true);
+  for (const char* name : {"t.ply", "t.pcd", "t.xyz", "t.csv", "t.obj"})
+  {
+    const std::string path = dir.file(name);
+    dp::writePointCloud(path, cloud);
+    const std::string whole = dp::test::readText(path);
+    const bool binary = name == std::string("t.ply") || name == std::string("t.pcd");
+    for (std::size_t cut = 0; cut < whole.size(); ++cut)
+    {
+      writeText(path, whole.substr(0, cut));
+      try
+      {
+        const dp::PointCloud read = dp::readPointCloud(path);
+        EXPECT_FALSE(binary) << name << " cut at " << cut << " read without an error";
+        EXPECT_LE(read.numberOfPoints(), cloud.numberOfPoints());
+        EXPECT_NO_THROW(read.validate());
+      }
+      catch (const dp::FileError& e)
+      {
+        EXPECT_EQ(std::string(e.what()).rfind(path, 0), 0u) << e.what();
+      }
+    }
+  }
+}
+
+TEST(Robustness, AbsurdCountsInHeadersFailBeforeAllocating)
+{
+  TempDir dir;
+  const std::string ply = dir.file("huge.ply");
+  for (const char* format : {"ascii", "binary_little_endian"})
+  {
+    writeText(ply, std::string("ply\nformat ") + format +
+                     " 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\n"
+                     "property float z\nend_header\n0 0 0\n");
+    expectFileError([&] { dp::readPLY(ply); }, ply, "truncated");
+  }
+  writeText(ply, "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
+                 "property float y\nproperty float z\nelement face 99999999999\n"
+                 "property list uchar int vertex_indices\nend_header\n\x03");
+  expectFileError([&] { dp::readPLY(ply); }, ply, "truncated");
+  const std::string pcd = dir.file("huge.pcd");
+  for (const char* data : {"ascii", "binary", "binary_compressed"})
+  {
+    writeText(pcd, std::string("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                               "WIDTH 1\nHEIGHT 1\nPOINTS 900000000000\nDATA ") +
+                     data + "\n0 0 0\n");
+    expectFileError([&] { dp::readPCD(pcd); }, pcd, "truncated");
+  }
+}
+
 TEST(Formats, ExtensionsMapToFormats)
 {
   EXPECT_EQ(dp::formatFromFileName("a/b.PLY"), dp::PointFileFormat::PLY);

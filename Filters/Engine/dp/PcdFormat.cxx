@@ -257,6 +257,16 @@ PointCloud readPCD(const std::string& path)
     firstValue[k] = valuesPerPoint;
     valuesPerPoint += fields[k].count;
   }
+  // A header may claim more points than the file can hold: check before allocating. LZF
+  // expands at most 264 bytes from a 3-byte back-reference, hence the bound for compressed data.
+  const std::size_t leastBytesPerPoint = data == "ascii" ? 2 * valuesPerPoint : recordSize;
+  const std::size_t capacity = data == "binary_compressed" ? text.size() * 88 : text.size();
+  if (leastBytesPerPoint > 0 && points > capacity / leastBytesPerPoint)
+  {
+    throw FileError(path, "PCD data ends early (truncated file): the header declares " +
+                            std::to_string(points) + " points but the data holds at most " +
+                            std::to_string(text.size() / leastBytesPerPoint));
+  }
   std::vector<double> values(points * valuesPerPoint);
   const std::string_view body = text;
   auto truncatedError = [&](std::size_t got)

@@ -506,6 +506,16 @@ bool fixedRecordSize(const PlyElement& element, std::size_t& size)
   return true;
 }
 
+// The fewest bytes one element can take: every scalar and every list length present; in ASCII
+// at least one digit and one separator per value.
+std::size_t minimumBytes(const PlyElement& element, bool binary)
+{
+  std::size_t bytes = 0;
+  for (const auto& p : element.properties)
+    bytes += binary ? sizeOf(p.isList ? p.countType : p.type) : 2;
+  return bytes;
+}
+
 void skipElement(const std::string& path, const PlyElement& element, BodyReader& reader)
 {
   std::size_t record = 0;
@@ -542,15 +552,15 @@ PointCloud readPLY(const std::string& path)
   bool sawVertex = false;
   for (const PlyElement& element : header.elements)
   {
-    std::size_t record = 0;
+    // Check the declared count against the bytes left before allocating anything, so a
+    // truncated file, or a header claiming billions of elements, fails at once.
+    const std::size_t least = minimumBytes(element, reader.isBinary());
+    if (least > 0 && element.count > reader.remaining() / least)
+    {
+      truncated(path, element, reader.remaining() / least);
+    }
     if (element.name == "vertex")
     {
-      // Check the byte count up front so a truncated binary file fails before any parsing.
-      if (reader.isBinary() && fixedRecordSize(element, record) &&
-          reader.remaining() < record * element.count)
-      {
-        truncated(path, element, reader.remaining() / std::max<std::size_t>(record, 1));
-      }
       readVertices(path, element, reader, cloud);
       sawVertex = true;
     }
