@@ -337,8 +337,8 @@ TEST(Robustness, AbsurdCountsInHeadersFailBeforeAllocating)
   for (const char* format : {"ascii", "binary_little_endian"})
   {
     writeText(ply, std::string("ply\nformat ") + format +
-                     " 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\n"
-                     "property float z\nend_header\n0 0 0\n");
+                       " 1.0\nelement vertex 4000000000000\nproperty float x\nproperty float y\n"
+                       "property float z\nend_header\n0 0 0\n");
     expectFileError([&] { dp::readPLY(ply); }, ply, "truncated");
   }
   writeText(ply, "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
@@ -350,7 +350,7 @@ TEST(Robustness, AbsurdCountsInHeadersFailBeforeAllocating)
   {
     writeText(pcd, std::string("VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
                                "WIDTH 1\nHEIGHT 1\nPOINTS 900000000000\nDATA ") +
-                     data + "\n0 0 0\n");
+                       data + "\n0 0 0\n");
     expectFileError([&] { dp::readPCD(pcd); }, pcd, "truncated");
   }
 }

@@ -264,8 +264,8 @@ PointCloud readPCD(const std::string& path)
   if (leastBytesPerPoint > 0 && points > capacity / leastBytesPerPoint)
   {
     throw FileError(path, "PCD data ends early (truncated file): the header declares " +
-                            std::to_string(points) + " points but the data holds at most " +
-                            std::to_string(text.size() / leastBytesPerPoint));
+                              std::to_string(points) + " points but the data holds at most " +
+                              std::to_string(text.size() / leastBytesPerPoint));
   }
   std::vector<double> values(points * valuesPerPoint);
   const std::string_view body = text;
