@@ -4,8 +4,12 @@
 #include "dp/detail/KdTree.h"
 
 #include <openvdb/openvdb.h>
+#include <openvdb/tools/Morphology.h>
+#include <openvdb/tools/Prune.h>
+#include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_group.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -32,13 +36,6 @@ struct DistanceField::Impl
   IndexGrid::Ptr Grid;
   std::unique_ptr<detail::KdTree> Tree;
   std::size_t Active = 0;
-
-  double squaredDistanceToCentre(std::int32_t index, const Coord& c) const
-  {
-    const double* p = &Points[3 * static_cast<std::size_t>(index)];
-    const double dx = p[0] - Voxel * c.x(), dy = p[1] - Voxel * c.y(), dz = p[2] - Voxel * c.z();
-    return dx * dx + dy * dy + dz * dz;
-  }
 };
 
 namespace
@@ -49,41 +46,25 @@ void initializeOpenVDB()
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-// The 26 neighbour offsets of a voxel.
-const std::vector<Coord>& neighbourhood()
+// An upper bound on the voxels the build activates: all lie within `reach` voxels
+// (Chebyshev) of a seed voxel, so in blocks of `reach` voxels a side that touch
+// (26-neighbourhood) a block holding a seed. Costs O(seeds log seeds).
+double activeVoxelUpperBound(const IndexTree& seeds, int reach)
 {
-  static const std::vector<Coord> offsets = []
+  const int side = std::max(reach, 1);
+  std::vector<std::array<int, 3>> blocks;
+  for (auto it = seeds.cbeginValueOn(); it; ++it)
   {
-    std::vector<Coord> o;
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j)
-        for (int k = -1; k <= 1; ++k)
-          if (i || j || k)
-            o.emplace_back(i, j, k);
-    return o;
-  }();
-  return offsets;
-}
-void sortUnique(std::vector<Coord>& coords)
-{
-  std::sort(coords.begin(), coords.end());
-  coords.erase(std::unique(coords.begin(), coords.end()), coords.end());
-}
-
-// An upper bound on the voxels within `band` of some point, computed on blocks `band` wide:
-// every such voxel lies in a block that touches (26-neighbourhood) a block holding a point.
-// O(N log N), no allocation proportional to the grid, so absurd settings fail at once.
-double bandVoxelUpperBound(const double* points, std::size_t count, double voxel, double band)
-{
-  std::vector<std::array<std::int64_t, 3>> blocks;
-  blocks.reserve(count);
-  for (std::size_t i = 0; i < count; ++i)
-    blocks.push_back({static_cast<std::int64_t>(std::floor(points[3 * i] / band)),
-                      static_cast<std::int64_t>(std::floor(points[3 * i + 1] / band)),
-                      static_cast<std::int64_t>(std::floor(points[3 * i + 2] / band))});
+    const Coord c = it.getCoord();
+    blocks.push_back({c.x() >= 0 ? c.x() / side : -((-c.x() + side - 1) / side),
+                      c.y() >= 0 ? c.y() / side : -((-c.y() + side - 1) / side),
+                      c.z() >= 0 ? c.z() / side : -((-c.z() + side - 1) / side)});
+  }
   std::sort(blocks.begin(), blocks.end());
   blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
-  std::vector<std::array<std::int64_t, 3>> dilated;
+  if (reach == 0)
+    return static_cast<double>(blocks.size());
+  std::vector<std::array<int, 3>> dilated;
   dilated.reserve(blocks.size() * 27);
   for (const auto& b : blocks)
     for (int i = -1; i <= 1; ++i)
@@ -92,8 +73,7 @@ double bandVoxelUpperBound(const double* points, std::size_t count, double voxel
           dilated.push_back({b[0] + i, b[1] + j, b[2] + k});
   std::sort(dilated.begin(), dilated.end());
   const auto unique = std::unique(dilated.begin(), dilated.end()) - dilated.begin();
-  const double perBlock = std::pow(band / voxel + 1, 3);
-  return static_cast<double>(unique) * perBlock;
+  return static_cast<double>(unique) * std::pow(static_cast<double>(side), 3);
 }
 
 } // namespace
@@ -131,18 +111,10 @@ void DistanceField::build(const double* points, std::size_t count,
                        " is too small for coordinates up to " + std::to_string(largest) +
                        " (voxel indices would overflow)");
 
-  const double band2 = band * band;
-  auto tooLarge = [&](double voxels)
-  {
-    return GridTooLarge("a distance field with VoxelSize " + std::to_string(voxel) +
-                        " and BandWidth " + std::to_string(band) + " needs up to " +
-                        std::to_string(static_cast<unsigned long long>(voxels)) +
-                        " voxels, over the limit of " + std::to_string(options.maxActiveVoxels) +
-                        ": use a larger voxel size or a narrower band");
-  };
-  const double bound = bandVoxelUpperBound(points, count, voxel, band);
-  if (bound > static_cast<double>(options.maxActiveVoxels))
-    throw tooLarge(bound);
+  // A voxel whose centre is within the band of a point p lies at most `reach` voxels
+  // (Chebyshev) from the voxel holding p: a point is at least (k - 1/2) voxels from a centre
+  // k voxels away.
+  const int reach = static_cast<int>(std::floor(band / voxel + 0.5));
 
   initializeOpenVDB();
   Impl next;
@@ -152,65 +124,59 @@ void DistanceField::build(const double* points, std::size_t count,
   next.Grid = IndexGrid::create(-1);
   next.Grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
   next.Grid->setName("NearestPointIndex");
-  auto acc = next.Grid->getAccessor();
+  IndexTree& tree = next.Grid->tree();
 
-  // Offers point `index` to voxel c: taken when c is new (and within the band) or when the
-  // point is closer to c's centre than what c holds. Returns whether c changed.
-  auto offer = [&](std::int32_t index, const Coord& c)
+  // Topology: the voxels holding a point, dilated (26-neighbourhood) by `reach`.
   {
-    const double d2 = next.squaredDistanceToCentre(index, c);
-    if (d2 > band2)
-      return false;
-    std::int32_t current = -1;
-    if (acc.probeValue(c, current))
+    auto acc = next.Grid->getAccessor();
+    for (std::size_t i = 0; i < count; ++i)
     {
-      if (current == index || d2 >= next.squaredDistanceToCentre(current, c))
-        return false;
+      const double* p = &next.Points[3 * i];
+      acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / voxel)),
+                           static_cast<int>(std::lround(p[1] / voxel)),
+                           static_cast<int>(std::lround(p[2] / voxel))));
     }
-    else if (++next.Active > options.maxActiveVoxels)
-    {
-      throw tooLarge(static_cast<double>(next.Active));
-    }
-    acc.setValue(c, index);
-    return true;
-  };
-
-  // Seeds: each point is offered to the 27 voxels around it. (Offering it only to its own
-  // voxel would lose every point that is not the closest to its voxel's centre, although it
-  // may be the nearest point of the next voxel.)
-  std::vector<Coord> front;
-  front.reserve(count);
-  for (std::size_t i = 0; i < count; ++i)
-  {
-    const double* p = &next.Points[3 * i];
-    const Coord centre(static_cast<int>(std::lround(p[0] / voxel)),
-                       static_cast<int>(std::lround(p[1] / voxel)),
-                       static_cast<int>(std::lround(p[2] / voxel)));
-    if (offer(static_cast<std::int32_t>(i), centre))
-      front.push_back(centre);
-    for (const Coord& offset : neighbourhood())
-      if (offer(static_cast<std::int32_t>(i), centre + offset))
-        front.push_back(centre + offset);
   }
-  sortUnique(front);
+  // Memory guard before dilating: nothing proportional to the band is allocated when the
+  // settings are absurd.
+  const double bound = activeVoxelUpperBound(tree, reach);
+  if (bound > static_cast<double>(options.maxActiveVoxels))
+    throw GridTooLarge("a distance field with VoxelSize " + std::to_string(voxel) +
+                       " and BandWidth " + std::to_string(band) + " needs up to " +
+                       std::to_string(static_cast<unsigned long long>(bound)) +
+                       " voxels, over the limit of " + std::to_string(options.maxActiveVoxels) +
+                       ": use a larger voxel size or a narrower band");
+  // The kd-tree builds while the band is dilated.
+  tbb::task_group kdBuild;
+  kdBuild.run([&] { next.Tree = std::make_unique<detail::KdTree>(next.Points.data(), count); });
+  if (reach > 0)
+    openvdb::tools::dilateActiveValues(tree, reach, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+  kdBuild.wait();
 
-  // Propagation (vector distance transform): each changed voxel offers its nearest point to
-  // its 26 neighbours, until nothing changes.
-  std::vector<Coord> following;
-  while (!front.empty())
-  {
-    following.clear();
-    for (const Coord& c : front)
-    {
-      const std::int32_t index = acc.getValue(c);
-      for (const Coord& offset : neighbourhood())
-        if (offer(index, c + offset))
-          following.push_back(c + offset);
-    }
-    sortUnique(following);
-    front.swap(following);
-  }
-  next.Tree = std::make_unique<detail::KdTree>(next.Points.data(), count);
+  // Values: the exact nearest point of every voxel centre (kd-tree), in parallel over leaves;
+  // voxels farther than the band from every point are switched off and pruned.
+  const double band2 = band * band;
+  openvdb::tree::LeafManager<IndexTree> leaves(tree);
+  leaves.foreach (
+      [&](IndexTree::LeafNodeType& leaf, std::size_t)
+      {
+        const auto active = leaf.getValueMask(); // a copy: the loop switches voxels off
+        for (auto it = active.beginOn(); it; ++it)
+        {
+          const openvdb::Index offset = it.pos();
+          const Coord c = leaf.offsetToGlobalCoord(offset);
+          const double centre[3] = {voxel * c.x(), voxel * c.y(), voxel * c.z()};
+          double d2 = 0;
+          const auto index = static_cast<std::int32_t>(next.Tree->nearest(centre, &d2));
+          if (d2 <= band2)
+            leaf.setValueOnly(offset, index);
+          else
+            leaf.setValueOff(offset, -1);
+        }
+      });
+  openvdb::tools::pruneInactive(tree);
+  next.Active = static_cast<std::size_t>(tree.activeVoxelCount());
   *P = std::move(next);
   // The kd-tree's adaptor points at next.Points' buffer, which moved along with the vector.
 }
@@ -285,32 +251,33 @@ DistanceSample DistanceField::sample(const double x[3]) const
   {
     const int bit[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
     const Coord c(base[0] + bit[0], base[1] + bit[1], base[2] + bit[2]);
+    const double centre[3] = {v * c.x(), v * c.y(), v * c.z()};
     std::int32_t index = -1;
     if (!acc.probeValue(c, index))
     {
-      // Outside the band: the exact nearest point of this voxel centre.
-      s.inBand = false;
-      const double centre[3] = {v * c.x(), v * c.y(), v * c.z()};
+      s.inBand = false; // outside the band: the exact nearest point from the kd-tree
       index = static_cast<std::int32_t>(P->Tree->nearest(centre));
     }
     const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
-    const double d[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-    const double length = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    // Trilinear weight of this corner, and its derivatives along each axis.
+    // The corner's value: the exact distance from the voxel centre to its nearest point.
+    const double value = std::sqrt((centre[0] - p[0]) * (centre[0] - p[0]) +
+                                   (centre[1] - p[1]) * (centre[1] - p[1]) +
+                                   (centre[2] - p[2]) * (centre[2] - p[2]));
     double w[3], dw[3];
     for (int k = 0; k < 3; ++k)
     {
       w[k] = bit[k] ? t[k] : 1 - t[k];
       dw[k] = (bit[k] ? 1.0 : -1.0) / v;
     }
-    const double weight = w[0] * w[1] * w[2];
-    const double dweight[3] = {dw[0] * w[1] * w[2], w[0] * dw[1] * w[2], w[0] * w[1] * dw[2]};
-    s.distance += weight * length;
-    for (int k = 0; k < 3; ++k)
-      s.gradient[k] += dweight[k] * length + (length > 0 ? weight * d[k] / length : 0.0);
-    if (length < best)
+    s.distance += w[0] * w[1] * w[2] * value;
+    s.gradient[0] += dw[0] * w[1] * w[2] * value;
+    s.gradient[1] += w[0] * dw[1] * w[2] * value;
+    s.gradient[2] += w[0] * w[1] * dw[2] * value;
+    const double toX = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
+                       (x[2] - p[2]) * (x[2] - p[2]);
+    if (toX < best)
     {
-      best = length;
+      best = toX;
       s.nearest = index;
     }
   }

@@ -4,31 +4,26 @@
  * @brief Unsigned distance field of a point cloud on a sparse OpenVDB grid, with the nearest
  *        point of every voxel: the D_i of the paper's distance energy E_dis = sum m_i D_i.
  *
- * Build: every point is offered to the 27 voxels around it; a front then propagates the index
- * of the nearest point voxel by voxel through the 26-neighbourhood (a vector distance
- * transform, in the spirit of the paper's vector-city transform), keeping the voxels whose
- * nearest point is within the band. Cost is linear in the number of active voxels (each is
- * touched a small, bounded number of times); no point-to-voxel brute force. Voxels store the
- * *index* of their nearest point, so distances are exact and the point's normal is at hand.
- * Before allocating, an upper bound on the band's voxel count (from band-wide blocks) is
- * checked against a limit, so absurd settings fail at once instead of exhausting memory.
+ * Build, linear in the active voxels: the voxels holding a point are activated and dilated
+ * (OpenVDB morphology, 26-neighbourhood) to cover the band; then every active voxel gets the
+ * index of the exact nearest point of its centre from a kd-tree (in parallel over the grid's
+ * leaf nodes), and voxels farther than the band are dropped. Voxels store the *index* of their
+ * nearest point (the paper's vector distance transform stores the vector), so the distance at
+ * every voxel centre is exact and the nearest point's normal is at hand. Before allocating, an
+ * upper bound on the voxel count is checked against a limit, so absurd settings fail at once.
  *
- * Sampling at any x (thread-safe, no locks): each of the 8 voxel centres around x names a
- * point p_c (its stored nearest point; for a voxel outside the band, the exact nearest point
- * from a kd-tree) and D(x) = sum_c w_c(x) |x - p_c| with trilinear weights w_c. So D is
- * continuous everywhere (across voxel faces and the band's edge), never below the true
- * distance, equal to it wherever the 8 voxels agree on their nearest point (away from the
- * data), and its gradient is D's analytic derivative: a unit vector away from the data far
- * out, so it pulls toward the data from any distance, never a silent zero.
- * (Measured alternatives: trilinear interpolation of stored distances overestimates as much
- * near the data and is not exact away from it; the distance to the closest of the 8 candidate
- * points is exact near dense data but jumps across voxel faces in sparse clouds.)
+ * Sampling at any x (thread-safe, no locks) interpolates, as the paper does: D(x) is the
+ * trilinear interpolation of the exact distances at the 8 voxel centres around x, and the
+ * gradient is D's analytic derivative. Voxel centres outside the band take their exact value
+ * from the kd-tree, so D is continuous everywhere (across voxel faces and the band's edge),
+ * defined everywhere, and pulls toward the data from any distance: never a silent zero.
+ * `nearest` is the closest to x of the 8 centres' nearest points.
  *
- * Limits: near the data (within about a voxel) D overestimates the distance to the nearest
- * point by up to about a voxel (the tests bound it); pick the voxel size at the data's accuracy,
- * as the paper does. D is the distance to points, not to the sampled surface. The transform's
- * stored nearest point can be slightly farther than the true one (26-neighbour propagation;
- * the tests bound how far). At most 2^31 - 1 points.
+ * Limits: interpolation overestimates the distance right at the data (by up to about half a
+ * voxel at a sample point): choose the voxel size at the data's accuracy, as the paper does.
+ * D is the distance to the points, not to the sampled surface; its gradient is continuous
+ * inside a cell, not across cell faces. Sampling outside the band costs up to 8 kd-tree
+ * queries. At most 2^31 - 1 points.
  */
 #pragma once
 
