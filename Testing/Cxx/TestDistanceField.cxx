@@ -250,6 +250,26 @@ TEST(DistanceField, OutsideTheBandItStillPullsTowardTheData)
   EXPECT_GT(previous, o.bandWidth) << "the line left the band";
 }
 
+TEST(DistanceField, WorksAtAnyScale)
+{
+  // The same cloud in metres and in micrometres-sized units: the same field, scaled.
+  const Cloud c = randomCloud(500, 11);
+  for (double scale : {1e-4, 1.0, 1e4})
+  {
+    std::vector<double> scaled(c.points);
+    for (double& x : scaled)
+      x *= scale;
+    dp::DistanceFieldOptions o;
+    o.voxelSize = 0.05 * scale;
+    dp::DistanceField field;
+    field.build(scaled.data(), 500, o);
+    const double unit[3] = {0.1, 0.2, -0.3};
+    const double x[3] = {unit[0] * scale, unit[1] * scale, unit[2] * scale};
+    EXPECT_NEAR(field.sample(x).distance / scale, bruteForce(c.points, unit), 0.75 * 0.05)
+        << "scale " << scale;
+  }
+}
+
 TEST(DistanceField, ParallelSamplingEqualsSerialSampling)
 {
   const Cloud c = tubeCloud(4000);

@@ -21,7 +21,9 @@ def main():
     sampler = os.path.join(os.environ["DP_BIN_DIR"], "dynamicpoints-sample")
     ns = {"__name__": "dp_plugin_proxies"}  # LoadPlugin fills a non-empty namespace only
     LoadPlugin(plugin, remote=False, ns=ns)
-    assert "PointSequenceReader" in ns and "PointSequenceFolder" in ns, sorted(ns)
+    # simple.py names proxies by their labels.
+    for name in ("PointSequenceReader", "PointSequenceFolder", "PointDistanceField"):
+        assert name in ns, sorted(ns)
 
     with tempfile.TemporaryDirectory(prefix="dp-pv-") as tmp:
         subprocess.run([sampler, "--mesh", "sheet", "--frames", "5", "--points", "800",
@@ -54,6 +56,14 @@ def main():
         assert list(folder.TimestepValues) == [0.0, 1.0, 2.0], folder.TimestepValues
         folder.UpdatePipeline(2.0)
         assert servermanager.Fetch(folder).GetNumberOfPoints() == expected[2]
+        # The distance field filter on the reader's current time step.
+        field = ns["PointDistanceField"](Input=reader, Dimensions=[24, 24, 24])
+        field.UpdatePipeline(1.0)
+        image = servermanager.Fetch(field)
+        assert image.GetDimensions() == (24, 24, 24), image.GetDimensions()
+        distance = image.GetPointData().GetArray("Distance")
+        assert distance is not None and distance.GetRange()[1] > 0
+        assert "diagonal" in field.GetProperty("VoxelSize").GetDocumentation().GetDescription()
     print("pvpython point sequence test passed")
     return 0
 

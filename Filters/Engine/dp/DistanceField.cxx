@@ -122,7 +122,8 @@ void DistanceField::build(const double* points, std::size_t count,
   next.Voxel = voxel;
   next.Band = band;
   next.Grid = IndexGrid::create(-1);
-  next.Grid->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+  // The grid keeps OpenVDB's identity transform: coordinates are mapped to voxels here, and
+  // OpenVDB refuses linear transforms whose scale cubed is below 1e-8 (a 2 mm voxel).
   next.Grid->setName("NearestPointIndex");
   IndexTree& tree = next.Grid->tree();
 
