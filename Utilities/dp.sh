@@ -25,6 +25,7 @@ packages=(
   libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
+  liblbfgs-dev
   python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri
 )
 

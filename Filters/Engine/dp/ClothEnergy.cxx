@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/ClothEnergy.h"
+
+#include <cmath>
+#include <stdexcept>
+
+namespace dp
+{
+namespace
+{
+struct V3
+{
+  double x, y, z;
+};
+inline V3 at(const double* p, std::int64_t i)
+{
+  return {p[3 * i], p[3 * i + 1], p[3 * i + 2]};
+}
+inline V3 operator-(V3 a, V3 b)
+{
+  return {a.x - b.x, a.y - b.y, a.z - b.z};
+}
+inline V3 operator+(V3 a, V3 b)
+{
+  return {a.x + b.x, a.y + b.y, a.z + b.z};
+}
+inline V3 operator*(double s, V3 a)
+{
+  return {s * a.x, s * a.y, s * a.z};
+}
+inline double dot(V3 a, V3 b)
+{
+  return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+inline V3 cross(V3 a, V3 b)
+{
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+inline double norm(V3 a)
+{
+  return std::sqrt(dot(a, a));
+}
+inline void add(double* g, std::int64_t i, V3 v)
+{
+  g[3 * i] += v.x;
+  g[3 * i + 1] += v.y;
+  g[3 * i + 2] += v.z;
+}
+
+// Angle at corner a of triangle (a, b, c), and its gradient with respect to b and c
+// (the gradient for a is minus their sum). Returns false when the corner is degenerate.
+bool cornerAngle(V3 a, V3 b, V3 c, double& angle, V3* gb, V3* gc)
+{
+  const V3 u = b - a, v = c - a;
+  const double lu = norm(u), lv = norm(v);
+  const V3 n = cross(u, v);
+  const double s = norm(n);
+  angle = std::atan2(s, dot(u, v));
+  if (!gb)
+    return true;
+  if (lu == 0 || lv == 0 || s <= 1e-300)
+    return false;
+  // d(angle)/db is perpendicular to u, in the plane, pointing away from v, of size 1/|u|.
+  const V3 towardV = (1.0 / (s * lu)) * cross(n, u); // unit, perpendicular to u, toward v
+  const V3 towardU = (1.0 / (s * lv)) * cross(v, n); // unit, perpendicular to v, toward u
+  *gb = (-1.0 / lu) * towardV;
+  *gc = (-1.0 / lv) * towardU;
+  return true;
+}
+
+// cos of the angle between the normals of triangles (a, b, c) and (b, a, d), and its gradient
+// with respect to the four vertices. Returns false when a triangle is degenerate.
+bool hingeCos(V3 a, V3 b, V3 c, V3 d, double& cosine, V3* g)
+{
+  const V3 e1 = b - a, e2 = c - a; // N1 = e1 x e2
+  const V3 f1 = a - b, f2 = d - b; // N2 = f1 x f2
+  const V3 n1 = cross(e1, e2), n2 = cross(f1, f2);
+  const double l1 = norm(n1), l2 = norm(n2);
+  if (l1 <= 1e-300 || l2 <= 1e-300)
+  {
+    cosine = 1.0;
+    return false;
+  }
+  const V3 u1 = (1.0 / l1) * n1, u2 = (1.0 / l2) * n2;
+  cosine = dot(u1, u2);
+  if (!g)
+    return true;
+  // dc/dN1 = (u2 - c u1) / |N1|, dc/dN2 = (u1 - c u2) / |N2|; N = e x f gives
+  // dc/de = f x (dc/dN), dc/df = (dc/dN) x e.
+  const V3 gN1 = (1.0 / l1) * (u2 - cosine * u1);
+  const V3 gN2 = (1.0 / l2) * (u1 - cosine * u2);
+  const V3 ge1 = cross(e2, gN1), ge2 = cross(gN1, e1);
+  const V3 gf1 = cross(f2, gN2), gf2 = cross(gN2, f1);
+  // e1 = b - a, e2 = c - a, f1 = a - b, f2 = d - b
+  g[0] = (-1.0 * (ge1 + ge2)) + gf1; // a
+  g[1] = ge1 + (-1.0 * (gf1 + gf2)); // b
+  g[2] = ge2;                        // c
+  g[3] = gf2;                        // d
+  return true;
+}
+} // namespace
+
+ClothEnergy::ClothEnergy(const TriangleMesh& mesh, const double* rest, const ClothParameters& k)
+    : Mesh(&mesh), K(k)
+{
+  if (k.stretch < 0 || k.shear < 0 || k.bend < 0 || !std::isfinite(k.stretch + k.shear + k.bend))
+    throw std::invalid_argument("cloth stiffnesses must be non-negative numbers");
+  const double area = mesh.totalArea(rest);
+  if (!(area > 0) || !std::isfinite(area))
+    throw std::invalid_argument("the template mesh has no area");
+  L = std::sqrt(area);
+  for (const auto& e : mesh.edges())
+    RestLength.push_back(norm(at(rest, e[1]) - at(rest, e[0])));
+  const auto& tris = mesh.triangles();
+  for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+    for (int k3 = 0; k3 < 3; ++k3)
+    {
+      double angle = 0;
+      cornerAngle(at(rest, tris[3 * t + k3]), at(rest, tris[3 * t + (k3 + 1) % 3]),
+                  at(rest, tris[3 * t + (k3 + 2) % 3]), angle, nullptr, nullptr);
+      RestAngle.push_back(angle);
+    }
+  std::vector<double> vertexArea = mesh.vertexAreas(rest);
+  for (const auto& h : mesh.hinges())
+  {
+    double cosine = 1;
+    hingeCos(at(rest, h[0]), at(rest, h[1]), at(rest, h[2]), at(rest, h[3]), cosine, nullptr);
+    RestCos.push_back(cosine);
+    const double a1 =
+        0.5 * norm(cross(at(rest, h[1]) - at(rest, h[0]), at(rest, h[2]) - at(rest, h[0])));
+    const double a2 =
+        0.5 * norm(cross(at(rest, h[0]) - at(rest, h[1]), at(rest, h[3]) - at(rest, h[1])));
+    HingeWeight.push_back((a1 + a2) / (3.0 * area));
+  }
+  Mass.resize(vertexArea.size());
+  for (std::size_t v = 0; v < vertexArea.size(); ++v)
+    Mass[v] = vertexArea[v] / area;
+}
+
+double ClothEnergy::value(const double* x) const
+{
+  return addGradient(x, nullptr);
+}
+
+double ClothEnergy::addGradient(const double* x, double* g) const
+{
+  const TriangleMesh& mesh = *Mesh;
+  double energy = 0;
+  const double invL2 = 1.0 / (L * L);
+  const auto& edges = mesh.edges();
+  for (std::size_t e = 0; e < edges.size(); ++e)
+  {
+    const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
+    const double l = norm(d);
+    const double stretch = l - RestLength[e];
+    energy += 0.5 * K.stretch * stretch * stretch * invL2;
+    if (g && l > 0)
+    {
+      const V3 f = (K.stretch * stretch * invL2 / l) * d;
+      add(g, edges[e][1], f);
+      add(g, edges[e][0], -1.0 * f);
+    }
+  }
+  const auto& tris = mesh.triangles();
+  if (K.shear > 0)
+    for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+      for (int c = 0; c < 3; ++c)
+      {
+        const std::int64_t ia = tris[3 * t + c], ib = tris[3 * t + (c + 1) % 3],
+                           ic = tris[3 * t + (c + 2) % 3];
+        double angle = 0;
+        V3 gb{}, gc{};
+        const bool ok = cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, g ? &gb : nullptr,
+                                    g ? &gc : nullptr);
+        const double delta = angle - RestAngle[3 * t + c];
+        energy += 0.5 * K.shear * delta * delta;
+        if (g && ok)
+        {
+          const double s = K.shear * delta;
+          add(g, ib, s * gb);
+          add(g, ic, s * gc);
+          add(g, ia, -s * 1.0 * (gb + gc));
+        }
+      }
+  const auto& hinges = mesh.hinges();
+  if (K.bend > 0)
+    for (std::size_t h = 0; h < hinges.size(); ++h)
+    {
+      const auto& v = hinges[h];
+      double cosine = 1;
+      V3 gh[4];
+      const bool ok =
+          hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, g ? gh : nullptr);
+      const double delta = cosine - RestCos[h];
+      const double weight = K.bend * HingeWeight[h];
+      energy += 0.5 * weight * delta * delta;
+      if (g && ok)
+        for (int k = 0; k < 4; ++k)
+          add(g, v[k], weight * delta * gh[k]);
+    }
+  return energy;
+}
+
+} // namespace dp

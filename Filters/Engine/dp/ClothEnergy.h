@@ -1,0 +1,63 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file ClothEnergy.h
+ * @brief The deformation energy E_int of the paper (after Baraff & Witkin's cloth):
+ *
+ *   E_int = 1/2 sum_edges   k_st        ((l - l0) / L)^2
+ *         + 1/2 sum_corners k_sh        (theta - theta0)^2
+ *         + 1/2 sum_hinges  k_ben w_h   (cos phi - cos phi0)^2
+ *
+ * over the template's edges (stretch), triangle corners (shear: in-plane corner angles) and
+ * hinges (bend: cos of the angle between the normals of two triangles sharing an edge). Rest
+ * values come from the template. L = sqrt(template area) makes every term dimensionless, so
+ * the energy and its minimisers do not depend on the data's units. Following the paper's rule,
+ * k_st and k_sh are constants, while the bending weight of a hinge w_h = (A_1 + A_2) / (3 A)
+ * (its share of the template's area A), so that totals do not change when the same shape is
+ * subdivided. vertexMass() gives the matching masses m_i = A_i / A (summing to 1).
+ *
+ * Limits: degenerate (zero-area) triangles in the *current* shape give zero shear/bend
+ * gradients for their corners/hinges instead of NaN.
+ */
+#pragma once
+
+#include "dp/TriangleMesh.h"
+
+#include <vector>
+
+namespace dp
+{
+
+struct ClothParameters
+{
+  double stretch = 1.0; // k_st
+  double shear = 0.05;  // k_sh
+  double bend = 0.5;    // k_ben
+};
+
+class ClothEnergy
+{
+public:
+  ClothEnergy(const TriangleMesh& mesh, const double* restPositions, const ClothParameters& k);
+
+  /** E_int at x (3 per vertex). */
+  double value(const double* x) const;
+  /** E_int at x; adds dE/dx to gradient (which must be sized 3 * vertices). */
+  double addGradient(const double* x, double* gradient) const;
+
+  const std::vector<double>& vertexMass() const { return Mass; }
+  double lengthScale() const { return L; }
+  const TriangleMesh& mesh() const { return *Mesh; }
+  const ClothParameters& parameters() const { return K; }
+
+private:
+  const TriangleMesh* Mesh;
+  ClothParameters K;
+  double L = 1.0;
+  std::vector<double> RestLength;  // per edge
+  std::vector<double> RestAngle;   // per corner (3 per triangle)
+  std::vector<double> RestCos;     // per hinge
+  std::vector<double> HingeWeight; // per hinge
+  std::vector<double> Mass;        // per vertex
+};
+
+} // namespace dp

@@ -1,0 +1,365 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/Tracker.h"
+
+#include <lbfgs.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+namespace dp
+{
+namespace
+{
+constexpr double Pi = 3.14159265358979323846;
+
+double diagonalOf(const std::vector<double>& x)
+{
+  double lo[3] = {x[0], x[1], x[2]}, hi[3] = {x[0], x[1], x[2]};
+  for (std::size_t i = 0; i < x.size(); i += 3)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], x[i + k]);
+      hi[k] = std::max(hi[k], x[i + k]);
+    }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+// What the solvers minimise: the tracker's energy with fixed data weights.
+struct Objective
+{
+  const Tracker* tracker;
+  const DistanceField* field;
+  const std::vector<double>* weights;
+  int evaluations = 0;
+  double operator()(const double* x, double* gradient)
+  {
+    ++evaluations;
+    if (gradient)
+      std::fill(gradient, gradient + tracker->templatePositions().size(), 0.0);
+    return tracker->energy(x, field, *weights, gradient);
+  }
+};
+
+lbfgsfloatval_t evaluateForLbfgs(void* instance, const lbfgsfloatval_t* x, lbfgsfloatval_t* g,
+                                 const int, const lbfgsfloatval_t)
+{
+  return (*static_cast<Objective*>(instance))(x, g);
+}
+
+// Largest eigenvalue of the Hessian of the objective at x, by power iteration on finite
+// differences of the gradient.
+double largestCurvature(Objective& objective, const std::vector<double>& x, double lengthScale)
+{
+  const std::size_t n = x.size();
+  std::vector<double> v(n), gp(n), gm(n), xp(n), xm(n);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = std::sin(12.9898 * static_cast<double>(i) + 1.0); // fixed, generic start
+  double lambda = 0;
+  const double h = 1e-6 * lengthScale;
+  for (int iteration = 0; iteration < 30; ++iteration)
+  {
+    double length = 0;
+    for (double value : v)
+      length += value * value;
+    length = std::sqrt(length);
+    if (length == 0)
+      break;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      v[i] /= length;
+      xp[i] = x[i] + h * v[i];
+      xm[i] = x[i] - h * v[i];
+    }
+    objective(xp.data(), gp.data());
+    objective(xm.data(), gm.data());
+    double rayleigh = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const double hv = (gp[i] - gm[i]) / (2 * h);
+      rayleigh += v[i] * hv;
+      v[i] = hv;
+    }
+    if (iteration > 3 && std::abs(rayleigh - lambda) < 1e-3 * std::abs(rayleigh))
+    {
+      lambda = rayleigh;
+      break;
+    }
+    lambda = rayleigh;
+  }
+  return std::abs(lambda);
+}
+} // namespace
+
+Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
+                 const TrackerOptions& options)
+    : Mesh(std::move(mesh)), Template(std::move(templatePositions)), Options(options),
+      Cloth(Mesh, Template.data(), options.cloth)
+{
+  if (Template.size() != 3 * Mesh.numberOfVertices())
+    throw std::invalid_argument("the template has " + std::to_string(Template.size() / 3) +
+                                " positions for " + std::to_string(Mesh.numberOfVertices()) +
+                                " vertices");
+  if (!(options.distanceWeight >= 0) || !(options.tolerance > 0) || options.maxIterations < 1 ||
+      options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0)
+    throw std::invalid_argument("tracker options out of range (weights, sizes and tolerance "
+                                "must be non-negative, iterations at least 1)");
+  Voxel = options.voxelSize > 0 ? options.voxelSize : diagonalOf(Template) / 200.0;
+}
+
+double Tracker::energy(const double* x, const DistanceField* field,
+                       const std::vector<double>& weights, double* gradient, double* internal,
+                       double* distance) const
+{
+  const double eInt = Cloth.addGradient(x, gradient);
+  double eDis = 0;
+  if (field)
+  {
+    const auto& mass = Cloth.vertexMass();
+    const double scale = Options.distanceWeight / Cloth.lengthScale();
+    for (std::size_t v = 0; v < mass.size(); ++v)
+    {
+      if (weights[v] == 0)
+        continue;
+      const DistanceSample s = field->sample(x + 3 * v);
+      const double w = scale * mass[v] * weights[v];
+      eDis += w * s.distance;
+      if (gradient)
+        for (int k = 0; k < 3; ++k)
+          gradient[3 * v + k] += w * s.gradient[k];
+    }
+  }
+  if (internal)
+    *internal = eInt;
+  if (distance)
+    *distance = eDis;
+  return eInt + eDis;
+}
+
+std::vector<double> Tracker::predict() const
+{
+  return History.empty() ? Template : History.back();
+}
+
+FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
+{
+  const auto start = std::chrono::steady_clock::now();
+  const std::size_t nv = Mesh.numberOfVertices();
+  const double L = Cloth.lengthScale();
+  FrameResult result;
+  result.frozen.assign(nv, 0);
+  result.rejected.assign(nv, 0);
+  result.residual.assign(nv, -1.0);
+
+  // The frame's distance field and target normals.
+  DistanceField field;
+  std::vector<float> targetNormals;
+  const bool haveData = count > 0;
+  if (haveData)
+  {
+    DistanceFieldOptions fieldOptions;
+    fieldOptions.voxelSize = Voxel;
+    fieldOptions.bandWidth = Options.bandWidth > 0 ? Options.bandWidth : 4 * Voxel;
+    field.build(points, count, fieldOptions);
+    if (Options.normalTestDegrees < 180)
+      targetNormals = normals ? std::vector<float>(normals, normals + 3 * count)
+                              : estimateNormals(points, count);
+  }
+
+  // Data weights: the normal test and the outlier cut-off, decided at a given shape.
+  std::vector<double> weights(nv, haveData ? 1.0 : 0.0);
+  auto decideWeights = [&](const std::vector<double>& x)
+  {
+    if (!haveData)
+      return;
+    std::vector<double> vertexNormals(3 * nv);
+    Mesh.vertexNormals(x.data(), vertexNormals.data());
+    const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      const DistanceSample s = field.sample(&x[3 * v]);
+      bool keep = Options.outlierDistance <= 0 || s.distance <= Options.outlierDistance;
+      if (keep && !targetNormals.empty())
+      {
+        const float* n = &targetNormals[3 * static_cast<std::size_t>(s.nearest)];
+        const double agreement = vertexNormals[3 * v] * n[0] + vertexNormals[3 * v + 1] * n[1] +
+                                 vertexNormals[3 * v + 2] * n[2];
+        keep = agreement >= cosLimit;
+      }
+      weights[v] = keep ? 1.0 : 0.0;
+      result.rejected[v] = keep ? 0 : 1;
+    }
+  };
+
+  Objective objective{this, haveData ? &field : nullptr, &weights};
+
+  // Start: the template for the first frame; afterwards motion prediction. Without data
+  // there is nothing to search the predictions against: keep moving as before (linear).
+  std::vector<double> x = predict();
+  if (!haveData && History.size() >= 2)
+  {
+    const auto& last = History.back();
+    const auto& before = History[History.size() - 2];
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] = 2 * last[i] - before[i];
+  }
+  else if (!History.empty() && Options.motionPrediction)
+  {
+    decideWeights(x);
+    const std::vector<double>& last = History.back();
+    std::vector<std::vector<double>> targets;
+    if (History.size() >= 2)
+    {
+      const auto& before = History[History.size() - 2];
+      std::vector<double> linear(last.size());
+      for (std::size_t i = 0; i < last.size(); ++i)
+        linear[i] = 2 * last[i] - before[i];
+      targets.push_back(std::move(linear));
+      if (History.size() >= 3)
+      {
+        const auto& earlier = History[History.size() - 3];
+        std::vector<double> quadratic(last.size());
+        for (std::size_t i = 0; i < last.size(); ++i)
+          quadratic[i] = 3 * last[i] - 3 * before[i] + earlier[i];
+        targets.push_back(std::move(quadratic));
+      }
+    }
+    double best = objective(last.data(), nullptr);
+    std::vector<double> candidate(last.size());
+    for (const auto& target : targets)
+      for (double alpha : {0.25, 0.5, 0.75, 1.0, 1.25, 1.5})
+      {
+        for (std::size_t i = 0; i < last.size(); ++i)
+          candidate[i] = last[i] + alpha * (target[i] - last[i]);
+        const double e = objective(candidate.data(), nullptr);
+        if (e < best)
+        {
+          best = e;
+          x = candidate;
+        }
+      }
+  }
+  decideWeights(x);
+
+  if (!haveData)
+  {
+    result.emptyFrame = true;
+  }
+
+  if (Options.solver == TrackerSolver::LBFGS)
+  {
+    lbfgs_parameter_t parameters;
+    lbfgs_parameter_init(&parameters);
+    parameters.m = 8;
+    parameters.max_iterations = Options.maxIterations;
+    parameters.epsilon = 1e-8;
+    parameters.past = 3;
+    parameters.delta = Options.tolerance;
+    parameters.linesearch = LBFGS_LINESEARCH_MORETHUENTE;
+    // Two passes: after the first, the normal test is decided again at the new shape.
+    for (int pass = 0; pass < 2; ++pass)
+    {
+      lbfgsfloatval_t fx = 0;
+      const int status = lbfgs(static_cast<int>(x.size()), x.data(), &fx, evaluateForLbfgs, nullptr,
+                               &objective, &parameters);
+      (void)status; // any stop leaves x at the best point found so far
+      if (pass == 0)
+        decideWeights(x);
+    }
+    result.iterations = objective.evaluations;
+  }
+  else
+  {
+    // The paper's solver: steepest descent with h < 2 / k_max.
+    const double kMax = largestCurvature(objective, x, L);
+    double h = kMax > 0 ? 1.9 / kMax : L;
+    std::vector<double> gradient(x.size()), step(nv), before;
+    std::vector<int> quiet(nv, 0);
+    std::vector<double> recent; // energies of the last iterations
+    int iteration = 0;
+    double previous = std::numeric_limits<double>::infinity();
+    for (; iteration < Options.maxIterations; ++iteration)
+    {
+      double e = objective(x.data(), gradient.data());
+      // h < 2 / k_max holds for the curvature where it was estimated; where the energy rises
+      // anyway, take the step back and halve h.
+      int halvings = 0;
+      while (e > previous && halvings < 20 && !before.empty())
+      {
+        h *= 0.5;
+        x = before;
+        e = objective(x.data(), gradient.data());
+        ++halvings;
+      }
+      previous = e;
+      before = x;
+      // Stop when ten iterations gained less than the tolerance (relative).
+      recent.push_back(e);
+      if (recent.size() > 10)
+      {
+        const double gained = recent[recent.size() - 11] - e;
+        if (gained <= Options.tolerance * std::abs(e))
+          break;
+      }
+      double largestStep = 0;
+      for (std::size_t v = 0; v < nv; ++v)
+      {
+        step[v] = 0;
+        if (Options.provisionalDetermination && result.frozen[v])
+          continue;
+        double step2 = 0;
+        for (int k = 0; k < 3; ++k)
+        {
+          const double d = h * gradient[3 * v + k];
+          x[3 * v + k] -= d;
+          step2 += d * d;
+        }
+        step[v] = std::sqrt(step2);
+        largestStep = std::max(largestStep, step[v]);
+      }
+      if (Options.provisionalDetermination)
+      {
+        // "Barely moves": a step below 1% of this iteration's largest one, three times running.
+        const double barely = 0.01 * largestStep;
+        for (std::size_t v = 0; v < nv; ++v)
+        {
+          if (result.frozen[v])
+          {
+            for (std::int64_t u : Mesh.neighbours(v))
+              if (step[u] > barely && !result.frozen[u])
+              {
+                result.frozen[v] = 0; // a neighbour moves: wake up
+                quiet[v] = 0;
+                break;
+              }
+            continue;
+          }
+          quiet[v] = step[v] < barely ? quiet[v] + 1 : 0;
+          if (quiet[v] >= 3)
+            result.frozen[v] = 1;
+        }
+      }
+      if (iteration % 25 == 24)
+        decideWeights(x);
+    }
+    result.iterations = iteration + 1;
+  }
+
+  result.positions = x;
+  energy(x.data(), haveData ? &field : nullptr, weights, nullptr, &result.internalEnergy,
+         &result.distanceEnergy);
+  if (haveData)
+    for (std::size_t v = 0; v < nv; ++v)
+      result.residual[v] = field.sample(&x[3 * v]).distance;
+  History.push_back(x);
+  if (History.size() > 3)
+    History.erase(History.begin());
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+} // namespace dp

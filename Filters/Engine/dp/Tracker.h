@@ -1,0 +1,119 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file Tracker.h
+ * @brief Deforms one template mesh through a sequence of point clouds, frame by frame, by
+ *        minimising E = E_int + E_dis (Shinya, Shioya & Shiraishi, "Unification of Dynamic
+ *        Point Data", eq. 1):
+ *
+ *   E_int  the cloth energy of ClothEnergy (stretch, shear, bend; rest state = the template);
+ *   E_dis  = k_dis * sum_i m_i w_i D(x_i) / L, with D the distance field of the frame's points
+ *          (DistanceField), m_i the vertex masses, L = sqrt(template area) (so nothing depends
+ *          on units), and w_i in {0, 1}: 0 when vertex i fails the normal test (its normal and
+ *          its nearest point's normal differ by more than normalTestDegrees) or is farther than
+ *          outlierDistance from the data.
+ *
+ * Solvers on the same energy:
+ *   SteepestDescent (the paper, eq. 2-3): x <- x - h grad E with h = 1.9 / k_max, k_max the
+ *     largest eigenvalue of the Hessian estimated by power iteration; stops when the largest
+ *     vertex step is below tolerance * L. With provisional determination (PD), vertices whose
+ *     step stays below the tolerance for 3 iterations are frozen until a neighbour moves.
+ *   LBFGS (default): quasi-Newton (libLBFGS, More-Thuente line search) on the same E and
+ *     gradient.
+ * Motion prediction (MP): the start of frame t is the minimum of E along the constant, linear
+ * and quadratic extrapolations of the trajectories (a 1-D search on each).
+ *
+ * Missing data: an empty frame continues the motion (linear extrapolation of the last two
+ * frames), relaxed by E_int alone, and is flagged; vertices with no data near them (holes) are
+ * held by E_int. The paper's solver backs off (halves h) where a step would raise the energy.
+ *
+ * Limits: one global step of motion prediction per frame (not per vertex); the distance field
+ * is rebuilt for every frame.
+ */
+#pragma once
+
+#include "dp/ClothEnergy.h"
+#include "dp/DistanceField.h"
+#include "dp/TriangleMesh.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace dp
+{
+
+enum class TrackerSolver
+{
+  LBFGS,
+  SteepestDescent
+};
+
+struct TrackerOptions
+{
+  ClothParameters cloth;
+  double distanceWeight = 1.0;     // k_dis
+  double normalTestDegrees = 90.0; // >= 180 switches the normal test off
+  double outlierDistance = 0.0;    // world units; 0: no cut-off
+  double voxelSize = 0.0;          // world units; 0: template diagonal / 200
+  double bandWidth = 0.0;          // world units; 0: 4 voxels
+  TrackerSolver solver = TrackerSolver::LBFGS;
+  bool motionPrediction = true;
+  bool provisionalDetermination = true; // steepest descent only
+  int maxIterations = 300;
+  double tolerance = 1e-5; // on the step (x L) and the relative energy decrease
+};
+
+struct FrameResult
+{
+  std::vector<double> positions;      // 3 per vertex
+  std::vector<double> residual;       // distance to the data per vertex (D), -1 if no data
+  std::vector<std::uint8_t> frozen;   // PD: frozen at the end of the solve
+  std::vector<std::uint8_t> rejected; // normal test or outlier cut-off dropped the data term
+  int iterations = 0;
+  double internalEnergy = 0;
+  double distanceEnergy = 0;
+  double seconds = 0;
+  bool emptyFrame = false;
+};
+
+class Tracker
+{
+public:
+  /** `templatePositions` is the rest state and the start of frame 0. Throws
+   *  std::invalid_argument for a mesh without area or options out of range. */
+  Tracker(TriangleMesh mesh, std::vector<double> templatePositions, const TrackerOptions& options);
+  // The cloth energy refers to the tracker's own mesh: a tracker does not move.
+  Tracker(const Tracker&) = delete;
+  Tracker& operator=(const Tracker&) = delete;
+
+  /**
+   * Fits the mesh to the next frame's points (x y z each; normals nx ny nz each or nullptr to
+   * estimate them) and returns the result; the tracker remembers it for the next frame.
+   */
+  FrameResult track(const double* points, std::size_t count, const float* normals);
+
+  /** Forgets the trajectory: the next track() starts from the template again. */
+  void reset() { History.clear(); }
+
+  const TriangleMesh& mesh() const { return Mesh; }
+  const std::vector<double>& templatePositions() const { return Template; }
+  const TrackerOptions& options() const { return Options; }
+  const ClothEnergy& clothEnergy() const { return Cloth; }
+  double voxelSize() const { return Voxel; }
+
+  /** E = E_int + E_dis at x against `field` with the given per-vertex data weights; adds the
+   *  gradient when `gradient` is not null. Exposed for tests. */
+  double energy(const double* x, const DistanceField* field, const std::vector<double>& weights,
+                double* gradient, double* internal = nullptr, double* distance = nullptr) const;
+
+private:
+  std::vector<double> predict() const;
+
+  TriangleMesh Mesh;
+  std::vector<double> Template;
+  TrackerOptions Options;
+  ClothEnergy Cloth;
+  double Voxel = 0;
+  std::vector<std::vector<double>> History; // the last three results, most recent last
+};
+
+} // namespace dp

@@ -1,0 +1,125 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/TriangleMesh.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+namespace dp
+{
+namespace
+{
+void cross(const double* a, const double* b, double* out)
+{
+  out[0] = a[1] * b[2] - a[2] * b[1];
+  out[1] = a[2] * b[0] - a[0] * b[2];
+  out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+// Unnormalised normal (twice the area) of triangle t.
+void faceNormal(const std::vector<std::int64_t>& tris, std::size_t t, const double* x, double* n)
+{
+  const double* a = x + 3 * tris[3 * t];
+  const double* b = x + 3 * tris[3 * t + 1];
+  const double* c = x + 3 * tris[3 * t + 2];
+  const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+  const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+  cross(u, v, n);
+}
+} // namespace
+
+TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vertexCount)
+    : Triangles(std::move(triangles)), VertexCount(vertexCount)
+{
+  if (Triangles.size() % 3 != 0)
+    throw std::invalid_argument("triangle indices are not a multiple of 3");
+  const auto n = static_cast<std::int64_t>(vertexCount);
+  // Directed edge (a, b) -> opposite vertex c of the triangle (a, b, c).
+  std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> directed;
+  Neighbours.assign(vertexCount, {});
+  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  {
+    const std::int64_t* v = &Triangles[3 * t];
+    for (int k = 0; k < 3; ++k)
+      if (v[k] < 0 || v[k] >= n)
+        throw std::invalid_argument("triangle " + std::to_string(t) + " uses vertex " +
+                                    std::to_string(v[k]) + " of " + std::to_string(n));
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+      throw std::invalid_argument("triangle " + std::to_string(t) + " repeats a vertex");
+    for (int k = 0; k < 3; ++k)
+      directed[{v[k], v[(k + 1) % 3]}] = v[(k + 2) % 3];
+  }
+  for (const auto& [edge, opposite] : directed)
+  {
+    const auto [a, b] = edge;
+    const auto reverse = directed.find({b, a});
+    if (reverse == directed.end() || a < b)
+    {
+      Edges.push_back({std::min(a, b), std::max(a, b)});
+      Neighbours[a].push_back(b);
+      Neighbours[b].push_back(a);
+    }
+    if (reverse != directed.end() && a < b)
+      Hinges.push_back({a, b, opposite, reverse->second});
+  }
+  for (auto& ring : Neighbours)
+  {
+    std::sort(ring.begin(), ring.end());
+    ring.erase(std::unique(ring.begin(), ring.end()), ring.end());
+  }
+  // A boundary edge seen once from each side is not possible; edges listed twice (from a
+  // non-manifold fan) are made unique.
+  std::sort(Edges.begin(), Edges.end());
+  Edges.erase(std::unique(Edges.begin(), Edges.end()), Edges.end());
+}
+
+std::vector<double> TriangleMesh::vertexAreas(const double* positions) const
+{
+  std::vector<double> area(VertexCount, 0.0);
+  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  {
+    double n[3];
+    faceNormal(Triangles, t, positions, n);
+    const double third = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]) / 6.0;
+    for (int k = 0; k < 3; ++k)
+      area[Triangles[3 * t + k]] += third;
+  }
+  return area;
+}
+
+double TriangleMesh::totalArea(const double* positions) const
+{
+  double total = 0;
+  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  {
+    double n[3];
+    faceNormal(Triangles, t, positions, n);
+    total += 0.5 * std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  }
+  return total;
+}
+
+void TriangleMesh::vertexNormals(const double* positions, double* normals) const
+{
+  std::fill(normals, normals + 3 * VertexCount, 0.0);
+  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  {
+    double n[3];
+    faceNormal(Triangles, t, positions, n);
+    for (int k = 0; k < 3; ++k)
+      for (int c = 0; c < 3; ++c)
+        normals[3 * Triangles[3 * t + k] + c] += n[c];
+  }
+  for (std::size_t v = 0; v < VertexCount; ++v)
+  {
+    double* n = normals + 3 * v;
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (length > 0)
+      for (int c = 0; c < 3; ++c)
+        n[c] /= length;
+  }
+}
+
+} // namespace dp
