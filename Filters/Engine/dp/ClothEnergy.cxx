@@ -144,23 +144,49 @@ double ClothEnergy::value(const double* x) const
 
 double ClothEnergy::addGradient(const double* x, double* g) const
 {
-  const TriangleMesh& mesh = *Mesh;
   double energy = 0;
-  const double invL2 = 1.0 / (L * L);
-  const auto& edges = mesh.edges();
-  for (std::size_t e = 0; e < edges.size(); ++e)
+  forEachTerm(x,
+              [&](const ClothTerm& t)
+              {
+                energy += 0.5 * t.weight * t.residual * t.residual;
+                if (g)
+                  for (int k = 0; k < t.count; ++k)
+                    for (int c = 0; c < 3; ++c)
+                      g[3 * t.vertex[k] + c] += t.weight * t.residual * t.gradient[k][c];
+              });
+  return energy;
+}
+
+void ClothEnergy::forEachTerm(const double* x,
+                              const std::function<void(const ClothTerm&)>& visit) const
+{
+  const TriangleMesh& mesh = *Mesh;
+  ClothTerm term;
+  auto put = [&term](int k, std::int64_t vertex, V3 gradient)
   {
-    const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
-    const double l = norm(d);
-    const double stretch = l - RestLength[e];
-    energy += 0.5 * K.stretch * stretch * stretch * invL2;
-    if (g && l > 0)
+    term.vertex[k] = vertex;
+    term.gradient[k][0] = gradient.x;
+    term.gradient[k][1] = gradient.y;
+    term.gradient[k][2] = gradient.z;
+  };
+  // Stretch: r = (l - l0) / L.
+  term.count = 2;
+  term.weight = K.stretch;
+  const auto& edges = mesh.edges();
+  if (K.stretch > 0)
+    for (std::size_t e = 0; e < edges.size(); ++e)
     {
-      const V3 f = (K.stretch * stretch * invL2 / l) * d;
-      add(g, edges[e][1], f);
-      add(g, edges[e][0], -1.0 * f);
+      const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
+      const double l = norm(d);
+      term.residual = (l - RestLength[e]) / L;
+      const V3 u = l > 0 ? (1.0 / (l * L)) * d : V3{0, 0, 0};
+      put(0, edges[e][1], u);
+      put(1, edges[e][0], -1.0 * u);
+      visit(term);
     }
-  }
+  // Shear: r = theta - theta0 at each triangle corner.
+  term.count = 3;
+  term.weight = K.shear;
   const auto& tris = mesh.triangles();
   if (K.shear > 0)
     for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
@@ -169,36 +195,33 @@ double ClothEnergy::addGradient(const double* x, double* g) const
         const std::int64_t ia = tris[3 * t + c], ib = tris[3 * t + (c + 1) % 3],
                            ic = tris[3 * t + (c + 2) % 3];
         double angle = 0;
-        V3 gb{}, gc{};
-        const bool ok = cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, g ? &gb : nullptr,
-                                    g ? &gc : nullptr);
-        const double delta = angle - RestAngle[3 * t + c];
-        energy += 0.5 * K.shear * delta * delta;
-        if (g && ok)
-        {
-          const double s = K.shear * delta;
-          add(g, ib, s * gb);
-          add(g, ic, s * gc);
-          add(g, ia, -s * 1.0 * (gb + gc));
-        }
+        V3 gb{0, 0, 0}, gc{0, 0, 0};
+        if (!cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, &gb, &gc))
+          gb = gc = V3{0, 0, 0};
+        term.residual = angle - RestAngle[3 * t + c];
+        put(0, ib, gb);
+        put(1, ic, gc);
+        put(2, ia, -1.0 * (gb + gc));
+        visit(term);
       }
+  // Bend: r = cos(phi) - cos(phi0) at each hinge, weighted by its area share.
+  term.count = 4;
   const auto& hinges = mesh.hinges();
   if (K.bend > 0)
     for (std::size_t h = 0; h < hinges.size(); ++h)
     {
       const auto& v = hinges[h];
       double cosine = 1;
-      V3 gh[4];
-      const bool ok =
-          hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, g ? gh : nullptr);
-      const double delta = cosine - RestCos[h];
-      const double weight = K.bend * HingeWeight[h];
-      energy += 0.5 * weight * delta * delta;
-      if (g && ok)
-        for (int k = 0; k < 4; ++k)
-          add(g, v[k], weight * delta * gh[k]);
+      V3 gh[4] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+      if (!hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, gh))
+        for (V3& gv : gh)
+          gv = V3{0, 0, 0};
+      term.residual = cosine - RestCos[h];
+      term.weight = K.bend * HingeWeight[h];
+      for (int k = 0; k < 4; ++k)
+        put(k, v[k], gh[k]);
+      visit(term);
     }
-  return energy;
 }
 
 } // namespace dp

@@ -22,6 +22,8 @@
 
 #include "dp/TriangleMesh.h"
 
+#include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace dp
@@ -34,6 +36,17 @@ struct ClothParameters
   double bend = 0.5;    // k_ben
 };
 
+/** One term of E_int written as 1/2 * weight * residual^2, with the residual's gradient with
+ *  respect to each of its vertices (2 for stretch, 3 for shear, 4 for bend). */
+struct ClothTerm
+{
+  double weight = 0;
+  double residual = 0;
+  int count = 0;
+  std::int64_t vertex[4] = {0, 0, 0, 0};
+  double gradient[4][3] = {};
+};
+
 class ClothEnergy
 {
 public:
@@ -43,6 +56,9 @@ public:
   double value(const double* x) const;
   /** E_int at x; adds dE/dx to gradient (which must be sized 3 * vertices). */
   double addGradient(const double* x, double* gradient) const;
+  /** Visits every term at x (for Gauss-Newton: the Hessian of a term is about
+   *  weight * grad(r) grad(r)^T). Degenerate terms come with zero gradients. */
+  void forEachTerm(const double* x, const std::function<void(const ClothTerm&)>& visit) const;
 
   const std::vector<double>& vertexMass() const { return Mass; }
   double lengthScale() const { return L; }

@@ -3,9 +3,14 @@
 
 #include <lbfgs.h>
 
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -145,6 +150,119 @@ std::vector<double> Tracker::predict() const
   return History.empty() ? Template : History.back();
 }
 
+int Tracker::solveGaussNewton(
+    std::vector<double>& x, const DistanceField* field, std::vector<double>& weights,
+    const std::function<void(const std::vector<double>&)>& decideWeights) const
+{
+  using Sparse = Eigen::SparseMatrix<double>;
+  const std::size_t nv = Mesh.numberOfVertices();
+  const Eigen::Index n = static_cast<Eigen::Index>(3 * nv);
+  const double L = Cloth.lengthScale();
+  const double scale = Options.distanceWeight / L;
+  const auto& mass = Cloth.vertexMass();
+  std::vector<Eigen::Triplet<double>> triplets;
+  Eigen::SimplicialLDLT<Sparse> solver;
+  bool analysed = false;
+  std::vector<double> gradient(x.size()), trial(x.size());
+  double damping = 1e-4; // relative to the mean diagonal
+  int evaluations = 0;
+  double e = energy(x.data(), field, weights,
+                    (std::fill(gradient.begin(), gradient.end(), 0.0), gradient.data()));
+  ++evaluations;
+  int iteration = 0;
+  for (; iteration < Options.maxIterations; ++iteration)
+  {
+    // Gauss-Newton matrix: cloth terms, distance terms (reweighted), Levenberg damping.
+    triplets.clear();
+    auto addBlock =
+        [&](std::int64_t a, std::int64_t b, const double* ga, const double* gb, double w)
+    {
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+          triplets.emplace_back(static_cast<int>(3 * a + r), static_cast<int>(3 * b + c),
+                                w * ga[r] * gb[c]);
+    };
+    Cloth.forEachTerm(x.data(),
+                      [&](const ClothTerm& t)
+                      {
+                        for (int a = 0; a < t.count; ++a)
+                          for (int b = 0; b < t.count; ++b)
+                            addBlock(t.vertex[a], t.vertex[b], t.gradient[a], t.gradient[b],
+                                     t.weight);
+                      });
+    const double floor = Voxel;
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      double g[3] = {0, 0, 0};
+      double w = 0;
+      if (field && weights[v] != 0)
+      {
+        const DistanceSample sample = field->sample(&x[3 * v]);
+        w = scale * mass[v] * weights[v] / std::max(sample.distance, floor);
+        std::copy(sample.gradient, sample.gradient + 3, g);
+      }
+      addBlock(static_cast<std::int64_t>(v), static_cast<std::int64_t>(v), g, g, w);
+    }
+    Sparse H(n, n);
+    H.setFromTriplets(triplets.begin(), triplets.end());
+    double meanDiagonal = 0;
+    for (Eigen::Index i = 0; i < n; ++i)
+      meanDiagonal += H.coeff(i, i);
+    meanDiagonal = std::max(meanDiagonal / static_cast<double>(n), 1e-300);
+    const Eigen::Map<const Eigen::VectorXd> g(gradient.data(), n);
+
+    bool accepted = false;
+    for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
+    {
+      Sparse A = H;
+      for (Eigen::Index i = 0; i < n; ++i)
+        A.coeffRef(i, i) += damping * meanDiagonal;
+      if (!analysed)
+      {
+        solver.analyzePattern(A);
+        analysed = true;
+      }
+      solver.factorize(A);
+      if (solver.info() != Eigen::Success)
+      {
+        damping *= 10;
+        continue;
+      }
+      const Eigen::VectorXd step = solver.solve(-g);
+      for (std::size_t i = 0; i < x.size(); ++i)
+        trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
+      const double eTrial = energy(trial.data(), field, weights, nullptr);
+      ++evaluations;
+      if (eTrial < e)
+      {
+        accepted = true;
+        const double decrease = e - eTrial;
+        x.swap(trial);
+        std::fill(gradient.begin(), gradient.end(), 0.0);
+        e = energy(x.data(), field, weights, gradient.data());
+        ++evaluations;
+        damping = std::max(damping * 0.3, 1e-9);
+        if (decrease <= Options.tolerance * std::abs(e) ||
+            step.cwiseAbs().maxCoeff() <= Options.tolerance * L)
+          return evaluations;
+      }
+      else
+      {
+        damping *= 10;
+      }
+    }
+    if (!accepted)
+      break; // no step decreases E any more: a (local) minimum
+    if (iteration % 5 == 4)
+    {
+      decideWeights(x);
+      std::fill(gradient.begin(), gradient.end(), 0.0);
+      e = energy(x.data(), field, weights, gradient.data());
+    }
+  }
+  return evaluations;
+}
+
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
 {
   const auto start = std::chrono::steady_clock::now();
@@ -250,15 +368,19 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     result.emptyFrame = true;
   }
 
-  if (Options.solver == TrackerSolver::LBFGS)
+  if (Options.solver == TrackerSolver::GaussNewton)
+  {
+    result.iterations = solveGaussNewton(x, haveData ? &field : nullptr, weights, decideWeights);
+  }
+  else if (Options.solver == TrackerSolver::LBFGS)
   {
     lbfgs_parameter_t parameters;
     lbfgs_parameter_init(&parameters);
     parameters.m = 8;
     parameters.max_iterations = Options.maxIterations;
     parameters.epsilon = 1e-8;
-    parameters.past = 3;
-    parameters.delta = Options.tolerance;
+    parameters.past = 5;
+    parameters.delta = 0.1 * Options.tolerance;
     parameters.linesearch = LBFGS_LINESEARCH_MORETHUENTE;
     // Two passes: after the first, the normal test is decided again at the new shape.
     for (int pass = 0; pass < 2; ++pass)
@@ -266,7 +388,9 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       lbfgsfloatval_t fx = 0;
       const int status = lbfgs(static_cast<int>(x.size()), x.data(), &fx, evaluateForLbfgs, nullptr,
                                &objective, &parameters);
-      (void)status; // any stop leaves x at the best point found so far
+      if (std::getenv("DP_DEBUG_LBFGS"))
+        std::fprintf(stderr, "lbfgs pass %d status %d fx %g evaluations %d\n", pass, status, fx,
+                     objective.evaluations);
       if (pass == 0)
         decideWeights(x);
     }

@@ -17,8 +17,12 @@
  *     largest eigenvalue of the Hessian estimated by power iteration; stops when the largest
  *     vertex step is below tolerance * L. With provisional determination (PD), vertices whose
  *     step stays below the tolerance for 3 iterations are frozen until a neighbour moves.
- *   LBFGS (default): quasi-Newton (libLBFGS, More-Thuente line search) on the same E and
- *     gradient.
+ *   GaussNewton (default): damped Gauss-Newton steps on the same E: each cloth term
+ *     1/2 k r^2 contributes k grad(r) grad(r)^T, each distance term s_i D_i contributes
+ *     s_i / max(D_i, voxel) grad(D_i) grad(D_i)^T (iteratively reweighted least squares, whose
+ *     fixed point is the minimum of the sum of distances); the sparse system is solved by
+ *     Eigen's LDL^T with Levenberg damping, and every step is accepted only if E decreases.
+ *   LBFGS: quasi-Newton (libLBFGS, More-Thuente line search) on the same E and gradient.
  * Motion prediction (MP): the start of frame t is the minimum of E along the constant, linear
  * and quadratic extrapolations of the trajectories (a 1-D search on each).
  *
@@ -36,6 +40,7 @@
 #include "dp/TriangleMesh.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace dp
@@ -43,6 +48,7 @@ namespace dp
 
 enum class TrackerSolver
 {
+  GaussNewton,
   LBFGS,
   SteepestDescent
 };
@@ -55,7 +61,7 @@ struct TrackerOptions
   double outlierDistance = 0.0;    // world units; 0: no cut-off
   double voxelSize = 0.0;          // world units; 0: template diagonal / 200
   double bandWidth = 0.0;          // world units; 0: 4 voxels
-  TrackerSolver solver = TrackerSolver::LBFGS;
+  TrackerSolver solver = TrackerSolver::GaussNewton;
   bool motionPrediction = true;
   bool provisionalDetermination = true; // steepest descent only
   int maxIterations = 300;
@@ -107,6 +113,9 @@ public:
 
 private:
   std::vector<double> predict() const;
+  int solveGaussNewton(std::vector<double>& x, const DistanceField* field,
+                       std::vector<double>& weights,
+                       const std::function<void(const std::vector<double>&)>& decideWeights) const;
 
   TriangleMesh Mesh;
   std::vector<double> Template;
