@@ -2,6 +2,7 @@
 #include "vtkDistanceFieldFilter.h"
 
 #include "dp/DistanceField.h"
+#include "vtkDPPointSetAccess.h"
 
 #include "vtkDataArray.h"
 #include "vtkDoubleArray.h"
@@ -63,46 +64,6 @@ int vtkDistanceFieldFilter::RequestUpdateExtent(vtkInformation*, vtkInformationV
   return 1; // the whole point set, whatever part of the image is asked for
 }
 
-namespace
-{
-// Finite points (x y z) of a point set, with their original ids and normals if any.
-struct TargetPoints
-{
-  std::vector<double> xyz;
-  std::vector<vtkIdType> ids;
-  std::vector<float> normals;
-};
-
-TargetPoints finitePoints(vtkPointSet* input)
-{
-  TargetPoints t;
-  const vtkIdType n = input->GetNumberOfPoints();
-  vtkDataArray* normals = input->GetPointData()->GetNormals();
-  if (!normals)
-    normals = input->GetPointData()->GetArray("Normals");
-  if (normals && normals->GetNumberOfComponents() != 3)
-    normals = nullptr;
-  t.xyz.reserve(3 * n);
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    double p[3];
-    input->GetPoint(i, p);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-      continue;
-    t.xyz.insert(t.xyz.end(), p, p + 3);
-    t.ids.push_back(i);
-    if (normals)
-    {
-      double nrm[3];
-      normals->GetTuple(i, nrm);
-      t.normals.insert(t.normals.end(), {static_cast<float>(nrm[0]), static_cast<float>(nrm[1]),
-                                         static_cast<float>(nrm[2])});
-    }
-  }
-  return t;
-}
-} // namespace
-
 int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                         vtkInformationVector* outputVector)
 {
@@ -122,8 +83,8 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
     vtkErrorMacro("BandWidth must be positive, or 0 for 3 voxels; got " << this->BandWidth);
     return 0;
   }
-  const TargetPoints target = finitePoints(input);
-  const vtkIdType dropped = input->GetNumberOfPoints() - static_cast<vtkIdType>(target.ids.size());
+  const vtkDP::TargetPoints target = vtkDP::finitePoints(input);
+  const vtkIdType dropped = target.dropped;
   if (dropped > 0)
   {
     vtkWarningMacro("dropped " << dropped << " input point(s) with NaN or infinite coordinates");

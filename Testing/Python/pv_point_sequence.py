@@ -22,13 +22,14 @@ def main():
     ns = {"__name__": "dp_plugin_proxies"}  # LoadPlugin fills a non-empty namespace only
     LoadPlugin(plugin, remote=False, ns=ns)
     # simple.py names proxies by their labels.
-    for name in ("PointSequenceReader", "PointSequenceFolder", "PointDistanceField"):
+    for name in ("PointSequenceReader", "PointSequenceFolder", "PointDistanceField",
+                 "DeformableTrack"):
         assert name in ns, sorted(ns)
 
     with tempfile.TemporaryDirectory(prefix="dp-pv-") as tmp:
         subprocess.run([sampler, "--mesh", "sheet", "--frames", "5", "--points", "800",
                         "--holes", "1", "--hole-radius", "0.25", "--moving-holes",
-                        "--interval", "0.5", tmp], check=True, capture_output=True)
+                        "--interval", "0.5", "--truth", tmp], check=True, capture_output=True)
         frames = sorted(f for f in os.listdir(tmp) if f.endswith(".ply"))
         expected = [ply_vertex_count(os.path.join(tmp, f)) for f in frames]
         assert len(set(expected)) > 1, expected
@@ -64,6 +65,14 @@ def main():
         distance = image.GetPointData().GetArray("Distance")
         assert distance is not None and distance.GetRange()[1] > 0
         assert "diagonal" in field.GetProperty("VoxelSize").GetDocumentation().GetDescription()
+        # The tracker: the template is the first truth mesh; track to the third time step.
+        template = OpenDataFile(os.path.join(tmp, "truth", "frame_0000.ply"))
+        track = ns["DeformableTrack"](Input=reader, Template=template)
+        assert list(track.TimestepValues) == list(reader.TimestepValues)
+        track.UpdatePipeline(1.0)
+        mesh = servermanager.Fetch(track)
+        assert mesh.GetNumberOfPolys() > 0 and mesh.GetPointData().GetArray("Residual")
+        assert mesh.GetFieldData().GetArray("FrameIndex").GetValue(0) == 2
     print("pvpython point sequence test passed")
     return 0
 

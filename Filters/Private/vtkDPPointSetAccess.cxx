@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkDPPointSetAccess.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellArrayIterator.h"
+#include "vtkDataArray.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+
+#include <cmath>
+
+namespace vtkDP
+{
+
+TargetPoints finitePoints(vtkPointSet* input)
+{
+  TargetPoints t;
+  if (!input)
+    return t;
+  const vtkIdType n = input->GetNumberOfPoints();
+  vtkDataArray* normals = input->GetPointData()->GetNormals();
+  if (!normals)
+    normals = input->GetPointData()->GetArray("Normals");
+  if (normals && normals->GetNumberOfComponents() != 3)
+    normals = nullptr;
+  t.xyz.reserve(3 * n);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    double p[3];
+    input->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+    {
+      ++t.dropped;
+      continue;
+    }
+    t.xyz.insert(t.xyz.end(), p, p + 3);
+    t.ids.push_back(i);
+    if (normals)
+    {
+      double nrm[3];
+      normals->GetTuple(i, nrm);
+      t.normals.insert(t.normals.end(), {static_cast<float>(nrm[0]), static_cast<float>(nrm[1]),
+                                         static_cast<float>(nrm[2])});
+    }
+  }
+  return t;
+}
+
+bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
+                  std::vector<double>& positions, const char*& why)
+{
+  triangles.clear();
+  positions.clear();
+  if (!mesh || mesh->GetNumberOfPolys() == 0)
+  {
+    why = "it has no polygons";
+    return false;
+  }
+  const vtkIdType n = mesh->GetNumberOfPoints();
+  positions.resize(3 * n);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    mesh->GetPoint(i, &positions[3 * i]);
+    if (!std::isfinite(positions[3 * i]) || !std::isfinite(positions[3 * i + 1]) ||
+        !std::isfinite(positions[3 * i + 2]))
+    {
+      why = "a point has a NaN or infinite coordinate";
+      return false;
+    }
+  }
+  auto cells = vtk::TakeSmartPointer(mesh->GetPolys()->NewIterator());
+  for (cells->GoToFirstCell(); !cells->IsDoneWithTraversal(); cells->GoToNextCell())
+  {
+    vtkIdType count = 0;
+    const vtkIdType* ids = nullptr;
+    cells->GetCurrentCell(count, ids);
+    for (vtkIdType k = 1; k + 1 < count; ++k)
+      triangles.insert(triangles.end(), {ids[0], ids[k], ids[k + 1]});
+  }
+  if (triangles.empty())
+  {
+    why = "its polygons have fewer than 3 points";
+    return false;
+  }
+  return true;
+}
+
+} // namespace vtkDP

@@ -1,0 +1,33 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Moving data between VTK point sets and the engine's plain arrays (private to the module).
+#ifndef vtkDPPointSetAccess_h
+#define vtkDPPointSetAccess_h
+
+#include "vtkType.h"
+
+#include <cstdint>
+#include <vector>
+
+class vtkPointSet;
+class vtkPolyData;
+
+namespace vtkDP
+{
+/** The finite points (x y z) of a point set, their original ids, and their normals when the
+ *  set has a 3-component "Normals" array (or active normals). */
+struct TargetPoints
+{
+  std::vector<double> xyz;
+  std::vector<vtkIdType> ids;
+  std::vector<float> normals;
+  vtkIdType dropped = 0; // points with NaN/Inf coordinates left out
+};
+TargetPoints finitePoints(vtkPointSet* input);
+
+/** A surface mesh as triangles (polygons split into fans) and positions. Returns false (with
+ *  `why` set) when the mesh has no polygons or a non-finite point. */
+bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
+                  std::vector<double>& positions, const char*& why);
+} // namespace vtkDP
+
+#endif

@@ -1,0 +1,320 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkDeformableTrackFilter.h"
+
+#include "dp/Tracker.h"
+#include "vtkDPPointSetAccess.h"
+
+#include "vtkCellArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkFloatArray.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkIntArray.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPointSet.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
+
+#include <algorithm>
+#include <memory>
+#include <vector>
+
+vtkStandardNewMacro(vtkDeformableTrackFilter);
+
+struct vtkDeformableTrackFilter::Internals
+{
+  std::vector<double> TimeSteps;        // the input's; empty for a static input
+  std::unique_ptr<dp::Tracker> Tracker; // made at the first frame
+  vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
+  std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
+  double LastInputTime = 0;
+
+  std::size_t frameCount() const { return TimeSteps.empty() ? 1 : TimeSteps.size(); }
+  double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
+  std::size_t frameAt(vtkInformation* outInfo) const
+  {
+    if (TimeSteps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+      return 0;
+    const double t = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
+    // The last frame whose time is <= t (with a little slack for rounding).
+    const auto it =
+        std::upper_bound(TimeSteps.begin(), TimeSteps.end(), t + 1e-9 * std::max(1.0, std::abs(t)));
+    return it == TimeSteps.begin() ? 0 : static_cast<std::size_t>(it - TimeSteps.begin()) - 1;
+  }
+  void clear()
+  {
+    Tracker.reset();
+    Polys = nullptr;
+    Cache.clear();
+  }
+};
+
+vtkDeformableTrackFilter::vtkDeformableTrackFilter() : Internal(new Internals)
+{
+  this->SetNumberOfInputPorts(2);
+}
+
+vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
+{
+  delete this->Internal;
+}
+
+int vtkDeformableTrackFilter::GetNumberOfCachedFrames()
+{
+  return static_cast<int>(this->Internal->Cache.size());
+}
+
+int vtkDeformableTrackFilter::FillInputPortInformation(int port, vtkInformation* info)
+{
+  if (port == 0)
+  {
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPointSet");
+  }
+  else
+  {
+    info->Set(vtkAlgorithm::INPUT_REQUIRED_DATA_TYPE(), "vtkPolyData");
+    info->Set(vtkAlgorithm::INPUT_IS_OPTIONAL(), 1);
+  }
+  return 1;
+}
+
+int vtkDeformableTrackFilter::RequestInformation(vtkInformation*,
+                                                 vtkInformationVector** inputVector,
+                                                 vtkInformationVector* outputVector)
+{
+  // Called again whenever this filter, the template or anything upstream changed: the cached
+  // frames are then stale.
+  this->Internal->clear();
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  this->Internal->TimeSteps.clear();
+  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()))
+  {
+    const int n = inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    const double* t = inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    this->Internal->TimeSteps.assign(t, t + n);
+    outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), t, n);
+    if (n > 0)
+    {
+      const double range[2] = {t[0], t[n - 1]};
+      outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+    }
+  }
+  else
+  {
+    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_RANGE());
+  }
+  return 1;
+}
+
+int vtkDeformableTrackFilter::RequestUpdateExtent(vtkInformation*,
+                                                  vtkInformationVector** inputVector,
+                                                  vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  const std::size_t target = in.frameAt(outputVector->GetInformationObject(0));
+  if (in.TimeSteps.empty())
+    return 1;
+  // Computing: ask for the next frame. Answering from the cache: ask for what upstream already
+  // has, so that nothing re-executes.
+  const double time = in.Cache.size() <= target ? in.timeOf(in.Cache.size()) : in.LastInputTime;
+  inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(), time);
+  in.LastInputTime = time;
+  return 1;
+}
+
+namespace
+{
+void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult& r,
+                const std::vector<double>& rest, std::size_t frame)
+{
+  const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(n);
+  std::copy(r.positions.begin(), r.positions.end(), coordinates->GetPointer(0));
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->SetPoints(points);
+  output->SetPolys(polys);
+
+  vtkNew<vtkFloatArray> displacement;
+  displacement->SetName("Displacement");
+  displacement->SetNumberOfComponents(3);
+  displacement->SetNumberOfTuples(n);
+  vtkNew<vtkFloatArray> residual;
+  residual->SetName("Residual");
+  residual->SetNumberOfTuples(n);
+  vtkNew<vtkUnsignedCharArray> frozen, rejected;
+  frozen->SetName("Frozen");
+  frozen->SetNumberOfTuples(n);
+  rejected->SetName("Rejected");
+  rejected->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i)
+  {
+    for (int c = 0; c < 3; ++c)
+      displacement->SetTypedComponent(i, c,
+                                      static_cast<float>(r.positions[3 * i + c] - rest[3 * i + c]));
+    residual->SetValue(i, static_cast<float>(r.residual[i]));
+    frozen->SetValue(i, r.frozen[i]);
+    rejected->SetValue(i, r.rejected[i]);
+  }
+  vtkPointData* pd = output->GetPointData();
+  pd->SetVectors(displacement);
+  pd->SetScalars(residual);
+  pd->AddArray(frozen);
+  pd->AddArray(rejected);
+
+  auto addValue = [output](const char* name, double value)
+  {
+    vtkNew<vtkDoubleArray> a;
+    a->SetName(name);
+    a->InsertNextValue(value);
+    output->GetFieldData()->AddArray(a);
+  };
+  addValue("FrameIndex", static_cast<double>(frame));
+  addValue("Iterations", r.iterations);
+  addValue("InternalEnergy", r.internalEnergy);
+  addValue("DistanceEnergy", r.distanceEnergy);
+  addValue("Seconds", r.seconds);
+  addValue("EmptyFrame", r.emptyFrame ? 1 : 0);
+}
+} // namespace
+
+int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
+                                          vtkInformationVector** inputVector,
+                                          vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  const std::size_t target = in.frameAt(outInfo);
+  const double requestedTime =
+      outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+          ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+          : in.timeOf(target);
+
+  if (in.Cache.size() <= target)
+  {
+    const std::size_t frame = in.Cache.size();
+    vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+
+    if (!in.Tracker)
+    {
+      // The template: input 1, else frame 0's own polygons.
+      vtkPolyData* mesh = vtkPolyData::GetData(inputVector[1], 0);
+      const bool fromInput = mesh != nullptr;
+      if (!mesh)
+        mesh = vtkPolyData::SafeDownCast(input);
+      std::vector<std::int64_t> triangles;
+      std::vector<double> positions;
+      const char* why = "";
+      if (!vtkDP::triangleMesh(mesh, triangles, positions, why))
+      {
+        request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+        vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
+                                    : "no template: connect a template mesh to input 1, or give "
+                                      "frame 0 polygons; frame 0 cannot be used: ")
+                      << why);
+        return 0;
+      }
+      dp::TrackerOptions options;
+      options.cloth = {this->StretchStiffness, this->ShearStiffness, this->BendStiffness};
+      options.distanceWeight = this->DistanceWeight;
+      options.normalTestDegrees = this->NormalTestAngle;
+      options.outlierDistance = this->OutlierDistance;
+      options.voxelSize = this->VoxelSize;
+      options.bandWidth = this->BandWidth;
+      options.solver = this->Solver == LBFGS              ? dp::TrackerSolver::LBFGS
+                       : this->Solver == STEEPEST_DESCENT ? dp::TrackerSolver::SteepestDescent
+                                                          : dp::TrackerSolver::GaussNewton;
+      options.motionPrediction = this->MotionPrediction;
+      options.provisionalDetermination = this->ProvisionalDetermination;
+      options.maxIterations = this->MaximumIterations;
+      options.tolerance = this->Tolerance;
+      try
+      {
+        const std::size_t vertices = positions.size() / 3;
+        in.Tracker = std::make_unique<dp::Tracker>(dp::TriangleMesh(triangles, vertices), positions,
+                                                   options);
+      }
+      catch (const std::exception& e)
+      {
+        request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+        vtkErrorMacro(<< "cannot track with this template: " << e.what());
+        return 0;
+      }
+      in.Polys = vtkSmartPointer<vtkCellArray>::New();
+      for (std::size_t t = 0; t < triangles.size(); t += 3)
+      {
+        const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
+        in.Polys->InsertNextCell(3, ids);
+      }
+    }
+
+    const vtkDP::TargetPoints target3 = vtkDP::finitePoints(input);
+    if (target3.dropped > 0)
+    {
+      vtkWarningMacro(<< "frame " << frame << ": dropped " << target3.dropped
+                      << " point(s) with NaN or infinite coordinates");
+    }
+    try
+    {
+      in.Cache.push_back(
+          in.Tracker->track(target3.xyz.data(), target3.ids.size(),
+                            target3.normals.empty() ? nullptr : target3.normals.data()));
+    }
+    catch (const std::exception& e)
+    {
+      request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+      vtkErrorMacro(<< "frame " << frame << ": " << e.what());
+      return 0;
+    }
+    if (in.Cache.back().emptyFrame)
+    {
+      vtkWarningMacro(<< "frame " << frame << " has no points: the mesh continues its motion");
+    }
+    this->UpdateProgress(static_cast<double>(in.Cache.size()) / static_cast<double>(target + 1));
+    if (in.Cache.size() <= target && !this->GetAbortExecute())
+      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+    else
+      request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+  }
+  else
+  {
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+  }
+
+  const std::size_t shown = std::min(target, in.Cache.size() - 1);
+  output->Initialize();
+  fillOutput(output, in.Polys, in.Cache[shown], in.Tracker->templatePositions(), shown);
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), requestedTime);
+  return 1;
+}
+
+void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Solver: " << this->Solver << "\n";
+  os << indent << "DistanceWeight: " << this->DistanceWeight << "\n";
+  os << indent << "StretchStiffness: " << this->StretchStiffness << "\n";
+  os << indent << "ShearStiffness: " << this->ShearStiffness << "\n";
+  os << indent << "BendStiffness: " << this->BendStiffness << "\n";
+  os << indent << "NormalTestAngle: " << this->NormalTestAngle << "\n";
+  os << indent << "OutlierDistance: " << this->OutlierDistance << "\n";
+  os << indent << "VoxelSize: " << this->VoxelSize << "\n";
+  os << indent << "BandWidth: " << this->BandWidth << "\n";
+  os << indent << "MotionPrediction: " << this->MotionPrediction << "\n";
+  os << indent << "ProvisionalDetermination: " << this->ProvisionalDetermination << "\n";
+  os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
+  os << indent << "Tolerance: " << this->Tolerance << "\n";
+  os << indent << "CachedFrames: " << this->Internal->Cache.size() << "\n";
+}

@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkDeformableTrackFilter
+ * @brief   deforms one template mesh through a time series of point clouds
+ *
+ * vtkDeformableTrackFilter turns a temporal point sequence (input 0: any temporal vtkPointSet
+ * source, e.g. vtkPointSequenceSource) into ONE deforming mesh of fixed connectivity: frame by
+ * frame it minimises the cloth energy of the mesh (stretch, shear, bend; rest state = the
+ * template) plus the distance from its vertices to the frame's points, as in Shinya, Shioya &
+ * Shiraishi, "Unification of Dynamic Point Data" (see dp::Tracker for the equations and the
+ * solvers). No skeleton, no correspondences.
+ *
+ * The template is input 1 when connected (a vtkPolyData with polygons), else frame 0's own
+ * polygons. The output has the template's connectivity; its points follow the requested time.
+ * Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's points,
+ * -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or outlier
+ * cut-off). Field data: "FrameIndex", "Iterations", "InternalEnergy", "DistanceEnergy",
+ * "Seconds", "EmptyFrame".
+ *
+ * Time: the output publishes the input's time steps. Asking for time t computes the frames up
+ * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),
+ * with progress and abort, and caches every result: later requests for any computed time are
+ * answered from the cache. Any change of a parameter, of the template or upstream clears the
+ * cache.
+ *
+ * @warning Memory: the cache keeps one position array per computed frame (24 bytes per vertex
+ * and frame). An empty frame is tracked by continuing the motion and flagged in "EmptyFrame".
+ */
+#ifndef vtkDeformableTrackFilter_h
+#define vtkDeformableTrackFilter_h
+
+#include "DynamicPointsFiltersModule.h" // for export macro
+#include "vtkPolyDataAlgorithm.h"
+
+class DYNAMICPOINTSFILTERS_EXPORT vtkDeformableTrackFilter : public vtkPolyDataAlgorithm
+{
+public:
+  static vtkDeformableTrackFilter* New();
+  vtkTypeMacro(vtkDeformableTrackFilter, vtkPolyDataAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  /** The template mesh (optional input 1). */
+  void SetTemplateConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
+
+  enum SolverType
+  {
+    GAUSS_NEWTON = 0,
+    LBFGS = 1,
+    STEEPEST_DESCENT = 2
+  };
+
+  ///@{
+  /** The minimiser: Gauss-Newton (default), L-BFGS, or the paper's steepest descent. */
+  vtkSetClampMacro(Solver, int, GAUSS_NEWTON, STEEPEST_DESCENT);
+  vtkGetMacro(Solver, int);
+  ///@}
+
+  ///@{
+  /** Weights of the energy terms (all dimensionless; defaults 1, 1, 0.05, 0.5). */
+  vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(DistanceWeight, double);
+  vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(StretchStiffness, double);
+  vtkSetClampMacro(ShearStiffness, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(ShearStiffness, double);
+  vtkSetClampMacro(BendStiffness, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(BendStiffness, double);
+  ///@}
+
+  ///@{
+  /** Normal test: drop a vertex's distance term when its normal and its nearest point's normal
+   *  differ by more than this angle in degrees (default 90; 180 switches the test off). */
+  vtkSetClampMacro(NormalTestAngle, double, 0.0, 180.0);
+  vtkGetMacro(NormalTestAngle, double);
+  ///@}
+
+  ///@{
+  /** Drop the distance term of vertices farther than this from the data (world units;
+   *  default 0 = never). */
+  vtkSetClampMacro(OutlierDistance, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(OutlierDistance, double);
+  ///@}
+
+  ///@{
+  /** Distance field resolution and band in world units (0 = automatic: the template's
+   *  diagonal / 200, and 4 voxels). */
+  vtkSetClampMacro(VoxelSize, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(VoxelSize, double);
+  vtkSetClampMacro(BandWidth, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(BandWidth, double);
+  ///@}
+
+  ///@{
+  /** The paper's speed-ups: motion prediction (MP) and provisional determination (PD). */
+  vtkSetMacro(MotionPrediction, vtkTypeBool);
+  vtkGetMacro(MotionPrediction, vtkTypeBool);
+  vtkBooleanMacro(MotionPrediction, vtkTypeBool);
+  vtkSetMacro(ProvisionalDetermination, vtkTypeBool);
+  vtkGetMacro(ProvisionalDetermination, vtkTypeBool);
+  vtkBooleanMacro(ProvisionalDetermination, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /** Iteration limit per frame and relative tolerance of the stopping rule. */
+  vtkSetClampMacro(MaximumIterations, int, 1, VTK_INT_MAX);
+  vtkGetMacro(MaximumIterations, int);
+  vtkSetClampMacro(Tolerance, double, 1e-15, 1.0);
+  vtkGetMacro(Tolerance, double);
+  ///@}
+
+  /** Number of frames computed and cached so far. */
+  int GetNumberOfCachedFrames();
+
+protected:
+  vtkDeformableTrackFilter();
+  ~vtkDeformableTrackFilter() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  int Solver = GAUSS_NEWTON;
+  double DistanceWeight = 1.0;
+  double StretchStiffness = 1.0;
+  double ShearStiffness = 0.05;
+  double BendStiffness = 0.5;
+  double NormalTestAngle = 90.0;
+  double OutlierDistance = 0.0;
+  double VoxelSize = 0.0;
+  double BandWidth = 0.0;
+  vtkTypeBool MotionPrediction = true;
+  vtkTypeBool ProvisionalDetermination = true;
+  int MaximumIterations = 300;
+  double Tolerance = 1e-5;
+
+private:
+  vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;
+  void operator=(const vtkDeformableTrackFilter&) = delete;
+
+  struct Internals;
+  Internals* Internal;
+};
+
+#endif

@@ -1,0 +1,105 @@
+"""vtkDeformableTrackFilter in a VTK pipeline: tracking a generated sequence against its ground
+truth, the temporal cache, parameter changes, the template choices and bad input."""
+import os
+import unittest
+
+import numpy as np
+from vtkmodules.numpy_interface import dataset_adapter as dsa
+from vtkmodules.vtkCommonDataModel import vtkPolyData
+
+import dynamicpoints
+from dp_testing import MessageRecorder, TempDirTestCase, run_tool
+
+FRAMES = 6
+
+
+class TestDeformableTrackFilter(TempDirTestCase):
+    def setUp(self):
+        super().setUp()
+        # A coarse sheet keeps the test quick; the truth meshes are the ground truth.
+        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 40, "--points", 4000,
+                 "--noise", 0.001, "--truth", self.path("seq"))
+        files = sorted(os.listdir(self.path("seq")))
+        self.frames = [f for f in files if f.endswith(".ply")][:FRAMES]
+        self.source = dynamicpoints.vtkPointSequenceSource()
+        for f in self.frames:
+            self.source.AddFileName(self.path("seq", f))
+        self.template = dynamicpoints.vtkPointSequenceSource()
+        self.template.SetFileName(self.path("seq", "truth", self.frames[0]))
+
+    def truth(self, frame):
+        reader = dynamicpoints.vtkPointSequenceSource()
+        reader.SetFileName(self.path("seq", "truth", self.frames[frame]))
+        reader.Update()
+        return np.asarray(dsa.WrapDataObject(reader.GetOutput()).Points)
+
+    def tracker(self):
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputConnection(self.source.GetOutputPort())
+        f.SetTemplateConnection(self.template.GetOutputPort())
+        return f
+
+    def test_tracks_the_sequence_close_to_the_ground_truth(self):
+        f = self.tracker()
+        truth0 = self.truth(0)
+        diagonal = np.linalg.norm(truth0.max(axis=0) - truth0.min(axis=0))
+        for frame in range(FRAMES):
+            f.UpdateTimeStep(frame)
+            out = dsa.WrapDataObject(f.GetOutput())
+            self.assertEqual(out.GetNumberOfPolys(), f.GetOutput().GetNumberOfPolys())
+            self.assertEqual(out.FieldData["FrameIndex"][0], frame)
+            self.assertAlmostEqual(out.GetInformation().Get(out.DATA_TIME_STEP()), frame)
+            rms = np.sqrt(((np.asarray(out.Points) - self.truth(frame)) ** 2).sum(axis=1).mean())
+            self.assertLess(rms, 0.02 * diagonal, f"frame {frame}")
+            np.testing.assert_allclose(out.PointData["Displacement"],
+                                       np.asarray(out.Points) - truth0, atol=1e-5)
+            self.assertGreaterEqual(out.PointData["Residual"].min(), 0)
+        self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
+
+    def test_the_cache_answers_earlier_times_and_parameter_changes_clear_it(self):
+        f = self.tracker()
+        f.UpdateTimeStep(FRAMES - 1)
+        self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
+        last = np.asarray(dsa.WrapDataObject(f.GetOutput()).Points).copy()
+        f.UpdateTimeStep(1)
+        self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
+        self.assertEqual(f.GetOutput().GetFieldData().GetArray("FrameIndex").GetValue(0), 1)
+        f.UpdateTimeStep(FRAMES - 1)
+        np.testing.assert_array_equal(dsa.WrapDataObject(f.GetOutput()).Points, last)
+        # Asking for an earlier time first computes only what it needs.
+        f.SetStretchStiffness(2.0)
+        f.UpdateTimeStep(2)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 3)
+
+    def test_frame_zero_polygons_are_the_template_when_no_input_one(self):
+        # Track the truth meshes themselves (their vertices as the points): frame 0's polygons
+        # are the template. The sheet's wave stretches it, which the cloth energy resists, so
+        # even these points are not followed exactly.
+        truth = dynamicpoints.vtkPointSequenceSource()
+        truth.SetDirectoryName(self.path("seq", "truth"))
+        truth.SetFilePattern("frame_000[0-3].ply")
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputConnection(truth.GetOutputPort())
+        f.UpdateTimeStep(3)
+        out = np.asarray(dsa.WrapDataObject(f.GetOutput()).Points)
+        diagonal = np.linalg.norm(out.max(axis=0) - out.min(axis=0))
+        rms = np.sqrt(((out - self.truth(3)) ** 2).sum(axis=1).mean())
+        self.assertLess(rms, 0.03 * diagonal)
+        self.assertEqual(f.GetOutput().GetNumberOfPolys(), truth.GetOutput().GetNumberOfPolys())
+
+    def test_without_any_template_it_says_what_to_do(self):
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputConnection(self.source.GetOutputPort())
+        rec = MessageRecorder(f)
+        f.UpdateTimeStep(0)
+        self.assertIn("no template", rec.error_text)
+        g = self.tracker()
+        g.SetTemplateConnection(None)
+        g.SetInputData(1, vtkPolyData())
+        rec = MessageRecorder(g)
+        g.UpdateTimeStep(0)
+        self.assertIn("template (input 1) cannot be used: it has no polygons", rec.error_text)
+
+
+if __name__ == "__main__":
+    unittest.main()
