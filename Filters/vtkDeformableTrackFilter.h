@@ -132,7 +132,7 @@ protected:
   vtkTypeBool MotionPrediction = true;
   vtkTypeBool ProvisionalDetermination = true;
   int MaximumIterations = 300;
-  double Tolerance = 1e-5;
+  double Tolerance = 1e-4;
 
 private:
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

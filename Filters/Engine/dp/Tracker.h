@@ -65,7 +65,7 @@ struct TrackerOptions
   bool motionPrediction = true;
   bool provisionalDetermination = true; // steepest descent only
   int maxIterations = 300;
-  double tolerance = 1e-5; // on the step (x L) and the relative energy decrease
+  double tolerance = 1e-4; // on the step (x L) and the relative energy decrease
 };
 
 struct FrameResult
