@@ -6,6 +6,7 @@
 //
 // The figure is frame 0 of ../shared/data/horse-gallop when present (scaled to 1.7 m), else the
 // built-in tube scaled to 1.7 m. Medians of --repeats builds.
+#include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
 #include "dp/AnimatedMesh.h"
@@ -40,33 +41,7 @@
 
 namespace
 {
-
-double now()
-{
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
-double median(std::vector<double> v)
-{
-  std::sort(v.begin(), v.end());
-  return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
-}
-
-double residentMiB()
-{
-  long pages = 0, resident = 0;
-  std::ifstream("/proc/self/statm") >> pages >> resident;
-  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1 << 20);
-}
-
-std::string cpuModel()
-{
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  for (std::string line; std::getline(cpuinfo, line);)
-    if (line.rfind("model name", 0) == 0)
-      return line.substr(line.find(':') + 2);
-  return "unknown CPU";
-}
+using namespace dp::bench;
 
 // The figure: an animated mesh's frame 0, scaled so its largest extent is `height` metres.
 struct Figure

@@ -4,6 +4,7 @@
 //
 // Default settings are the foundation issue's: 200 frames of 20k points (binary PLY with
 // normals, made by the sampler on the built-in bending tube). Prints medians of --repeats runs.
+#include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
 #include "dp/AnimatedMesh.h"
@@ -29,43 +30,7 @@
 
 namespace
 {
-
-double seconds()
-{
-  using clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
-}
-
-double median(std::vector<double> v)
-{
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double residentMiB() // current resident set size
-{
-  long pages = 0, resident = 0;
-  std::ifstream statm("/proc/self/statm");
-  statm >> pages >> resident;
-  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1 << 20);
-}
-
-double peakMiB()
-{
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return static_cast<double>(usage.ru_maxrss) / 1024.0;
-}
-
-std::string cpuModel()
-{
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  for (std::string line; std::getline(cpuinfo, line);)
-    if (line.rfind("model name", 0) == 0)
-      return line.substr(line.find(':') + 2);
-  return "unknown CPU";
-}
+using namespace dp::bench;
 
 const char* const Usage =
     R"(Usage: BenchmarkReadSequence [--frames N] [--points N] [--repeats N] [--dir DIR]
@@ -138,16 +103,16 @@ int main(int argc, char** argv)
   const double rssBefore = residentMiB();
   for (std::size_t r = 0; r < repeats; ++r)
   {
-    double start = seconds();
+    double start = now();
     std::size_t total = 0;
     for (const auto& f : sequence.frames())
       total += dp::readPLY(f.path).numberOfPoints();
-    parseTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+    parseTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
 
     vtkNew<vtkPointSequenceSource> source;
     source->SetFileName(series.c_str());
     source->UpdateInformation();
-    start = seconds();
+    start = now();
     std::size_t viaSource = 0;
     for (std::size_t f = 0; f < sequence.size(); ++f)
     {
@@ -156,14 +121,14 @@ int main(int argc, char** argv)
       if (r == 0 && f == std::min<std::size_t>(9, sequence.size() - 1))
         rssAfterFirstFrames = residentMiB();
     }
-    sourceTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+    sourceTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
     if (r == 0)
       rssAtEnd = residentMiB();
 
-    start = seconds();
+    start = now();
     for (std::size_t f = sequence.size(); f-- > 0;)
       source->UpdateTimeStep(sequence[f].time);
-    reverseTimes.push_back((seconds() - start) / static_cast<double>(sequence.size()));
+    reverseTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
     if (viaSource != total)
     {
       std::cerr << "point counts differ: " << viaSource << " via the source, " << total

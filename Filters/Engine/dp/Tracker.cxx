@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/Tracker.h"
 
+#include "dp/SurfaceSampler.h"
+
 #include <lbfgs.h>
 
 #include <Eigen/Sparse>
@@ -20,19 +22,6 @@ namespace dp
 namespace
 {
 constexpr double Pi = 3.14159265358979323846;
-
-double diagonalOf(const std::vector<double>& x)
-{
-  double lo[3] = {x[0], x[1], x[2]}, hi[3] = {x[0], x[1], x[2]};
-  for (std::size_t i = 0; i < x.size(); i += 3)
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], x[i + k]);
-      hi[k] = std::max(hi[k], x[i + k]);
-    }
-  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
-                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
-}
 
 // What the solvers minimise: the tracker's energy with fixed data weights.
 struct Objective
@@ -113,7 +102,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
       options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0)
     throw std::invalid_argument("tracker options out of range (weights, sizes and tolerance "
                                 "must be non-negative, iterations at least 1)");
-  Voxel = options.voxelSize > 0 ? options.voxelSize : diagonalOf(Template) / 200.0;
+  Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
 }
 
 double Tracker::energy(const double* x, const DistanceField* field,
