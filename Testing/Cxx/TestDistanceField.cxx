@@ -270,6 +270,35 @@ TEST(DistanceField, WorksAtAnyScale)
   }
 }
 
+TEST(DistanceField, LazyModeGivesTheSameFieldAsTheGrid)
+{
+  const Cloud c = tubeCloud(5000);
+  dp::DistanceFieldOptions o;
+  o.voxelSize = 0.02;
+  o.bandWidth = 0.06;
+  dp::DistanceField eager, lazy;
+  eager.build(c.points.data(), c.points.size() / 3, o);
+  o.lazy = true;
+  lazy.build(c.points.data(), c.points.size() / 3, o);
+  EXPECT_EQ(lazy.activeVoxelCount(), 0u);
+  const std::vector<double> q = queriesNear(c.points, 0.1, 3000, 12);
+  std::vector<dp::DistanceSample> many(q.size() / 3);
+  lazy.sampleMany(q.data(), many.size(), many.data()); // concurrent first uses
+  for (std::size_t i = 0; i < many.size(); ++i)
+  {
+    const dp::DistanceSample a = eager.sample(&q[3 * i]), b = lazy.sample(&q[3 * i]);
+    ASSERT_EQ(a.distance, b.distance) << i;
+    ASSERT_EQ(a.nearest, b.nearest);
+    ASSERT_EQ(a.inBand, b.inBand);
+    ASSERT_EQ(many[i].distance, b.distance);
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(a.gradient[k], b.gradient[k]);
+  }
+  EXPECT_GT(lazy.activeVoxelCount(), 100u);
+  EXPECT_LT(lazy.activeVoxelCount(), eager.activeVoxelCount() * 2);
+  EXPECT_EQ(lazy.voxelNearest(0, 0, 0), eager.voxelNearest(0, 0, 0));
+}
+
 TEST(DistanceField, ParallelSamplingEqualsSerialSampling)
 {
   const Cloud c = tubeCloud(4000);

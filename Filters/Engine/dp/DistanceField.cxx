@@ -8,6 +8,7 @@
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
+#include <tbb/concurrent_hash_map.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -33,9 +34,51 @@ struct DistanceField::Impl
   std::vector<double> Points;
   double Voxel = 0;
   double Band = 0;
-  IndexGrid::Ptr Grid;
+  IndexGrid::Ptr Grid; // eager mode: the band's voxels
   std::unique_ptr<detail::KdTree> Tree;
   std::size_t Active = 0;
+  bool Lazy = false;
+  // Lazy mode: voxel key -> nearest point index, filled on first use (thread-safe).
+  mutable tbb::concurrent_hash_map<std::uint64_t, std::int32_t> Visited;
+
+  static std::uint64_t key(const Coord& c)
+  {
+    constexpr std::uint64_t mask = (1u << 21) - 1; // 21 bits a coordinate, offset to be positive
+    return ((static_cast<std::uint64_t>(c.x() + (1 << 20)) & mask) << 42) |
+           ((static_cast<std::uint64_t>(c.y() + (1 << 20)) & mask) << 21) |
+           (static_cast<std::uint64_t>(c.z() + (1 << 20)) & mask);
+  }
+
+  // The nearest point of voxel centre c, and whether it lies within the band.
+  template <typename Accessor>
+  std::int32_t nearestOf(const Coord& c, Accessor* acc, bool& inBand) const
+  {
+    std::int32_t index = -1;
+    if (acc && acc->probeValue(c, index))
+    {
+      inBand = true;
+      return index;
+    }
+    const double centre[3] = {Voxel * c.x(), Voxel * c.y(), Voxel * c.z()};
+    if (Lazy)
+    {
+      tbb::concurrent_hash_map<std::uint64_t, std::int32_t>::const_accessor found;
+      if (Visited.find(found, key(c)))
+        index = found->second;
+    }
+    if (index < 0)
+    {
+      index = static_cast<std::int32_t>(Tree->nearest(centre));
+      if (Lazy)
+        Visited.insert({key(c), index});
+    }
+    const double* p = &Points[3 * static_cast<std::size_t>(index)];
+    const double d2 = (centre[0] - p[0]) * (centre[0] - p[0]) +
+                      (centre[1] - p[1]) * (centre[1] - p[1]) +
+                      (centre[2] - p[2]) * (centre[2] - p[2]);
+    inBand = Lazy && d2 <= Band * Band;
+    return index;
+  }
 };
 
 namespace
@@ -111,6 +154,29 @@ void DistanceField::build(const double* points, std::size_t count,
                        " is too small for coordinates up to " + std::to_string(largest) +
                        " (voxel indices would overflow)");
 
+  if (options.lazy)
+  {
+    if ((largest + band) / voxel > (1 << 20) - 2)
+      throw GridTooLarge("VoxelSize " + std::to_string(voxel) +
+                         " is too small for coordinates up to " + std::to_string(largest) +
+                         " in lazy mode (voxel indices limited to 2^20)");
+    Impl next;
+    next.Points.assign(points, points + 3 * count);
+    next.Voxel = voxel;
+    next.Band = band;
+    next.Lazy = true;
+    next.Tree = std::make_unique<detail::KdTree>(next.Points.data(), count);
+    P->Visited.clear();
+    P->Points = std::move(next.Points);
+    P->Voxel = voxel;
+    P->Band = band;
+    P->Lazy = true;
+    P->Grid = nullptr;
+    P->Active = 0;
+    P->Tree = std::move(next.Tree); // its adaptor points into the moved vector's buffer
+    return;
+  }
+
   // A voxel whose centre is within the band of a point p lies at most `reach` voxels
   // (Chebyshev) from the voxel holding p: a point is at least (k - 1/2) voxels from a centre
   // k voxels away.
@@ -178,13 +244,20 @@ void DistanceField::build(const double* points, std::size_t count,
       });
   openvdb::tools::pruneInactive(tree);
   next.Active = static_cast<std::size_t>(tree.activeVoxelCount());
-  *P = std::move(next);
+  P->Visited.clear();
+  P->Points = std::move(next.Points);
+  P->Voxel = next.Voxel;
+  P->Band = next.Band;
+  P->Lazy = false;
+  P->Grid = std::move(next.Grid);
+  P->Active = next.Active;
+  P->Tree = std::move(next.Tree);
   // The kd-tree's adaptor points at next.Points' buffer, which moved along with the vector.
 }
 
 bool DistanceField::empty() const
 {
-  return !P->Grid;
+  return !P->Tree;
 }
 double DistanceField::voxelSize() const
 {
@@ -204,7 +277,7 @@ const double* DistanceField::points() const
 }
 std::size_t DistanceField::activeVoxelCount() const
 {
-  return P->Active;
+  return P->Lazy ? P->Visited.size() : P->Active;
 }
 
 std::size_t DistanceField::memoryBytes() const
@@ -226,8 +299,15 @@ std::int64_t DistanceField::voxelNearest(int i, int j, int k) const
 {
   if (empty())
     return -1;
-  std::int32_t value = -1;
-  return P->Grid->tree().probeValue(Coord(i, j, k), value) ? value : -1;
+  bool inBand = false;
+  openvdb::tree::ValueAccessor<const IndexTree, false>* none = nullptr;
+  if (P->Grid)
+  {
+    std::int32_t value = -1;
+    return P->Grid->tree().probeValue(Coord(i, j, k), value) ? value : -1;
+  }
+  const std::int32_t index = P->nearestOf(Coord(i, j, k), none, inBand);
+  return inBand ? index : -1;
 }
 
 DistanceSample DistanceField::sample(const double x[3]) const
@@ -235,7 +315,8 @@ DistanceSample DistanceField::sample(const double x[3]) const
   if (empty())
     throw std::logic_error("DistanceField::sample before build()");
   // An unregistered accessor: no locking, one per call, safe for concurrent readers.
-  openvdb::tree::ValueAccessor<const IndexTree, false> acc(P->Grid->tree());
+  using Accessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
+  std::unique_ptr<Accessor> acc = P->Grid ? std::make_unique<Accessor>(P->Grid->tree()) : nullptr;
   const double v = P->Voxel;
   double t[3];
   int base[3];
@@ -253,12 +334,9 @@ DistanceSample DistanceField::sample(const double x[3]) const
     const int bit[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
     const Coord c(base[0] + bit[0], base[1] + bit[1], base[2] + bit[2]);
     const double centre[3] = {v * c.x(), v * c.y(), v * c.z()};
-    std::int32_t index = -1;
-    if (!acc.probeValue(c, index))
-    {
-      s.inBand = false; // outside the band: the exact nearest point from the kd-tree
-      index = static_cast<std::int32_t>(P->Tree->nearest(centre));
-    }
+    bool cornerInBand = false;
+    const std::int32_t index = P->nearestOf(c, acc.get(), cornerInBand);
+    s.inBand = s.inBand && cornerInBand;
     const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
     // The corner's value: the exact distance from the voxel centre to its nearest point.
     const double value = std::sqrt((centre[0] - p[0]) * (centre[0] - p[0]) +

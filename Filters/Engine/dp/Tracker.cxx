@@ -194,18 +194,17 @@ int Tracker::solveGaussNewton(
     }
     Sparse H(n, n);
     H.setFromTriplets(triplets.begin(), triplets.end());
-    double meanDiagonal = 0;
-    for (Eigen::Index i = 0; i < n; ++i)
-      meanDiagonal += H.coeff(i, i);
-    meanDiagonal = std::max(meanDiagonal / static_cast<double>(n), 1e-300);
+    // Every vertex has a (possibly zero) data block, so the diagonal is stored and damping
+    // can be added in place without changing the pattern.
+    const Eigen::VectorXd diagonal = H.diagonal();
+    const double meanDiagonal = std::max(diagonal.mean(), 1e-300);
     const Eigen::Map<const Eigen::VectorXd> g(gradient.data(), n);
 
     bool accepted = false;
     for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
     {
       Sparse A = H;
-      for (Eigen::Index i = 0; i < n; ++i)
-        A.coeffRef(i, i) += damping * meanDiagonal;
+      A.diagonal().array() += damping * meanDiagonal;
       if (!analysed)
       {
         solver.analyzePattern(A);
@@ -271,6 +270,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     DistanceFieldOptions fieldOptions;
     fieldOptions.voxelSize = Voxel;
     fieldOptions.bandWidth = Options.bandWidth > 0 ? Options.bandWidth : 4 * Voxel;
+    fieldOptions.lazy = true; // only the voxels around the vertices are ever needed
     field.build(points, count, fieldOptions);
     if (Options.normalTestDegrees < 180)
       targetNormals = normals ? std::vector<float>(normals, normals + 3 * count)
