@@ -1,0 +1,302 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Benchmark: the paper's experiments on ground-truth animated meshes. Per frame, random surface
+// samples (20k by default) are the data; the template is frame 0, at full resolution or
+// simplified (vtkQuadricDecimation) to a vertex count; the ground truth of a simplified vertex
+// is its barycentric position on the frame-0 mesh, carried through the frames. Prints vertex
+// RMS against the ground truth (the paper's measure) and RMS distance to the true surface,
+// both also in % of the bounding-box diagonal, ms per frame and peak memory; optionally the
+// paper's Table 2 ablation (none / MP / PD / both) for a solver.
+#include "BenchmarkUtilities.h"
+#include "CommandLine.h"
+
+#include "dp/AnimatedMesh.h"
+#include "dp/FrameSequence.h"
+#include "dp/SurfaceSampler.h"
+#include "dp/Tracker.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellArrayIterator.h"
+#include "vtkCellLocator.h"
+#include "vtkGenericCell.h"
+#include "vtkNew.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkQuadricDecimation.h"
+#include "vtkTriangle.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace
+{
+using namespace dp::bench;
+
+vtkNew<vtkPolyData> toPolyData(const std::vector<double>& positions,
+                               const std::vector<std::int64_t>& triangles)
+{
+  vtkNew<vtkPolyData> pd;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  for (std::size_t i = 0; i < positions.size(); i += 3)
+    points->InsertNextPoint(&positions[i]);
+  vtkNew<vtkCellArray> polys;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
+    polys->InsertNextCell(3, ids);
+  }
+  pd->SetPoints(points);
+  pd->SetPolys(polys);
+  return pd;
+}
+
+// A template and, for each of its vertices, where it sits on the full-resolution mesh.
+struct Template
+{
+  std::vector<std::int64_t> triangles;
+  std::vector<double> positions;
+  std::vector<std::int64_t> onTriangle; // index into the full mesh's triangles
+  std::vector<double> barycentric;      // 3 per vertex
+};
+
+Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
+{
+  Template t;
+  const std::vector<double> frame0 = mesh.positions(0);
+  const auto& full = mesh.triangles();
+  if (targetVertices == 0 || targetVertices >= mesh.numberOfVertices())
+  {
+    t.triangles = full;
+    t.positions = frame0;
+    return t; // vertices are the ground truth's own
+  }
+  vtkNew<vtkQuadricDecimation> decimate;
+  auto input = toPolyData(frame0, full);
+  decimate->SetInputData(input);
+  decimate->SetTargetReduction(1.0 - static_cast<double>(targetVertices) /
+                                         static_cast<double>(mesh.numberOfVertices()));
+  decimate->VolumePreservationOn();
+  // Flat regions make the quadrics singular; VTK then warns once per vertex and falls back
+  // to the edge's midpoint, which is fine here.
+  const int warnings = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  decimate->Update();
+  vtkObject::SetGlobalWarningDisplay(warnings);
+  vtkPolyData* coarse = decimate->GetOutput();
+  vtkNew<vtkCellLocator> locator;
+  locator->SetDataSet(input);
+  locator->BuildLocator();
+  vtkNew<vtkGenericCell> cell;
+  for (vtkIdType i = 0; i < coarse->GetNumberOfPoints(); ++i)
+  {
+    double p[3], closest[3], d2 = 0;
+    coarse->GetPoint(i, p);
+    vtkIdType cellId = -1;
+    int subId = 0;
+    locator->FindClosestPoint(p, closest, cell, cellId, subId, d2);
+    // Barycentric coordinates of the closest point in its triangle.
+    const std::int64_t* v = &full[3 * cellId];
+    double a[3], b[3], c[3], w[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      a[k] = frame0[3 * v[0] + k];
+      b[k] = frame0[3 * v[1] + k];
+      c[k] = frame0[3 * v[2] + k];
+    }
+    vtkTriangle::BarycentricCoords(closest, a, b, c, w);
+    t.positions.insert(t.positions.end(), closest, closest + 3);
+    t.onTriangle.push_back(cellId);
+    t.barycentric.insert(t.barycentric.end(), w, w + 3);
+  }
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  auto polys = vtk::TakeSmartPointer(coarse->GetPolys()->NewIterator());
+  for (polys->GoToFirstCell(); !polys->IsDoneWithTraversal(); polys->GoToNextCell())
+  {
+    polys->GetCurrentCell(count, ids);
+    if (count == 3)
+      t.triangles.insert(t.triangles.end(), {ids[0], ids[1], ids[2]});
+  }
+  return t;
+}
+
+std::vector<double> groundTruth(const Template& t, const std::vector<double>& frame,
+                                const std::vector<std::int64_t>& full)
+{
+  if (t.onTriangle.empty())
+    return frame;
+  std::vector<double> out(t.positions.size());
+  for (std::size_t i = 0; i < t.onTriangle.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      double value = 0;
+      for (int c = 0; c < 3; ++c)
+        value += t.barycentric[3 * i + c] * frame[3 * full[3 * t.onTriangle[i] + c] + k];
+      out[3 * i + k] = value;
+    }
+  return out;
+}
+
+struct Run
+{
+  double vertexRms = 0, surfaceRms = 0, msPerFrame = 0;
+  std::size_t frames = 0;
+};
+
+Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
+          std::size_t frames, std::size_t points)
+{
+  dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.positions.size() / 3), t.positions, options);
+  dp::SamplerOptions sampling;
+  sampling.pointsPerFrame = points;
+  Run run;
+  double vertexSum = 0, surfaceSum = 0, seconds = 0;
+  std::size_t vertexCount = 0;
+  for (std::size_t f = 0; f < frames; ++f)
+  {
+    const std::vector<double> truthMesh = mesh.positions(f);
+    const dp::PointCloud cloud = dp::sampleSurface(truthMesh, mesh.triangles(), sampling, f);
+    const dp::FrameResult r =
+        tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
+    seconds += r.seconds;
+    const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
+    for (std::size_t i = 0; i < truth.size(); ++i)
+      vertexSum += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
+    vertexCount += truth.size() / 3;
+    // Distance from each tracked vertex to the true surface of the frame.
+    auto surface = toPolyData(truthMesh, mesh.triangles());
+    vtkNew<vtkCellLocator> locator;
+    locator->SetDataSet(surface);
+    locator->BuildLocator();
+    vtkNew<vtkGenericCell> cell;
+    for (std::size_t i = 0; i < r.positions.size(); i += 3)
+    {
+      double closest[3], d2 = 0;
+      vtkIdType cellId = -1;
+      int subId = 0;
+      double x[3] = {r.positions[i], r.positions[i + 1], r.positions[i + 2]};
+      locator->FindClosestPoint(x, closest, cell, cellId, subId, d2);
+      surfaceSum += d2;
+    }
+  }
+  run.frames = frames;
+  run.vertexRms = std::sqrt(vertexSum / static_cast<double>(vertexCount));
+  run.surfaceRms = std::sqrt(surfaceSum / static_cast<double>(vertexCount));
+  run.msPerFrame = 1e3 * seconds / static_cast<double>(frames);
+  return run;
+}
+
+const char* solverName(dp::TrackerSolver s)
+{
+  return s == dp::TrackerSolver::GaussNewton ? "Gauss-Newton"
+         : s == dp::TrackerSolver::LBFGS     ? "L-BFGS"
+                                             : "steepest descent";
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  using namespace dp::cli;
+  std::string data = "../shared/data";
+  std::vector<std::string> sequences = {"horse-collapse", "horse-gallop"};
+  std::vector<std::size_t> sizes = {450, 1000, 0};
+  std::size_t frames = 0, points = 20000;
+  bool ablation = false;
+  dp::TrackerOptions options;
+  try
+  {
+    for (int i = 1; i < argc; ++i)
+    {
+      const std::string arg = argv[i];
+      if (arg == "--data")
+        data = optionValue(argc, argv, i);
+      else if (arg == "--sequence")
+        sequences = {optionValue(argc, argv, i)};
+      else if (arg == "--vertices")
+        sizes = {parseCount(arg, optionValue(argc, argv, i), 0, 10000000)};
+      else if (arg == "--frames")
+        frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+      else if (arg == "--points")
+        points = parseCount(arg, optionValue(argc, argv, i), 1, 10000000);
+      else if (arg == "--solver")
+      {
+        const std::string s = optionValue(argc, argv, i);
+        options.solver = s == "lbfgs" ? dp::TrackerSolver::LBFGS
+                         : s == "sd"  ? dp::TrackerSolver::SteepestDescent
+                                      : dp::TrackerSolver::GaussNewton;
+      }
+      else if (arg == "--ablation")
+        ablation = true;
+      else
+      {
+        std::cout << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
+                     "(0: full)] [--frames N] [--points N] [--solver gn|lbfgs|sd] [--ablation]\n";
+        return arg == "-h" || arg == "--help" ? 0 : 2;
+      }
+    }
+  }
+  catch (const UsageError& e)
+  {
+    std::cerr << e.what() << "\n";
+    return 2;
+  }
+  std::printf("machine: %s, %u hardware threads; Release build; %zu samples per frame\n",
+              cpuModel().c_str(), std::thread::hardware_concurrency(), points);
+  for (const std::string& name : sequences)
+  {
+    std::unique_ptr<dp::AnimatedMesh> mesh;
+    if (name == "tube")
+      mesh = std::make_unique<dp::BendingTube>();
+    else
+    {
+      const std::string folder = data + "/" + name;
+      if (!std::filesystem::is_directory(folder))
+      {
+        std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
+        continue;
+      }
+      mesh = std::make_unique<dp::MeshSequenceFiles>(
+          dp::FrameSequence::fromDirectory(folder, "*.ply"));
+    }
+    const std::size_t n =
+        frames ? std::min(frames, mesh->numberOfFrames()) : mesh->numberOfFrames();
+    const double diagonal = dp::boundingBoxDiagonal(mesh->positions(0));
+    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f, solver %s\n",
+                name.c_str(), n, mesh->numberOfFrames(), mesh->numberOfVertices(), diagonal,
+                solverName(options.solver));
+    std::printf("%10s %14s %16s %12s %12s\n", "template", "vertex RMS", "surface RMS", "ms/frame",
+                "peak MiB");
+    for (std::size_t size : sizes)
+    {
+      const Template t = makeTemplate(*mesh, size);
+      const Run r = track(*mesh, t, options, n, points);
+      std::printf("%10zu %8.5f %5.2f%% %10.5f %5.2f%% %12.1f %12.1f\n", t.positions.size() / 3,
+                  r.vertexRms, 100 * r.vertexRms / diagonal, r.surfaceRms,
+                  100 * r.surfaceRms / diagonal, r.msPerFrame, peakMiB());
+    }
+    if (ablation)
+    {
+      const Template t = makeTemplate(*mesh, sizes.front());
+      std::printf("ablation (%zu-vertex template): %8s %8s %14s %12s\n", t.positions.size() / 3,
+                  "MP", "PD", "vertex RMS %", "ms/frame");
+      for (int mode = 0; mode < 4; ++mode)
+      {
+        dp::TrackerOptions o = options;
+        o.motionPrediction = mode & 1;
+        o.provisionalDetermination = mode & 2;
+        const Run r = track(*mesh, t, o, n, points);
+        std::printf("%31s %8s %8s %13.3f%% %12.1f\n", "", o.motionPrediction ? "on" : "off",
+                    o.provisionalDetermination ? "on" : "off", 100 * r.vertexRms / diagonal,
+                    r.msPerFrame);
+      }
+    }
+  }
+  return 0;
+}
