@@ -149,6 +149,8 @@ struct Run
   std::size_t frames = 0;
 };
 
+bool Verbose = false; // --verbose: one line per frame
+
 Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
           std::size_t frames, std::size_t points)
 {
@@ -166,8 +168,19 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
         tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
     seconds += r.seconds;
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
+    double frameSum = 0;
     for (std::size_t i = 0; i < truth.size(); ++i)
-      vertexSum += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
+      frameSum += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
+    vertexSum += frameSum;
+    if (Verbose)
+    {
+      int rejected = 0;
+      for (auto flag : r.rejected)
+        rejected += flag;
+      std::printf("  frame %3zu: vertex RMS %.5f, %d iterations, %d rejected, %.1f ms\n", f,
+                  std::sqrt(frameSum / static_cast<double>(truth.size() / 3)), r.iterations,
+                  rejected, 1e3 * r.seconds);
+    }
     vertexCount += truth.size() / 3;
     // Distance from each tracked vertex to the true surface of the frame.
     auto surface = toPolyData(truthMesh, mesh.triangles());
@@ -234,10 +247,27 @@ int main(int argc, char** argv)
       }
       else if (arg == "--ablation")
         ablation = true;
+      else if (arg == "--verbose")
+        Verbose = true;
+      else if (arg == "--distance-weight")
+        options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--normal-test")
+        options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
+      else if (arg == "--stiffness")
+      {
+        // stretch,shear,bend
+        const std::string v = optionValue(argc, argv, i);
+        if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
+                        &options.cloth.bend) != 3)
+          throw UsageError("--stiffness wants stretch,shear,bend");
+      }
       else
       {
-        std::cout << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
-                     "(0: full)] [--frames N] [--points N] [--solver gn|lbfgs|sd] [--ablation]\n";
+        std::cout
+            << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
+               "(0: full)] [--frames N] [--points N] [--solver gn|lbfgs|sd] [--ablation] "
+               "[--verbose]\n"
+               "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
