@@ -56,7 +56,7 @@ public:
   ///@}
 
   ///@{
-  /** Weights of the energy terms (all dimensionless; defaults 1, 1, 0.05, 0.5). */
+  /** Weights of the energy terms (all dimensionless; defaults 10, 1, 0.05, 0.5). */
   vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(DistanceWeight, double);
   vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
@@ -121,7 +121,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int Solver = GAUSS_NEWTON;
-  double DistanceWeight = 1.0;
+  double DistanceWeight = 10.0;
   double StretchStiffness = 1.0;
   double ShearStiffness = 0.05;
   double BendStiffness = 0.5;

@@ -56,7 +56,7 @@ enum class TrackerSolver
 struct TrackerOptions
 {
   ClothParameters cloth;
-  double distanceWeight = 1.0;     // k_dis
+  double distanceWeight = 10.0;    // k_dis
   double normalTestDegrees = 90.0; // >= 180 switches the normal test off
   double outlierDistance = 0.0;    // world units; 0: no cut-off
   double voxelSize = 0.0;          // world units; 0: template diagonal / 200
