@@ -375,11 +375,10 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     for (int pass = 0; pass < 2; ++pass)
     {
       lbfgsfloatval_t fx = 0;
-      const int status = lbfgs(static_cast<int>(x.size()), x.data(), &fx, evaluateForLbfgs, nullptr,
-                               &objective, &parameters);
-      if (std::getenv("DP_DEBUG_LBFGS"))
-        std::fprintf(stderr, "lbfgs pass %d status %d fx %g evaluations %d\n", pass, status, fx,
-                     objective.evaluations);
+      // Any stop (converged, iteration limit, line-search failure) leaves x at the best point
+      // found, which is what the frame gets.
+      lbfgs(static_cast<int>(x.size()), x.data(), &fx, evaluateForLbfgs, nullptr, &objective,
+            &parameters);
       if (pass == 0)
         decideWeights(x);
     }
