@@ -4,8 +4,8 @@
 """
 import sys
 
-from paraview.simple import (Delete, LoadPlugin, OpenDataFile, Show, Render,
-                             GetActiveViewOrCreate, GetAnimationScene, SaveScreenshot, ResetCamera)
+from paraview.simple import (Delete, LoadPlugin, OpenDataFile, Show, GetActiveViewOrCreate,
+                             GetAnimationScene, SaveScreenshot, ResetCamera)
 
 
 def main(plugin, series, screenshot):
@@ -15,11 +15,10 @@ def main(plugin, series, screenshot):
     view = GetActiveViewOrCreate("RenderView")
     display = Show(reader, view)
     display.PointSize = 2.0
-    scene = GetAnimationScene()
-    scene.UpdateAnimationUsingDataTimeSteps()
-    scene.AnimationTime = reader.TimestepValues[len(reader.TimestepValues) // 2]
+    GetAnimationScene().UpdateAnimationUsingDataTimeSteps()
+    # Show the middle frame; SaveScreenshot renders by itself.
+    view.ViewTime = reader.TimestepValues[len(reader.TimestepValues) // 2]
     ResetCamera(view)
-    Render(view)
     SaveScreenshot(screenshot, view, ImageResolution=[800, 600])
     # Release the view while the GL context is alive: under Xvfb, leaving it to interpreter
     # shutdown ends in a GLXBadContext error and a non-zero exit.

@@ -43,10 +43,27 @@ class TestExamples(TempDirTestCase):
     def test_paraview_example_renders_a_screenshot(self):
         series = self.make_sequence()
         shot = self.path("shot.png")
-        result = subprocess.run(
-            ["xvfb-run", "-a", "-s", "-screen 0 1280x1024x24", shutil.which("pvpython"), "--dr",
-             os.path.join(EXAMPLES, "ParaView", "read_sequence.py"), PLUGIN, series, shot],
-            capture_output=True, text=True, timeout=300)
+        # Our own X server, announced ready through -displayfd (xvfb-run's readiness wait
+        # proved racy on a loaded machine). The pipe stays open while the server runs: Xvfb
+        # may write to it again, and dies ("Cannot write display number") if it is closed.
+        ready_read, ready_write = os.pipe()
+        server = subprocess.Popen(["Xvfb", "-displayfd", str(ready_write), "-screen", "0",
+                                   "1280x1024x24", "-nolisten", "tcp", "-noreset"],
+                                  pass_fds=(ready_write,), stdout=subprocess.DEVNULL,
+                                  stderr=subprocess.DEVNULL, start_new_session=True)
+        os.close(ready_write)
+        try:
+            display = os.read(ready_read, 64).decode().strip()
+            self.assertTrue(display.isdigit(), f"Xvfb did not start ({display!r})")
+            result = subprocess.run(
+                [shutil.which("pvpython"), "--dr",
+                 os.path.join(EXAMPLES, "ParaView", "read_sequence.py"), PLUGIN, series, shot],
+                capture_output=True, text=True, timeout=300,
+                env=dict(os.environ, DISPLAY=":" + display))
+        finally:
+            server.terminate()
+            server.wait(timeout=30)
+            os.close(ready_read)
         self.assertEqual(result.returncode, 0, result.stdout + result.stderr)
         self.assertIn("time steps: [0.0, 1.0, 2.0, 3.0, 4.0]", result.stdout)
         reader = vtkPNGReader()
