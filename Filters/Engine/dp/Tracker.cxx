@@ -387,8 +387,14 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     // The paper's solver: steepest descent with h < 2 / k_max.
     const double kMax = largestCurvature(objective, x, L);
     double h = kMax > 0 ? 1.9 / kMax : L;
-    std::vector<double> gradient(x.size()), step(nv), before;
-    std::vector<int> quiet(nv, 0);
+    std::vector<double> gradient(x.size()), before;
+    // PD: a vertex that barely moves is frozen. The distance term's gradient has the same size
+    // everywhere, so a settled vertex keeps stepping but goes nowhere: over a window of
+    // iterations, it freezes when its net motion is under a quarter of the path it stepped,
+    // and wakes when a neighbour moves steadily (net motion over half its path).
+    constexpr int window = 5;
+    std::vector<double> anchor = x, path(nv, 0.0);
+    std::vector<std::uint8_t> steady(nv, 0);
     std::vector<double> recent; // energies of the last iterations
     int iteration = 0;
     double previous = std::numeric_limits<double>::infinity();
@@ -415,10 +421,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
         if (gained <= Options.tolerance * std::abs(e))
           break;
       }
-      double largestStep = 0;
       for (std::size_t v = 0; v < nv; ++v)
       {
-        step[v] = 0;
         if (Options.provisionalDetermination && result.frozen[v])
           continue;
         double step2 = 0;
@@ -428,30 +432,30 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
           x[3 * v + k] -= d;
           step2 += d * d;
         }
-        step[v] = std::sqrt(step2);
-        largestStep = std::max(largestStep, step[v]);
+        path[v] += std::sqrt(step2);
       }
-      if (Options.provisionalDetermination)
+      if (Options.provisionalDetermination && iteration % window == window - 1)
       {
-        // "Barely moves": a step below 1% of this iteration's largest one, three times running.
-        const double barely = 0.01 * largestStep;
         for (std::size_t v = 0; v < nv; ++v)
         {
-          if (result.frozen[v])
-          {
-            for (std::int64_t u : Mesh.neighbours(v))
-              if (step[u] > barely && !result.frozen[u])
-              {
-                result.frozen[v] = 0; // a neighbour moves: wake up
-                quiet[v] = 0;
-                break;
-              }
-            continue;
-          }
-          quiet[v] = step[v] < barely ? quiet[v] + 1 : 0;
-          if (quiet[v] >= 3)
+          double d2 = 0;
+          for (int k = 0; k < 3; ++k)
+            d2 += (x[3 * v + k] - anchor[3 * v + k]) * (x[3 * v + k] - anchor[3 * v + k]);
+          const double net = std::sqrt(d2);
+          steady[v] = path[v] > 0 && net > 0.5 * path[v];
+          if (!result.frozen[v] && path[v] > 0 && net < 0.25 * path[v])
             result.frozen[v] = 1;
         }
+        for (std::size_t v = 0; v < nv; ++v)
+          if (result.frozen[v])
+            for (std::int64_t u : Mesh.neighbours(v))
+              if (steady[u])
+              {
+                result.frozen[v] = 0; // a neighbour moves: wake up
+                break;
+              }
+        anchor = x;
+        std::fill(path.begin(), path.end(), 0.0);
       }
       if (iteration % 25 == 24)
         decideWeights(x);

@@ -14,9 +14,11 @@
  *
  * Solvers on the same energy:
  *   SteepestDescent (the paper, eq. 2-3): x <- x - h grad E with h = 1.9 / k_max, k_max the
- *     largest eigenvalue of the Hessian estimated by power iteration; stops when the largest
- *     vertex step is below tolerance * L. With provisional determination (PD), vertices whose
- *     step stays below the tolerance for 3 iterations are frozen until a neighbour moves.
+ *     largest eigenvalue of the Hessian estimated by power iteration (halved where a step
+ *     would raise E); stops when ten iterations gain less than the tolerance (relative). With
+ *     provisional determination (PD), every 5 iterations a vertex whose net motion is under a
+ *     quarter of the path it stepped (it jitters in place) is frozen, until a neighbour moves
+ *     steadily (net motion over half its path).
  *   GaussNewton (default): damped Gauss-Newton steps on the same E: each cloth term
  *     1/2 k r^2 contributes k grad(r) grad(r)^T, each distance term s_i D_i contributes
  *     s_i / max(D_i, voxel) grad(D_i) grad(D_i)^T (iteratively reweighted least squares, whose
