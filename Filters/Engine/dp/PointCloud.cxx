@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 
 namespace dp
 {
@@ -119,29 +118,6 @@ std::size_t dropNonFinitePoints(PointCloud& cloud)
     cloud.faceConnectivity = std::move(conn);
   }
   return n - kept;
-}
-
-void computeBounds(const PointCloud& cloud, double bounds[6])
-{
-  if (cloud.numberOfPoints() == 0)
-  {
-    std::fill(bounds, bounds + 6, 0.0);
-    return;
-  }
-  for (int k = 0; k < 3; ++k)
-  {
-    bounds[2 * k] = std::numeric_limits<double>::infinity();
-    bounds[2 * k + 1] = -std::numeric_limits<double>::infinity();
-  }
-  for (std::size_t i = 0; i < cloud.numberOfPoints(); ++i)
-  {
-    for (int k = 0; k < 3; ++k)
-    {
-      const double v = cloud.points[3 * i + k];
-      bounds[2 * k] = std::min(bounds[2 * k], v);
-      bounds[2 * k + 1] = std::max(bounds[2 * k + 1], v);
-    }
-  }
 }
 
 } // namespace dp

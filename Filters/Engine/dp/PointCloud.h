@@ -62,9 +62,6 @@ struct PointCloud
  */
 std::size_t dropNonFinitePoints(PointCloud& cloud);
 
-/** Axis-aligned bounds {xmin,xmax,ymin,ymax,zmin,zmax}; all zero for an empty cloud. */
-void computeBounds(const PointCloud& cloud, double bounds[6]);
-
 /** Error raised by the readers and writers: the message always starts with the file name. */
 class FileError : public std::runtime_error
 {

@@ -114,13 +114,6 @@ bool isEngineFormat(PointFileFormat format)
          format == PointFileFormat::Text || format == PointFileFormat::OBJ;
 }
 
-const char* const* supportedExtensions()
-{
-  static const char* const extensions[] = {"ply", "pcd", "xyz", "pts", "csv",  "txt",
-                                           "obj", "vtp", "vtu", "vtk", nullptr};
-  return extensions;
-}
-
 PointCloud readPointCloud(const std::string& path, ReadReport* report)
 {
   PointCloud cloud;

@@ -41,9 +41,6 @@ PointFileFormat formatFromFileName(const std::string& path);
 /** True for the formats readPointCloud() parses (not the VTK formats, not Unknown). */
 bool isEngineFormat(PointFileFormat format);
 
-/** The extensions readable by the product, without dots: "ply", "pcd", ... */
-const char* const* supportedExtensions();
-
 struct ReadReport
 {
   std::size_t droppedNonFinite = 0; // points removed because a coordinate was NaN or Inf
