@@ -229,6 +229,11 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       dp::TrackerOptions options;
       options.cloth = {this->StretchStiffness, this->ShearStiffness, this->BendStiffness};
       options.distanceWeight = this->DistanceWeight;
+      options.distanceMeasure = this->DistanceMeasure == DISTANCE_TO_POINTS
+                                    ? dp::DistanceMeasure::Points
+                                    : dp::DistanceMeasure::Planes;
+      options.squaredDistance = this->SquaredDistance;
+      options.restUpdate = this->RestUpdate;
       options.normalTestDegrees = this->NormalTestAngle;
       options.outlierDistance = this->OutlierDistance;
       options.voxelSize = this->VoxelSize;
@@ -305,6 +310,9 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   this->Superclass::PrintSelf(os, indent);
   os << indent << "Solver: " << this->Solver << "\n";
   os << indent << "DistanceWeight: " << this->DistanceWeight << "\n";
+  os << indent << "DistanceMeasure: " << this->DistanceMeasure << "\n";
+  os << indent << "SquaredDistance: " << this->SquaredDistance << "\n";
+  os << indent << "RestUpdate: " << this->RestUpdate << "\n";
   os << indent << "StretchStiffness: " << this->StretchStiffness << "\n";
   os << indent << "ShearStiffness: " << this->ShearStiffness << "\n";
   os << indent << "BendStiffness: " << this->BendStiffness << "\n";

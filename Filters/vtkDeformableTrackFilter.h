@@ -55,8 +55,36 @@ public:
   vtkGetMacro(Solver, int);
   ///@}
 
+  enum DistanceMeasureType
+  {
+    DISTANCE_TO_PLANES = 0, // tangent planes of the nearest points (default)
+    DISTANCE_TO_POINTS = 1  // the nearest points themselves (the paper)
+  };
+
   ///@{
-  /** Weights of the energy terms (all dimensionless; defaults 10, 1, 0.05, 0.5). */
+  /** What the distance term measures: the distance to the tangent planes of the nearest data
+   *  points (default; vertices can slide along the data) or to the points (the paper). */
+  vtkSetClampMacro(DistanceMeasure, int, DISTANCE_TO_PLANES, DISTANCE_TO_POINTS);
+  vtkGetMacro(DistanceMeasure, int);
+  ///@}
+
+  ///@{
+  /** Penalise the squared distance D^2 / (2 voxel) (default on) or the distance D (the
+   *  paper). */
+  vtkSetMacro(SquaredDistance, vtkTypeBool);
+  vtkGetMacro(SquaredDistance, vtkTypeBool);
+  vtkBooleanMacro(SquaredDistance, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /** Share of the previous frame in the rest state of the deformation energy (default 0.3;
+   *  0 = the template, as in the paper; 1 = the previous frame). */
+  vtkSetClampMacro(RestUpdate, double, 0.0, 1.0);
+  vtkGetMacro(RestUpdate, double);
+  ///@}
+
+  ///@{
+  /** Weights of the energy terms (all dimensionless; defaults 300, 1, 0.05, 0.5). */
   vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(DistanceWeight, double);
   vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
@@ -121,7 +149,10 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int Solver = GAUSS_NEWTON;
-  double DistanceWeight = 10.0;
+  double DistanceWeight = 300.0;
+  int DistanceMeasure = DISTANCE_TO_PLANES;
+  vtkTypeBool SquaredDistance = true;
+  double RestUpdate = 0.3;
   double StretchStiffness = 1.0;
   double ShearStiffness = 0.05;
   double BendStiffness = 0.5;

@@ -150,6 +150,9 @@ struct Run
 };
 
 bool Verbose = false; // --verbose: one line per frame
+// --oracle: diagnostics that start each frame from the ground truth: "previous" (one-step error
+// from the true previous frame), "same" (how far the energy's minimum lies from the truth).
+std::string Oracle;
 
 Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
           std::size_t frames, std::size_t points)
@@ -164,6 +167,10 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   {
     const std::vector<double> truthMesh = mesh.positions(f);
     const dp::PointCloud cloud = dp::sampleSurface(truthMesh, mesh.triangles(), sampling, f);
+    if (Oracle == "previous" && f > 0)
+      tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
+    else if (Oracle == "same")
+      tracker.restartFrom(groundTruth(t, truthMesh, mesh.triangles()));
     const dp::FrameResult r =
         tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
     seconds += r.seconds;
@@ -172,16 +179,8 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
     for (std::size_t i = 0; i < truth.size(); ++i)
       frameSum += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
     vertexSum += frameSum;
-    if (Verbose)
-    {
-      int rejected = 0;
-      for (auto flag : r.rejected)
-        rejected += flag;
-      std::printf("  frame %3zu: vertex RMS %.5f, %d iterations, %d rejected, %.1f ms\n", f,
-                  std::sqrt(frameSum / static_cast<double>(truth.size() / 3)), r.iterations,
-                  rejected, 1e3 * r.seconds);
-    }
     vertexCount += truth.size() / 3;
+    double frameSurface = 0;
     // Distance from each tracked vertex to the true surface of the frame.
     auto surface = toPolyData(truthMesh, mesh.triangles());
     vtkNew<vtkCellLocator> locator;
@@ -195,7 +194,19 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
       int subId = 0;
       double x[3] = {r.positions[i], r.positions[i + 1], r.positions[i + 2]};
       locator->FindClosestPoint(x, closest, cell, cellId, subId, d2);
-      surfaceSum += d2;
+      frameSurface += d2;
+    }
+    surfaceSum += frameSurface;
+    if (Verbose)
+    {
+      int rejected = 0;
+      for (auto flag : r.rejected)
+        rejected += flag;
+      std::printf("  frame %3zu: vertex RMS %.5f, surface RMS %.5f, %d iterations, %d rejected, "
+                  "%.1f ms, E %.6g\n",
+                  f, std::sqrt(frameSum / static_cast<double>(truth.size() / 3)),
+                  std::sqrt(frameSurface / static_cast<double>(truth.size() / 3)), r.iterations,
+                  rejected, 1e3 * r.seconds, r.internalEnergy + r.distanceEnergy);
     }
   }
   run.frames = frames;
@@ -247,10 +258,27 @@ int main(int argc, char** argv)
       }
       else if (arg == "--ablation")
         ablation = true;
+      else if (arg == "--rest-update")
+        options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+      else if (arg == "--measure")
+        options.distanceMeasure = optionValue(argc, argv, i) == "points"
+                                      ? dp::DistanceMeasure::Points
+                                      : dp::DistanceMeasure::Planes;
+      else if (arg == "--no-mp")
+        options.motionPrediction = false;
+      else if (arg == "--penalty")
+        options.squaredDistance = optionValue(argc, argv, i) != "linear";
+      else if (arg == "--oracle")
+        Oracle = optionValue(argc, argv, i);
       else if (arg == "--verbose")
         Verbose = true;
       else if (arg == "--distance-weight")
         options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--tolerance")
+        options.tolerance = parseDouble(arg, optionValue(argc, argv, i), 1e-15, 1);
+      else if (arg == "--max-iterations")
+        options.maxIterations =
+            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 1000000));
       else if (arg == "--normal-test")
         options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
       else if (arg == "--stiffness")
@@ -267,7 +295,10 @@ int main(int argc, char** argv)
             << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
                "(0: full)] [--frames N] [--points N] [--solver gn|lbfgs|sd] [--ablation] "
                "[--verbose]\n"
-               "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE]\n";
+               "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE] "
+               "[--tolerance T] [--max-iterations N]\n"
+               "       [--measure planes|points] [--penalty squared|linear] [--rest-update B] "
+               "[--no-mp] [--oracle previous|same]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }

@@ -109,23 +109,10 @@ ClothEnergy::ClothEnergy(const TriangleMesh& mesh, const double* rest, const Clo
   if (!(area > 0) || !std::isfinite(area))
     throw std::invalid_argument("the template mesh has no area");
   L = std::sqrt(area);
-  for (const auto& e : mesh.edges())
-    RestLength.push_back(norm(at(rest, e[1]) - at(rest, e[0])));
-  const auto& tris = mesh.triangles();
-  for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
-    for (int k3 = 0; k3 < 3; ++k3)
-    {
-      double angle = 0;
-      cornerAngle(at(rest, tris[3 * t + k3]), at(rest, tris[3 * t + (k3 + 1) % 3]),
-                  at(rest, tris[3 * t + (k3 + 2) % 3]), angle, nullptr, nullptr);
-      RestAngle.push_back(angle);
-    }
+  Rest = restStateOf(rest);
   std::vector<double> vertexArea = mesh.vertexAreas(rest);
   for (const auto& h : mesh.hinges())
   {
-    double cosine = 1;
-    hingeCos(at(rest, h[0]), at(rest, h[1]), at(rest, h[2]), at(rest, h[3]), cosine, nullptr);
-    RestCos.push_back(cosine);
     const double a1 =
         0.5 * norm(cross(at(rest, h[1]) - at(rest, h[0]), at(rest, h[2]) - at(rest, h[0])));
     const double a2 =
@@ -135,6 +122,55 @@ ClothEnergy::ClothEnergy(const TriangleMesh& mesh, const double* rest, const Clo
   Mass.resize(vertexArea.size());
   for (std::size_t v = 0; v < vertexArea.size(); ++v)
     Mass[v] = vertexArea[v] / area;
+}
+
+ClothRestState ClothEnergy::restStateOf(const double* x) const
+{
+  const TriangleMesh& mesh = *Mesh;
+  ClothRestState rest;
+  rest.length.reserve(mesh.edges().size());
+  for (const auto& e : mesh.edges())
+    rest.length.push_back(norm(at(x, e[1]) - at(x, e[0])));
+  const auto& tris = mesh.triangles();
+  rest.angle.reserve(tris.size());
+  for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+    for (int k3 = 0; k3 < 3; ++k3)
+    {
+      double angle = 0;
+      cornerAngle(at(x, tris[3 * t + k3]), at(x, tris[3 * t + (k3 + 1) % 3]),
+                  at(x, tris[3 * t + (k3 + 2) % 3]), angle, nullptr, nullptr);
+      rest.angle.push_back(angle);
+    }
+  rest.cosine.reserve(mesh.hinges().size());
+  for (const auto& h : mesh.hinges())
+  {
+    double cosine = 1;
+    hingeCos(at(x, h[0]), at(x, h[1]), at(x, h[2]), at(x, h[3]), cosine, nullptr);
+    rest.cosine.push_back(cosine);
+  }
+  return rest;
+}
+
+void ClothEnergy::setRestState(ClothRestState rest)
+{
+  if (rest.length.size() != Rest.length.size() || rest.angle.size() != Rest.angle.size() ||
+      rest.cosine.size() != Rest.cosine.size())
+    throw std::invalid_argument("a rest state of another mesh");
+  Rest = std::move(rest);
+}
+
+ClothRestState ClothRestState::blend(const ClothRestState& a, const ClothRestState& b, double t)
+{
+  ClothRestState out = a;
+  auto mix = [t](std::vector<double>& x, const std::vector<double>& y)
+  {
+    for (std::size_t i = 0; i < x.size(); ++i)
+      x[i] += t * (y[i] - x[i]);
+  };
+  mix(out.length, b.length);
+  mix(out.angle, b.angle);
+  mix(out.cosine, b.cosine);
+  return out;
 }
 
 double ClothEnergy::value(const double* x) const
@@ -148,7 +184,7 @@ double ClothEnergy::addGradient(const double* x, double* g) const
   forEachTerm(x,
               [&](const ClothTerm& t)
               {
-                energy += 0.5 * t.weight * t.residual * t.residual;
+                energy += t.energy;
                 if (g)
                   for (int k = 0; k < t.count; ++k)
                     for (int c = 0; c < 3; ++c)
@@ -169,24 +205,28 @@ void ClothEnergy::forEachTerm(const double* x,
     term.gradient[k][1] = gradient.y;
     term.gradient[k][2] = gradient.z;
   };
+  auto finish = [&](double k)
+  {
+    term.weight = k;
+    term.energy = 0.5 * k * term.residual * term.residual;
+    visit(term);
+  };
   // Stretch: r = (l - l0) / L.
   term.count = 2;
-  term.weight = K.stretch;
   const auto& edges = mesh.edges();
   if (K.stretch > 0)
     for (std::size_t e = 0; e < edges.size(); ++e)
     {
       const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
       const double l = norm(d);
-      term.residual = (l - RestLength[e]) / L;
+      term.residual = (l - Rest.length[e]) / L;
       const V3 u = l > 0 ? (1.0 / (l * L)) * d : V3{0, 0, 0};
       put(0, edges[e][1], u);
       put(1, edges[e][0], -1.0 * u);
-      visit(term);
+      finish(K.stretch);
     }
   // Shear: r = theta - theta0 at each triangle corner.
   term.count = 3;
-  term.weight = K.shear;
   const auto& tris = mesh.triangles();
   if (K.shear > 0)
     for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
@@ -198,11 +238,11 @@ void ClothEnergy::forEachTerm(const double* x,
         V3 gb{0, 0, 0}, gc{0, 0, 0};
         if (!cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, &gb, &gc))
           gb = gc = V3{0, 0, 0};
-        term.residual = angle - RestAngle[3 * t + c];
+        term.residual = angle - Rest.angle[3 * t + c];
         put(0, ib, gb);
         put(1, ic, gc);
         put(2, ia, -1.0 * (gb + gc));
-        visit(term);
+        finish(K.shear);
       }
   // Bend: r = cos(phi) - cos(phi0) at each hinge, weighted by its area share.
   term.count = 4;
@@ -216,11 +256,10 @@ void ClothEnergy::forEachTerm(const double* x,
       if (!hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, gh))
         for (V3& gv : gh)
           gv = V3{0, 0, 0};
-      term.residual = cosine - RestCos[h];
-      term.weight = K.bend * HingeWeight[h];
+      term.residual = cosine - Rest.cosine[h];
       for (int k = 0; k < 4; ++k)
         put(k, v[k], gh[k]);
-      visit(term);
+      finish(K.bend * HingeWeight[h]);
     }
 }
 

@@ -36,15 +36,28 @@ struct ClothParameters
   double bend = 0.5;    // k_ben
 };
 
-/** One term of E_int written as 1/2 * weight * residual^2, with the residual's gradient with
- *  respect to each of its vertices (2 for stretch, 3 for shear, 4 for bend). */
+/** One term of E_int: its energy, its residual r and r's gradient with respect to each of its
+ *  vertices (2 for stretch, 3 for shear, 4 for bend), and its stiffness: the term is
+ *  1/2 weight r^2, so dE/dx = weight * r * grad(r). */
 struct ClothTerm
 {
+  double energy = 0;
   double weight = 0;
   double residual = 0;
   int count = 0;
   std::int64_t vertex[4] = {0, 0, 0, 0};
   double gradient[4][3] = {};
+};
+
+/** The rest values of E_int's terms: per edge, per triangle corner, per hinge. */
+struct ClothRestState
+{
+  std::vector<double> length; // per edge
+  std::vector<double> angle;  // per corner (3 per triangle)
+  std::vector<double> cosine; // per hinge
+
+  /** (1 - t) * a + t * b, term by term. */
+  static ClothRestState blend(const ClothRestState& a, const ClothRestState& b, double t);
 };
 
 class ClothEnergy
@@ -60,6 +73,13 @@ public:
    *  weight * grad(r) grad(r)^T). Degenerate terms come with zero gradients. */
   void forEachTerm(const double* x, const std::function<void(const ClothTerm&)>& visit) const;
 
+  /** The rest values a shape would have (same mesh). */
+  ClothRestState restStateOf(const double* positions) const;
+  /** Replaces the rest values; masses, bending weights and L stay the template's, so the
+   *  parameter rule and the units still hold. */
+  void setRestState(ClothRestState rest);
+  const ClothRestState& restState() const { return Rest; }
+
   const std::vector<double>& vertexMass() const { return Mass; }
   double lengthScale() const { return L; }
   const TriangleMesh& mesh() const { return *Mesh; }
@@ -69,9 +89,7 @@ private:
   const TriangleMesh* Mesh;
   ClothParameters K;
   double L = 1.0;
-  std::vector<double> RestLength;  // per edge
-  std::vector<double> RestAngle;   // per corner (3 per triangle)
-  std::vector<double> RestCos;     // per hinge
+  ClothRestState Rest;
   std::vector<double> HingeWeight; // per hinge
   std::vector<double> Mass;        // per vertex
 };

@@ -8,7 +8,7 @@
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
-#include <tbb/concurrent_hash_map.h>
+#include <tbb/concurrent_unordered_map.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
@@ -38,8 +38,9 @@ struct DistanceField::Impl
   std::unique_ptr<detail::KdTree> Tree;
   std::size_t Active = 0;
   bool Lazy = false;
-  // Lazy mode: voxel key -> nearest point index, filled on first use (thread-safe).
-  mutable tbb::concurrent_hash_map<std::uint64_t, std::int32_t> Visited;
+  // Lazy mode: voxel key -> nearest point index, filled on first use (thread-safe; lookups
+  // take no lock, which matters: the tracker samples 8 voxels per vertex and evaluation).
+  mutable tbb::concurrent_unordered_map<std::uint64_t, std::int32_t> Visited;
 
   static std::uint64_t key(const Coord& c)
   {
@@ -62,8 +63,8 @@ struct DistanceField::Impl
     const double centre[3] = {Voxel * c.x(), Voxel * c.y(), Voxel * c.z()};
     if (Lazy)
     {
-      tbb::concurrent_hash_map<std::uint64_t, std::int32_t>::const_accessor found;
-      if (Visited.find(found, key(c)))
+      const auto found = Visited.find(key(c));
+      if (found != Visited.end())
         index = found->second;
     }
     if (index < 0)
@@ -310,13 +311,12 @@ std::int64_t DistanceField::voxelNearest(int i, int j, int k) const
   return inBand ? index : -1;
 }
 
-DistanceSample DistanceField::sample(const double x[3]) const
+template <typename CornerValue>
+DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
+                                          CornerValue cornerValue) const
 {
   if (empty())
     throw std::logic_error("DistanceField::sample before build()");
-  // An unregistered accessor: no locking, one per call, safe for concurrent readers.
-  using Accessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
-  std::unique_ptr<Accessor> acc = P->Grid ? std::make_unique<Accessor>(P->Grid->tree()) : nullptr;
   const double v = P->Voxel;
   double t[3];
   int base[3];
@@ -327,31 +327,49 @@ DistanceSample DistanceField::sample(const double x[3]) const
     t[k] = g - base[k];
   }
   DistanceSample s;
-  s.inBand = true;
+  VoxelCell local;
+  if (!cell)
+    cell = &local;
+  if (!cell->valid || cell->base[0] != base[0] || cell->base[1] != base[1] ||
+      cell->base[2] != base[2])
+  {
+    // An unregistered accessor: no locking, one per call, safe for concurrent readers.
+    using Accessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
+    std::unique_ptr<Accessor> acc = P->Grid ? std::make_unique<Accessor>(P->Grid->tree()) : nullptr;
+    cell->inBand = true;
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const Coord c(base[0] + (corner & 1), base[1] + ((corner >> 1) & 1),
+                    base[2] + ((corner >> 2) & 1));
+      bool cornerInBand = false;
+      cell->nearest[corner] = P->nearestOf(c, acc.get(), cornerInBand);
+      cell->inBand = cell->inBand && cornerInBand;
+    }
+    std::copy(base, base + 3, cell->base);
+    cell->valid = true;
+  }
+  s.inBand = cell->inBand;
   double best = std::numeric_limits<double>::infinity();
   for (int corner = 0; corner < 8; ++corner)
   {
     const int bit[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
-    const Coord c(base[0] + bit[0], base[1] + bit[1], base[2] + bit[2]);
-    const double centre[3] = {v * c.x(), v * c.y(), v * c.z()};
-    bool cornerInBand = false;
-    const std::int32_t index = P->nearestOf(c, acc.get(), cornerInBand);
-    s.inBand = s.inBand && cornerInBand;
+    const double centre[3] = {v * (base[0] + bit[0]), v * (base[1] + bit[1]),
+                              v * (base[2] + bit[2])};
+    const std::int32_t index = cell->nearest[corner];
     const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
-    // The corner's value: the exact distance from the voxel centre to its nearest point.
-    const double value = std::sqrt((centre[0] - p[0]) * (centre[0] - p[0]) +
-                                   (centre[1] - p[1]) * (centre[1] - p[1]) +
-                                   (centre[2] - p[2]) * (centre[2] - p[2]));
+    double valueGradient[3] = {0, 0, 0};
+    const double value = cornerValue(centre, index, p, valueGradient);
     double w[3], dw[3];
     for (int k = 0; k < 3; ++k)
     {
       w[k] = bit[k] ? t[k] : 1 - t[k];
       dw[k] = (bit[k] ? 1.0 : -1.0) / v;
     }
-    s.distance += w[0] * w[1] * w[2] * value;
-    s.gradient[0] += dw[0] * w[1] * w[2] * value;
-    s.gradient[1] += w[0] * dw[1] * w[2] * value;
-    s.gradient[2] += w[0] * w[1] * dw[2] * value;
+    const double weight = w[0] * w[1] * w[2];
+    s.distance += weight * value;
+    s.gradient[0] += dw[0] * w[1] * w[2] * value + weight * valueGradient[0];
+    s.gradient[1] += w[0] * dw[1] * w[2] * value + weight * valueGradient[1];
+    s.gradient[2] += w[0] * w[1] * dw[2] * value + weight * valueGradient[2];
     const double toX = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
                        (x[2] - p[2]) * (x[2] - p[2]);
     if (toX < best)
@@ -361,6 +379,46 @@ DistanceSample DistanceField::sample(const double x[3]) const
     }
   }
   return s;
+}
+
+DistanceSample DistanceField::sample(const double x[3], VoxelCell* cell) const
+{
+  // Each corner: the exact distance from the voxel centre to its nearest point (a constant).
+  return interpolate(x, cell,
+                     [](const double* centre, std::int32_t, const double* p, double*)
+                     {
+                       return std::sqrt((centre[0] - p[0]) * (centre[0] - p[0]) +
+                                        (centre[1] - p[1]) * (centre[1] - p[1]) +
+                                        (centre[2] - p[2]) * (centre[2] - p[2]));
+                     });
+}
+
+DistanceSample DistanceField::sampleToPlanes(const double x[3], const float* normals, double reach,
+                                             VoxelCell* cell) const
+{
+  // Each corner: the distance from x to the tangent plane of the corner's nearest point,
+  // |n.(x - p)|, plus how far x lies beyond `reach` from p (so far from the data the field
+  // still pulls toward the points, not along an extended plane).
+  return interpolate(
+      x, cell,
+      [x, normals, reach](const double*, std::int32_t index, const double* p, double* gradient)
+      {
+        const float* n = normals + 3 * static_cast<std::size_t>(index);
+        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+        const double sign = along >= 0 ? 1.0 : -1.0;
+        double value = sign * along;
+        for (int k = 0; k < 3; ++k)
+          gradient[k] = sign * n[k];
+        const double length = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        if (length > reach)
+        {
+          value += length - reach;
+          for (int k = 0; k < 3; ++k)
+            gradient[k] += r[k] / length;
+        }
+        return value;
+      });
 }
 
 void DistanceField::sampleMany(const double* positions, std::size_t count,

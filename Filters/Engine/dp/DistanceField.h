@@ -55,6 +55,16 @@ struct DistanceSample
   bool inBand = false;       // all 8 surrounding voxels were in the band (else: kd-tree)
 };
 
+/** The 8 voxels around a position, remembered between samples of the same moving vertex:
+ *  while it stays in the same cell, sampling skips the voxel lookups. One per caller thread. */
+struct VoxelCell
+{
+  int base[3] = {0, 0, 0};
+  std::int32_t nearest[8] = {-1, -1, -1, -1, -1, -1, -1, -1};
+  bool inBand = false;
+  bool valid = false;
+};
+
 /** Thrown when the requested grid would exceed DistanceFieldOptions::maxActiveVoxels. */
 class GridTooLarge : public std::runtime_error
 {
@@ -86,8 +96,18 @@ public:
   /** Bytes held by the grid and the kd-tree (approximate). */
   std::size_t memoryBytes() const;
 
-  /** Distance, gradient and nearest point at x. Thread-safe. */
-  DistanceSample sample(const double x[3]) const;
+  /** Distance, gradient and nearest point at x. Thread-safe (with a `cell` per thread). */
+  DistanceSample sample(const double x[3], VoxelCell* cell = nullptr) const;
+  /**
+   * Distance to the surface the points sample rather than to the points themselves: each of
+   * the 8 voxel centres around x contributes |n.(x - p)|, the distance from x to the tangent
+   * plane at the centre's nearest point p (unit normal n from `normals`, 3 per point), plus
+   * max(0, |x - p| - reach); the contributions are blended trilinearly. Along the surface the
+   * value stays near zero (no dimples at the samples, so a mesh can slide along the data);
+   * beyond `reach` it grows like the distance to the points. Continuous in x. Thread-safe.
+   */
+  DistanceSample sampleToPlanes(const double x[3], const float* normals, double reach,
+                                VoxelCell* cell = nullptr) const;
   /** sample() for many positions (x y z each), in parallel. */
   void sampleMany(const double* positions, std::size_t count, DistanceSample* out) const;
 
@@ -98,6 +118,9 @@ public:
   std::int64_t voxelNearest(int i, int j, int k) const;
 
 private:
+  template <typename CornerValue>
+  DistanceSample interpolate(const double x[3], VoxelCell* cell, CornerValue cornerValue) const;
+
   struct Impl;
   std::unique_ptr<Impl> P;
 };

@@ -100,6 +100,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
       options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0)
     throw std::invalid_argument("tracker options out of range (weights, sizes and tolerance "
                                 "must be non-negative, iterations at least 1)");
+  TemplateRest = Cloth.restState();
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
 }
 
@@ -117,12 +118,16 @@ double Tracker::energy(const double* x, const DistanceField* field,
     {
       if (weights[v] == 0)
         continue;
-      const DistanceSample s = field->sample(x + 3 * v);
+      const DistanceSample s = sampleData(*field, x + 3 * v, v);
       const double w = scale * mass[v] * weights[v];
-      eDis += w * s.distance;
+      // Squared: D^2 / (2 voxel), smooth at the data; else the paper's D.
+      const double value =
+          Options.squaredDistance ? 0.5 * s.distance * s.distance / Voxel : s.distance;
+      const double slope = Options.squaredDistance ? s.distance / Voxel : 1.0;
+      eDis += w * value;
       if (gradient)
         for (int k = 0; k < 3; ++k)
-          gradient[3 * v + k] += w * s.gradient[k];
+          gradient[3 * v + k] += w * slope * s.gradient[k];
     }
   }
   if (internal)
@@ -130,6 +135,15 @@ double Tracker::energy(const double* x, const DistanceField* field,
   if (distance)
     *distance = eDis;
   return eInt + eDis;
+}
+
+DistanceSample Tracker::sampleData(const DistanceField& field, const double* x,
+                                   std::size_t vertex) const
+{
+  VoxelCell* cell = vertex < Cells.size() ? &Cells[vertex] : nullptr;
+  if (Options.distanceMeasure == DistanceMeasure::Planes && !FrameNormals.empty())
+    return field.sampleToPlanes(x, FrameNormals.data(), 2 * Voxel, cell);
+  return field.sample(x, cell);
 }
 
 std::vector<double> Tracker::predict() const
@@ -184,8 +198,9 @@ int Tracker::solveGaussNewton(
       double w = 0;
       if (field && weights[v] != 0)
       {
-        const DistanceSample sample = field->sample(&x[3 * v]);
-        w = scale * mass[v] * weights[v] / std::max(sample.distance, floor);
+        const DistanceSample sample = sampleData(*field, &x[3 * v], v);
+        w = scale * mass[v] * weights[v] /
+            (Options.squaredDistance ? Voxel : std::max(sample.distance, floor));
         std::copy(sample.gradient, sample.gradient + 3, g);
       }
       addBlock(static_cast<std::int64_t>(v), static_cast<std::int64_t>(v), g, g, w);
@@ -261,7 +276,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
 
   // The frame's distance field and target normals.
   DistanceField field;
-  std::vector<float> targetNormals;
+  std::vector<float>& targetNormals = FrameNormals;
+  targetNormals.clear();
   const bool haveData = count > 0;
   if (haveData)
   {
@@ -270,13 +286,20 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     fieldOptions.bandWidth = Options.bandWidth > 0 ? Options.bandWidth : 4 * Voxel;
     fieldOptions.lazy = true; // only the voxels around the vertices are ever needed
     field.build(points, count, fieldOptions);
-    if (Options.normalTestDegrees < 180)
+    if (Options.normalTestDegrees < 180 || Options.distanceMeasure == DistanceMeasure::Planes)
       targetNormals = normals ? std::vector<float>(normals, normals + 3 * count)
                               : estimateNormals(points, count);
   }
 
+  if (Options.restUpdate > 0)
+    Cloth.setRestState(History.empty() ? TemplateRest
+                                       : ClothRestState::blend(
+                                             TemplateRest, Cloth.restStateOf(History.back().data()),
+                                             Options.restUpdate));
+
   // Data weights: the normal test and the outlier cut-off, decided at a given shape.
   std::vector<double> weights(nv, haveData ? 1.0 : 0.0);
+  Cells.assign(nv, VoxelCell{}); // a new field
   auto decideWeights = [&](const std::vector<double>& x)
   {
     if (!haveData)
@@ -286,9 +309,9 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
     for (std::size_t v = 0; v < nv; ++v)
     {
-      const DistanceSample s = field.sample(&x[3 * v]);
+      const DistanceSample s = field.sample(&x[3 * v], &Cells[v]);
       bool keep = Options.outlierDistance <= 0 || s.distance <= Options.outlierDistance;
-      if (keep && !targetNormals.empty())
+      if (keep && Options.normalTestDegrees < 180)
       {
         const float* n = &targetNormals[3 * static_cast<std::size_t>(s.nearest)];
         const double agreement = vertexNormals[3 * v] * n[0] + vertexNormals[3 * v + 1] * n[1] +
@@ -468,7 +491,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
          &result.distanceEnergy);
   if (haveData)
     for (std::size_t v = 0; v < nv; ++v)
-      result.residual[v] = field.sample(&x[3 * v]).distance;
+      result.residual[v] = sampleData(field, &x[3 * v], v).distance;
   History.push_back(x);
   if (History.size() > 3)
     History.erase(History.begin());

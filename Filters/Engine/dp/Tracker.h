@@ -6,11 +6,20 @@
  *        Point Data", eq. 1):
  *
  *   E_int  the cloth energy of ClothEnergy (stretch, shear, bend; rest state = the template);
- *   E_dis  = k_dis * sum_i m_i w_i D(x_i) / L, with D the distance field of the frame's points
- *          (DistanceField), m_i the vertex masses, L = sqrt(template area) (so nothing depends
- *          on units), and w_i in {0, 1}: 0 when vertex i fails the normal test (its normal and
- *          its nearest point's normal differ by more than normalTestDegrees) or is farther than
- *          outlierDistance from the data.
+ *   E_dis  = k_dis * sum_i m_i w_i P(D(x_i)) / L, with D the distance field of the frame's
+ *          points (DistanceField), m_i the vertex masses, L = sqrt(template area) (so nothing
+ *          depends on units), and w_i in {0, 1}: 0 when vertex i fails the normal test (its
+ *          normal and its nearest point's normal differ by more than normalTestDegrees) or is
+ *          farther than outlierDistance from the data. P(D) = D in the paper; by default
+ *          D^2 / (2 voxel). D is by default the distance to the tangent planes of the nearest
+ *          points (DistanceField::sampleToPlanes) rather than to the points themselves.
+ *
+ * Beyond the paper (each measured in BenchmarkTracker; the paper's choices stay as options):
+ * the plane distance and the squared penalty remove the pull toward individual samples that
+ * held vertices back along the surface; the rest state of E_int for frame t is
+ * (1 - restUpdate) * template + restUpdate * frame t-1, since real sequences (horse-collapse)
+ * stray so far from the template that the template's rest state pulls even the true shape
+ * 2-4% of the diagonal away.
  *
  * Solvers on the same energy:
  *   SteepestDescent (the paper, eq. 2-3): x <- x - h grad E with h = 1.9 / k_max, k_max the
@@ -48,6 +57,14 @@
 namespace dp
 {
 
+/** What D_i of the distance energy measures. */
+enum class DistanceMeasure
+{
+  Points, // the distance to the nearest data point (the paper)
+  Planes  // the distance to the tangent planes of the nearest data points (DistanceField::
+          // sampleToPlanes): no pull toward individual samples, so the mesh slides along the data
+};
+
 enum class TrackerSolver
 {
   GaussNewton,
@@ -58,12 +75,20 @@ enum class TrackerSolver
 struct TrackerOptions
 {
   ClothParameters cloth;
-  double distanceWeight = 10.0;    // k_dis
+  double distanceWeight = 300.0;   // k_dis
   double normalTestDegrees = 90.0; // >= 180 switches the normal test off
   double outlierDistance = 0.0;    // world units; 0: no cut-off
-  double voxelSize = 0.0;          // world units; 0: template diagonal / 200
-  double bandWidth = 0.0;          // world units; 0: 4 voxels
+  DistanceMeasure distanceMeasure = DistanceMeasure::Planes;
+  // true: each vertex's term is D_i^2 / (2 voxel) (smooth at the data, so vertices do not stick
+  // where they first touch it); false: the paper's D_i.
+  bool squaredDistance = true;
+  double voxelSize = 0.0; // world units; 0: template diagonal / 200
+  double bandWidth = 0.0; // world units; 0: 4 voxels
   TrackerSolver solver = TrackerSolver::GaussNewton;
+  // Rest state of E_int for frame t: (1 - restUpdate) * template + restUpdate * frame t-1.
+  // 0 is the paper (the template); a share of the last frame lets the rest state follow shapes
+  // that stray far from the template (a collapse), so that E_int stops pulling them back.
+  double restUpdate = 0.3;
   bool motionPrediction = true;
   bool provisionalDetermination = true; // steepest descent only
   int maxIterations = 300;
@@ -102,6 +127,9 @@ public:
   /** Forgets the trajectory: the next track() starts from the template again. */
   void reset() { History.clear(); }
 
+  /** Continues from `positions` as if it had been the last result (no motion history). */
+  void restartFrom(const std::vector<double>& positions) { History = {positions}; }
+
   const TriangleMesh& mesh() const { return Mesh; }
   const std::vector<double>& templatePositions() const { return Template; }
   const TrackerOptions& options() const { return Options; }
@@ -115,6 +143,7 @@ public:
 
 private:
   std::vector<double> predict() const;
+  DistanceSample sampleData(const DistanceField& field, const double* x, std::size_t vertex) const;
   int solveGaussNewton(std::vector<double>& x, const DistanceField* field,
                        std::vector<double>& weights,
                        const std::function<void(const std::vector<double>&)>& decideWeights) const;
@@ -123,6 +152,11 @@ private:
   std::vector<double> Template;
   TrackerOptions Options;
   ClothEnergy Cloth;
+  ClothRestState TemplateRest;
+  std::vector<float> FrameNormals; // the current frame's point normals (Planes, normal test)
+  // Per vertex, the voxels last sampled in this frame's field (a cache: vertices move little
+  // between evaluations). Makes energy() unsafe to call concurrently on one tracker.
+  mutable std::vector<VoxelCell> Cells;
   double Voxel = 0;
   std::vector<std::vector<double>> History; // the last three results, most recent last
 };
