@@ -216,6 +216,53 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   return run;
 }
 
+// The paper's Fig. 4: time per frame against the vertex count, on the procedural bending tube
+// at resolutions from 500 to 50k vertices (same shape, same 20k points per frame).
+std::vector<std::size_t> ScalingSizes = {500, 1000, 2000, 5000, 10000, 20000, 50000};
+
+void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::size_t points)
+{
+  std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
+              frames, points);
+  std::printf("%10s %12s %14s %12s %14s\n", "vertices", "ms/frame", "ms/1k vertices",
+              "iterations", "vertex RMS %");
+  for (std::size_t target : ScalingSizes)
+  {
+    dp::BendingTube::Options shape;
+    shape.segments = static_cast<std::size_t>(std::lround(std::sqrt(target / 1.67)));
+    shape.rings = (target + shape.segments - 1) / shape.segments;
+    const dp::BendingTube tube(shape);
+    dp::Tracker tracker(dp::TriangleMesh(tube.triangles(), tube.numberOfVertices()),
+                        tube.positions(0), options);
+    dp::SamplerOptions sampling;
+    sampling.pointsPerFrame = points;
+    std::vector<double> ms;
+    double iterations = 0, sum = 0;
+    const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
+    for (std::size_t f = 0; f <= frames; ++f)
+    {
+      const dp::PointCloud cloud = dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
+      const dp::FrameResult r =
+          tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
+      if (f == 0)
+        continue; // the first frame starts at the data
+      ms.push_back(1e3 * r.seconds);
+      iterations += r.iterations;
+      const std::vector<double> truth = tube.positions(f);
+      double e = 0;
+      for (std::size_t i = 0; i < truth.size(); ++i)
+        e += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
+      sum += e / static_cast<double>(truth.size() / 3);
+    }
+    const double median = dp::bench::median(ms);
+    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%%\n", tube.numberOfVertices(), median,
+                1e3 * median / static_cast<double>(tube.numberOfVertices()),
+                iterations / static_cast<double>(frames),
+                100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal);
+    std::fflush(stdout);
+  }
+}
+
 const char* solverName(dp::TrackerSolver s)
 {
   return s == dp::TrackerSolver::GaussNewton ? "Gauss-Newton"
@@ -232,7 +279,7 @@ int main(int argc, char** argv)
   std::vector<std::string> sequences = {"horse-collapse", "horse-gallop"};
   std::vector<std::size_t> sizes = {450, 1000, 0};
   std::size_t frames = 0, points = 20000;
-  bool ablation = false;
+  bool ablation = false, scaling = false;
   dp::TrackerOptions options;
   try
   {
@@ -258,6 +305,21 @@ int main(int argc, char** argv)
       }
       else if (arg == "--ablation")
         ablation = true;
+      else if (arg == "--scaling")
+        scaling = true;
+      else if (arg == "--scaling-sizes")
+      {
+        // comma-separated vertex counts
+        ScalingSizes.clear();
+        std::string list = optionValue(argc, argv, i);
+        for (std::size_t start = 0; start <= list.size();)
+        {
+          const std::size_t comma = std::min(list.find(',', start), list.size());
+          ScalingSizes.push_back(
+              parseCount(arg, list.substr(start, comma - start), 3, 10000000));
+          start = comma + 1;
+        }
+      }
       else if (arg == "--rest-update")
         options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--measure")
@@ -298,7 +360,7 @@ int main(int argc, char** argv)
                "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE] "
                "[--tolerance T] [--max-iterations N]\n"
                "       [--measure planes|points] [--penalty squared|linear] [--rest-update B] "
-               "[--no-mp] [--oracle previous|same]\n";
+               "[--no-mp] [--oracle previous|same] [--scaling] [--scaling-sizes N,N,...]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -310,6 +372,11 @@ int main(int argc, char** argv)
   }
   std::printf("machine: %s, %u hardware threads; Release build; %zu samples per frame\n",
               cpuModel().c_str(), std::thread::hardware_concurrency(), points);
+  if (scaling)
+  {
+    scalingTable(options, frames ? frames : 4, points);
+    return 0;
+  }
   for (const std::string& name : sequences)
   {
     std::unique_ptr<dp::AnimatedMesh> mesh;
