@@ -492,6 +492,10 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   if (haveData)
     for (std::size_t v = 0; v < nv; ++v)
       result.residual[v] = sampleData(field, &x[3 * v], v).distance;
+  // Both index this frame's points and field, which end here (energy() called from outside
+  // must not meet them with another field).
+  Cells.clear();
+  FrameNormals.clear();
   History.push_back(x);
   if (History.size() > 3)
     History.erase(History.begin());
