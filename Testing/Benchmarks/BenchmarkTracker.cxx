@@ -224,8 +224,8 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::si
 {
   std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
               frames, points);
-  std::printf("%10s %12s %14s %12s %14s\n", "vertices", "ms/frame", "ms/1k vertices",
-              "iterations", "vertex RMS %");
+  std::printf("%10s %12s %14s %12s %14s\n", "vertices", "ms/frame", "ms/1k vertices", "iterations",
+              "vertex RMS %");
   for (std::size_t target : ScalingSizes)
   {
     dp::BendingTube::Options shape;
@@ -241,7 +241,8 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::si
     const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
     for (std::size_t f = 0; f <= frames; ++f)
     {
-      const dp::PointCloud cloud = dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
+      const dp::PointCloud cloud =
+          dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
       const dp::FrameResult r =
           tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
       if (f == 0)
@@ -261,6 +262,16 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::si
                 100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal);
     std::fflush(stdout);
   }
+}
+
+// For a two-valued option: false for `first`, true for `second`, a usage error otherwise.
+bool oneOf(const std::string& option, const std::string& value, const char* first,
+           const char* second)
+{
+  if (value != first && value != second)
+    throw dp::cli::UsageError(option + " wants " + first + " or " + second + ", not '" + value +
+                              "'");
+  return value == second;
 }
 
 const char* solverName(dp::TrackerSolver s)
@@ -315,23 +326,22 @@ int main(int argc, char** argv)
         for (std::size_t start = 0; start <= list.size();)
         {
           const std::size_t comma = std::min(list.find(',', start), list.size());
-          ScalingSizes.push_back(
-              parseCount(arg, list.substr(start, comma - start), 3, 10000000));
+          ScalingSizes.push_back(parseCount(arg, list.substr(start, comma - start), 3, 10000000));
           start = comma + 1;
         }
       }
       else if (arg == "--rest-update")
         options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--measure")
-        options.distanceMeasure = optionValue(argc, argv, i) == "points"
+        options.distanceMeasure = oneOf(arg, optionValue(argc, argv, i), "planes", "points")
                                       ? dp::DistanceMeasure::Points
                                       : dp::DistanceMeasure::Planes;
       else if (arg == "--no-mp")
         options.motionPrediction = false;
       else if (arg == "--penalty")
-        options.squaredDistance = optionValue(argc, argv, i) != "linear";
+        options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
       else if (arg == "--oracle")
-        Oracle = optionValue(argc, argv, i);
+        Oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
       else if (arg == "--verbose")
         Verbose = true;
       else if (arg == "--distance-weight")

@@ -95,6 +95,15 @@ ErrorStats distanceError(const dp::DistanceField& field, const std::vector<doubl
   return e;
 }
 
+// 2 cm voxels and a 10 cm band: about a voxel per sample spacing of tubeCloud(5000).
+dp::DistanceFieldOptions tubeFieldOptions()
+{
+  dp::DistanceFieldOptions o;
+  o.voxelSize = 0.02;
+  o.bandWidth = 0.1;
+  return o;
+}
+
 TEST(DistanceField, MatchesBruteForceOnARandomCloud)
 {
   const Cloud c = randomCloud(3000, 1);
@@ -148,9 +157,7 @@ TEST(DistanceField, MatchesBruteForceOnASurfaceSampledCloud)
 TEST(DistanceField, GradientIsTheDerivativeOfTheDistance)
 {
   const Cloud c = tubeCloud(5000);
-  dp::DistanceFieldOptions o;
-  o.voxelSize = 0.02;
-  o.bandWidth = 0.1;
+  const dp::DistanceFieldOptions o = tubeFieldOptions();
   dp::DistanceField field;
   field.build(c.points.data(), c.points.size() / 3, o);
   const std::vector<double> q = queriesNear(c.points, 0.15, 500, 4);
@@ -191,9 +198,7 @@ TEST(DistanceField, GradientIsTheDerivativeOfTheDistance)
 TEST(DistanceField, PlaneDistanceHasItsDerivativeAsGradientAndIsFlatAlongTheData)
 {
   const Cloud c = tubeCloud(5000);
-  dp::DistanceFieldOptions o;
-  o.voxelSize = 0.02;
-  o.bandWidth = 0.1;
+  const dp::DistanceFieldOptions o = tubeFieldOptions();
   dp::DistanceField field;
   field.build(c.points.data(), c.points.size() / 3, o);
   const double reach = 2 * o.voxelSize;

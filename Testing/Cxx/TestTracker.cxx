@@ -269,6 +269,26 @@ TEST(Tracker, DistanceTermGradientMatchesFiniteDifferences)
       [&](const double* p, double* g) { return tracker.energy(p, &field, weights, g); }, x, 1e-4);
 }
 
+TEST(Tracker, RefusesOptionsOutOfRange)
+{
+  const MeshData m = tube();
+  auto make = [&m](const dp::TrackerOptions& o)
+  { dp::Tracker(dp::TriangleMesh(m.triangles, m.positions.size() / 3), m.positions, o); };
+  EXPECT_NO_THROW(make(dp::TrackerOptions{}));
+  for (double bad : {-0.1, 1.5, std::nan("")})
+  {
+    dp::TrackerOptions o;
+    o.restUpdate = bad;
+    EXPECT_THROW(make(o), std::invalid_argument) << "rest update " << bad;
+  }
+  dp::TrackerOptions o;
+  o.distanceWeight = -1;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.maxIterations = 0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+}
+
 TEST(Tracker, FollowsANoisySequenceWithEverySolver)
 {
   const Sequence s = makeSequence(10, 0.002, 0, 6000);

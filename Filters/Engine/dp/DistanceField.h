@@ -21,7 +21,8 @@
  *
  * Limits: interpolation overestimates the distance right at the data (by up to about half a
  * voxel at a sample point): choose the voxel size at the data's accuracy, as the paper does.
- * D is the distance to the points, not to the sampled surface; its gradient is continuous
+ * D is the distance to the points, not to the sampled surface (sampleToPlanes approximates
+ * the latter from the points' normals); its gradient is continuous
  * inside a cell, not across cell faces. Sampling outside the band costs up to 8 kd-tree
  * queries. At most 2^31 - 1 points.
  */

@@ -97,9 +97,11 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
                                 " positions for " + std::to_string(Mesh.numberOfVertices()) +
                                 " vertices");
   if (!(options.distanceWeight >= 0) || !(options.tolerance > 0) || options.maxIterations < 1 ||
-      options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0)
+      options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0 ||
+      !(options.restUpdate >= 0 && options.restUpdate <= 1))
     throw std::invalid_argument("tracker options out of range (weights, sizes and tolerance "
-                                "must be non-negative, iterations at least 1)");
+                                "must be non-negative, iterations at least 1, the rest update "
+                                "between 0 and 1)");
   TemplateRest = Cloth.restState();
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
 }
@@ -276,8 +278,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
 
   // The frame's distance field and target normals.
   DistanceField field;
-  std::vector<float>& targetNormals = FrameNormals;
-  targetNormals.clear();
+  FrameNormals.clear();
   const bool haveData = count > 0;
   if (haveData)
   {
@@ -287,8 +288,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     fieldOptions.lazy = true; // only the voxels around the vertices are ever needed
     field.build(points, count, fieldOptions);
     if (Options.normalTestDegrees < 180 || Options.distanceMeasure == DistanceMeasure::Planes)
-      targetNormals = normals ? std::vector<float>(normals, normals + 3 * count)
-                              : estimateNormals(points, count);
+      FrameNormals = normals ? std::vector<float>(normals, normals + 3 * count)
+                             : estimateNormals(points, count);
   }
 
   if (Options.restUpdate > 0)
@@ -313,7 +314,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       bool keep = Options.outlierDistance <= 0 || s.distance <= Options.outlierDistance;
       if (keep && Options.normalTestDegrees < 180)
       {
-        const float* n = &targetNormals[3 * static_cast<std::size_t>(s.nearest)];
+        const float* n = &FrameNormals[3 * static_cast<std::size_t>(s.nearest)];
         const double agreement = vertexNormals[3 * v] * n[0] + vertexNormals[3 * v + 1] * n[1] +
                                  vertexNormals[3 * v + 2] * n[2];
         keep = agreement >= cosLimit;
