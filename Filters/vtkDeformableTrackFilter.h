@@ -84,7 +84,7 @@ public:
   ///@}
 
   ///@{
-  /** Weights of the energy terms (all dimensionless; defaults 300, 1, 0.05, 0.5). */
+  /** Weights of the energy terms (all dimensionless; defaults 100, 1, 0.05, 0.5). */
   vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(DistanceWeight, double);
   vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
@@ -149,7 +149,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int Solver = GAUSS_NEWTON;
-  double DistanceWeight = 300.0;
+  double DistanceWeight = 100.0;
   int DistanceMeasure = DISTANCE_TO_PLANES;
   vtkTypeBool SquaredDistance = true;
   double RestUpdate = 0.3;
@@ -163,7 +163,7 @@ protected:
   vtkTypeBool MotionPrediction = true;
   vtkTypeBool ProvisionalDetermination = true;
   int MaximumIterations = 300;
-  double Tolerance = 1e-4;
+  double Tolerance = 1e-3;
 
 private:
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

@@ -149,7 +149,10 @@ struct Run
   std::size_t frames = 0;
 };
 
-bool Verbose = false; // --verbose: one line per frame
+bool Verbose = false;          // --verbose: one line per frame
+std::uint64_t SamplerSeed = 1; // --seed: which random samples the frames get
+double NoiseFraction = 0;      // --noise: Gaussian noise on the samples, as a share of the diagonal
+std::size_t Holes = 0;         // --holes: holes cut in every frame (radius 5% of the diagonal)
 // --oracle: diagnostics that start each frame from the ground truth: "previous" (one-step error
 // from the true previous frame), "same" (how far the energy's minimum lies from the truth).
 std::string Oracle;
@@ -160,6 +163,11 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.positions.size() / 3), t.positions, options);
   dp::SamplerOptions sampling;
   sampling.pointsPerFrame = points;
+  sampling.seed = SamplerSeed;
+  const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
+  sampling.noiseStdDev = NoiseFraction * diagonal;
+  sampling.holes = Holes;
+  sampling.holeRadius = 0.05 * diagonal;
   Run run;
   double vertexSum = 0, surfaceSum = 0, seconds = 0;
   std::size_t vertexCount = 0;
@@ -314,6 +322,12 @@ int main(int argc, char** argv)
                          : s == "sd"  ? dp::TrackerSolver::SteepestDescent
                                       : dp::TrackerSolver::GaussNewton;
       }
+      else if (arg == "--noise")
+        NoiseFraction = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+      else if (arg == "--holes")
+        Holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
+      else if (arg == "--seed")
+        SamplerSeed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
       else if (arg == "--ablation")
         ablation = true;
       else if (arg == "--scaling")
@@ -365,7 +379,8 @@ int main(int argc, char** argv)
       {
         std::cout
             << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
-               "(0: full)] [--frames N] [--points N] [--solver gn|lbfgs|sd] [--ablation] "
+               "(0: full)] [--frames N] [--points N] [--seed S] [--noise FRACTION] [--holes N] "
+               "[--solver gn|lbfgs|sd] [--ablation] "
                "[--verbose]\n"
                "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE] "
                "[--tolerance T] [--max-iterations N]\n"

@@ -222,7 +222,8 @@ TEST(DistanceField, PlaneDistanceHasItsDerivativeAsGradientAndIsFlatAlongTheData
       const double fd = (field.sampleToPlanes(a, c.normals.data(), reach).distance -
                          field.sampleToPlanes(b, c.normals.data(), reach).distance) /
                         (2 * h);
-      // The value has kinks where a plane distance changes sign: skip those queries.
+      // The slope of the trilinear weights jumps across voxel faces: where the central
+      // difference straddles one, compare with a one-sided difference instead.
       if (std::abs(fd - s.gradient[k]) > 1e-4)
       {
         double a2[3] = {x[0], x[1], x[2]};
@@ -244,6 +245,88 @@ TEST(DistanceField, PlaneDistanceHasItsDerivativeAsGradientAndIsFlatAlongTheData
     planes += field.sampleToPlanes(&surface[3 * v], c.normals.data(), reach).distance;
   }
   EXPECT_LT(planes, 0.5 * points);
+}
+
+TEST(DistanceField, PlaneQuadricIsTheGaussNewtonModelOfTheSquaredDistance)
+{
+  // One point: every voxel corner shares it, so D^2 = (n.(x - p))^2 + max(0, |x - p| - reach)^2
+  // whatever the weights, and the quadric must reproduce it: value, gradient, and (within
+  // reach, where D^2 is a quadratic) every displacement exactly.
+  const double p[3] = {0.31, -0.12, 0.07};
+  const float n[3] = {0.6f, 0.0f, 0.8f};
+  const double voxel = 0.05, reach = 2 * voxel;
+  dp::DistanceFieldOptions o;
+  o.voxelSize = voxel;
+  dp::DistanceField field;
+  field.build(p, 1, o);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 50; ++trial)
+  {
+    const double scale = trial < 25 ? 0.05 : 0.5; // within reach, then far beyond it
+    const double x[3] = {p[0] + scale * u(rng), p[1] + scale * u(rng), p[2] + scale * u(rng)};
+    dp::PlaneQuadric q;
+    const dp::DistanceSample s = field.sampleToPlanes(x, n, reach, nullptr, &q);
+    EXPECT_NEAR(q.constant, s.distance * s.distance, 1e-12);
+    const double zero[3] = {0, 0, 0};
+    EXPECT_NEAR(q(zero), q.constant, 1e-15);
+    const double h = 1e-6;
+    for (int k = 0; k < 3; ++k)
+    {
+      double a[3] = {x[0], x[1], x[2]}, b[3] = {x[0], x[1], x[2]};
+      a[k] += h;
+      b[k] -= h;
+      const double da = field.sampleToPlanes(a, n, reach).distance;
+      const double db = field.sampleToPlanes(b, n, reach).distance;
+      EXPECT_NEAR(2 * q.vector[k], (da * da - db * db) / (2 * h), 1e-6) << trial;
+    }
+    // The matrix is positive semidefinite: the model never promises an unbounded decrease.
+    for (int k = 0; k < 20; ++k)
+    {
+      const double d[3] = {u(rng), u(rng), u(rng)};
+      const double quadratic =
+          q(d) - q.constant - 2 * (q.vector[0] * d[0] + q.vector[1] * d[1] + q.vector[2] * d[2]);
+      EXPECT_GE(quadratic, -1e-12);
+    }
+    if (trial < 25 && std::sqrt((x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
+                                (x[2] - p[2]) * (x[2] - p[2])) < 0.5 * reach)
+    {
+      const double d[3] = {0.01 * u(rng), 0.01 * u(rng), 0.01 * u(rng)};
+      const double y[3] = {x[0] + d[0], x[1] + d[1], x[2] + d[2]};
+      const double at = field.sampleToPlanes(y, n, reach).distance;
+      EXPECT_NEAR(q(d), at * at, 1e-12) << trial;
+    }
+  }
+}
+
+TEST(DistanceField, PlaneDistanceHasNoFalseZeroBetweenTwoSheets)
+{
+  // Two parallel sheets of points 6 voxels apart with opposite normals (the two sides of a
+  // thin part): halfway between them, no plane passes, so D must be about the half gap, not 0.
+  std::vector<double> points;
+  std::vector<float> normals;
+  const double voxel = 0.01, gap = 6 * voxel;
+  for (int i = -20; i <= 20; ++i)
+    for (int j = -20; j <= 20; ++j)
+      for (int side = 0; side < 2; ++side)
+      {
+        points.insert(points.end(), {0.5 * voxel * i, 0.5 * voxel * j, side ? gap : 0.0});
+        normals.insert(normals.end(), {0.0f, 0.0f, side ? 1.0f : -1.0f});
+      }
+  dp::DistanceFieldOptions o;
+  o.voxelSize = voxel;
+  o.bandWidth = 4 * voxel;
+  dp::DistanceField field;
+  field.build(points.data(), points.size() / 3, o);
+  for (double z : {0.45 * gap, 0.5 * gap, 0.55 * gap})
+  {
+    const double x[3] = {0.0123, -0.0077, z};
+    const double d = field.sampleToPlanes(x, normals.data(), 10 * voxel).distance;
+    EXPECT_NEAR(d, std::min(z, gap - z), 0.6 * voxel) << z;
+  }
+  // On a sheet, D is ~0.
+  const double on[3] = {0.0123, -0.0077, 0.0};
+  EXPECT_LT(field.sampleToPlanes(on, normals.data(), 10 * voxel).distance, 1e-9);
 }
 
 TEST(DistanceField, IsContinuousAcrossVoxelFaces)

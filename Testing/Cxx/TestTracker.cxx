@@ -302,7 +302,11 @@ TEST(Tracker, FollowsANoisySequenceWithEverySolver)
     // default weight it needs several thousand iterations here, so it runs with the paper's
     // balance of terms.
     if (solver == dp::TrackerSolver::SteepestDescent)
+    {
       o.distanceWeight = 1.0;
+      o.distanceMeasure = dp::DistanceMeasure::Points; // and the paper's distance term, D
+      o.squaredDistance = false;
+    }
     // L-BFGS also slows down on the stiff default data term (300): it runs with a softer one.
     if (solver == dp::TrackerSolver::LBFGS)
       o.distanceWeight = 10.0;

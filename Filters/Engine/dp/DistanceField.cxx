@@ -311,14 +311,11 @@ std::int64_t DistanceField::voxelNearest(int i, int j, int k) const
   return inBand ? index : -1;
 }
 
-template <typename CornerValue>
-DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
-                                          CornerValue cornerValue) const
+const VoxelCell& DistanceField::locate(const double x[3], VoxelCell* cell, double t[3]) const
 {
   if (empty())
     throw std::logic_error("DistanceField::sample before build()");
   const double v = P->Voxel;
-  double t[3];
   int base[3];
   for (int k = 0; k < 3; ++k)
   {
@@ -326,10 +323,6 @@ DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
     base[k] = static_cast<int>(std::floor(g));
     t[k] = g - base[k];
   }
-  DistanceSample s;
-  VoxelCell local;
-  if (!cell)
-    cell = &local;
   if (!cell->valid || cell->base[0] != base[0] || cell->base[1] != base[1] ||
       cell->base[2] != base[2])
   {
@@ -348,28 +341,52 @@ DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
     std::copy(base, base + 3, cell->base);
     cell->valid = true;
   }
-  s.inBand = cell->inBand;
+  return *cell;
+}
+
+namespace
+{
+// Trilinear weight of a corner (bits i j k) at fractional position t, and its gradient.
+inline double cornerWeight(int corner, const double t[3], double voxel, double gradient[3])
+{
+  double w[3], dw[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    const bool bit = (corner >> k) & 1;
+    w[k] = bit ? t[k] : 1 - t[k];
+    dw[k] = (bit ? 1.0 : -1.0) / voxel;
+  }
+  gradient[0] = dw[0] * w[1] * w[2];
+  gradient[1] = w[0] * dw[1] * w[2];
+  gradient[2] = w[0] * w[1] * dw[2];
+  return w[0] * w[1] * w[2];
+}
+} // namespace
+
+template <typename CornerValue>
+DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
+                                          CornerValue cornerValue) const
+{
+  VoxelCell local;
+  double t[3];
+  const VoxelCell& corners = locate(x, cell ? cell : &local, t);
+  const double v = P->Voxel;
+  DistanceSample s;
+  s.inBand = corners.inBand;
   double best = std::numeric_limits<double>::infinity();
   for (int corner = 0; corner < 8; ++corner)
   {
-    const int bit[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
-    const double centre[3] = {v * (base[0] + bit[0]), v * (base[1] + bit[1]),
-                              v * (base[2] + bit[2])};
-    const std::int32_t index = cell->nearest[corner];
+    const double centre[3] = {v * (corners.base[0] + (corner & 1)),
+                              v * (corners.base[1] + ((corner >> 1) & 1)),
+                              v * (corners.base[2] + ((corner >> 2) & 1))};
+    const std::int32_t index = corners.nearest[corner];
     const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
-    double valueGradient[3] = {0, 0, 0};
+    double valueGradient[3] = {0, 0, 0}, dWeight[3];
     const double value = cornerValue(centre, index, p, valueGradient);
-    double w[3], dw[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      w[k] = bit[k] ? t[k] : 1 - t[k];
-      dw[k] = (bit[k] ? 1.0 : -1.0) / v;
-    }
-    const double weight = w[0] * w[1] * w[2];
+    const double weight = cornerWeight(corner, t, v, dWeight);
     s.distance += weight * value;
-    s.gradient[0] += dw[0] * w[1] * w[2] * value + weight * valueGradient[0];
-    s.gradient[1] += w[0] * dw[1] * w[2] * value + weight * valueGradient[1];
-    s.gradient[2] += w[0] * w[1] * dw[2] * value + weight * valueGradient[2];
+    for (int k = 0; k < 3; ++k)
+      s.gradient[k] += dWeight[k] * value + weight * valueGradient[k];
     const double toX = (x[0] - p[0]) * (x[0] - p[0]) + (x[1] - p[1]) * (x[1] - p[1]) +
                        (x[2] - p[2]) * (x[2] - p[2]);
     if (toX < best)
@@ -394,31 +411,68 @@ DistanceSample DistanceField::sample(const double x[3], VoxelCell* cell) const
 }
 
 DistanceSample DistanceField::sampleToPlanes(const double x[3], const float* normals, double reach,
-                                             VoxelCell* cell) const
+                                             VoxelCell* cell, PlaneQuadric* quadric) const
 {
-  // Each corner: the distance from x to the tangent plane of the corner's nearest point,
-  // |n.(x - p)|, plus how far x lies beyond `reach` from p (so far from the data the field
-  // still pulls toward the points, not along an extended plane).
-  return interpolate(
-      x, cell,
-      [x, normals, reach](const double*, std::int32_t index, const double* p, double* gradient)
+  // D^2 = sum_c w_c [ (n_c.(x - p_c))^2 + max(0, |x - p_c| - reach)^2 ] over the 8 corners c
+  // (trilinear weights w_c, p_c a corner's nearest point, n_c its normal): the mean squared
+  // distance to the corners' tangent planes, plus, far from the points, the squared distance
+  // beyond `reach`. Squared, the planes need no orientation; averaged, they have no false zero
+  // between two sheets whose planes disagree; and with the weights held, each term is a linear
+  // residual, so D^2 near x is exactly the quadric a Gauss-Newton step wants.
+  VoxelCell local;
+  double t[3];
+  const VoxelCell& corners = locate(x, cell ? cell : &local, t);
+  const double v = P->Voxel;
+  PlaneQuadric q;
+  double squared = 0, gradient[3] = {0, 0, 0};
+  DistanceSample s;
+  s.inBand = corners.inBand;
+  double best = std::numeric_limits<double>::infinity();
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    const std::int32_t index = corners.nearest[corner];
+    const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
+    const float* normal = normals + 3 * static_cast<std::size_t>(index);
+    const double n[3] = {normal[0], normal[1], normal[2]};
+    const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+    double dWeight[3];
+    const double w = cornerWeight(corner, t, v, dWeight);
+    // The corner's residuals: a along n (the plane), f along u (beyond reach).
+    const double a = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    const double length = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+    const double f = std::max(0.0, length - reach);
+    const double u[3] = {f > 0 ? r[0] / length : 0.0, f > 0 ? r[1] / length : 0.0,
+                         f > 0 ? r[2] / length : 0.0};
+    const double value = a * a + f * f;
+    squared += w * value;
+    for (int k = 0; k < 3; ++k)
+      gradient[k] += dWeight[k] * value + 2 * w * (a * n[k] + f * u[k]);
+    if (quadric)
+    {
+      int m = 0;
+      for (int i = 0; i < 3; ++i)
       {
-        const float* n = normals + 3 * static_cast<std::size_t>(index);
-        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-        const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-        const double sign = along >= 0 ? 1.0 : -1.0;
-        double value = sign * along;
-        for (int k = 0; k < 3; ++k)
-          gradient[k] = sign * n[k];
-        const double length = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-        if (length > reach)
-        {
-          value += length - reach;
-          for (int k = 0; k < 3; ++k)
-            gradient[k] += r[k] / length;
-        }
-        return value;
-      });
+        q.vector[i] += w * (a * n[i] + f * u[i]);
+        for (int j = i; j < 3; ++j)
+          q.matrix[m++] += w * (n[i] * n[j] + u[i] * u[j]);
+      }
+    }
+    if (length < best)
+    {
+      best = length;
+      s.nearest = index;
+    }
+  }
+  s.distance = std::sqrt(squared);
+  if (s.distance > 0)
+    for (int k = 0; k < 3; ++k)
+      s.gradient[k] = gradient[k] / (2 * s.distance);
+  if (quadric)
+  {
+    q.constant = squared;
+    *quadric = q;
+  }
+  return s;
 }
 
 void DistanceField::sampleMany(const double* positions, std::size_t count,

@@ -66,6 +66,26 @@ struct VoxelCell
   bool valid = false;
 };
 
+/** D^2 near a point x of sampleToPlanes, as a function of a displacement d:
+ *  D^2(x + d) ~= constant + 2 vector.d + d^T matrix d (matrix symmetric, stored xx xy xz yy yz zz),
+ *  with D^2's value at d = 0, and the linear and quadratic parts of its terms with the
+ *  interpolation weights held (the Gauss-Newton model with the corners' correspondences fixed;
+ *  it leaves out the voxel-scale ripple the weights' own slopes add to the gradient). */
+struct PlaneQuadric
+{
+  double matrix[6] = {0, 0, 0, 0, 0, 0};
+  double vector[3] = {0, 0, 0};
+  double constant = 0;
+
+  /** The model at displacement d. */
+  double operator()(const double d[3]) const
+  {
+    return constant + 2 * (vector[0] * d[0] + vector[1] * d[1] + vector[2] * d[2]) +
+           matrix[0] * d[0] * d[0] + matrix[3] * d[1] * d[1] + matrix[5] * d[2] * d[2] +
+           2 * (matrix[1] * d[0] * d[1] + matrix[2] * d[0] * d[2] + matrix[4] * d[1] * d[2]);
+  }
+};
+
 /** Thrown when the requested grid would exceed DistanceFieldOptions::maxActiveVoxels. */
 class GridTooLarge : public std::runtime_error
 {
@@ -100,15 +120,17 @@ public:
   /** Distance, gradient and nearest point at x. Thread-safe (with a `cell` per thread). */
   DistanceSample sample(const double x[3], VoxelCell* cell = nullptr) const;
   /**
-   * Distance to the surface the points sample rather than to the points themselves: each of
-   * the 8 voxel centres around x contributes |n.(x - p)|, the distance from x to the tangent
-   * plane at the centre's nearest point p (unit normal n from `normals`, 3 per point), plus
-   * max(0, |x - p| - reach); the contributions are blended trilinearly. Along the surface the
-   * value stays near zero (no dimples at the samples, so a mesh can slide along the data);
-   * beyond `reach` it grows like the distance to the points. Continuous in x. Thread-safe.
+   * Distance to the surface the points sample rather than to the points themselves: D is the
+   * root mean square, with the trilinear weights, of the distances from x to the tangent planes
+   * at the 8 surrounding voxel centres' nearest points (unit normals from `normals`, 3 per
+   * point, orientation irrelevant); beyond `reach` from a corner's point, the distance past
+   * `reach` is added in quadrature, so far from the data D still grows like the distance to the
+   * points. Along the surface D stays near zero (no dimples at the samples, so a mesh can slide
+   * along the data); D^2 is smooth within a voxel cell and continuous everywhere, and
+   * `quadric`, when given, receives its Gauss-Newton model around x. Thread-safe.
    */
   DistanceSample sampleToPlanes(const double x[3], const float* normals, double reach,
-                                VoxelCell* cell = nullptr) const;
+                                VoxelCell* cell = nullptr, PlaneQuadric* quadric = nullptr) const;
   /** sample() for many positions (x y z each), in parallel. */
   void sampleMany(const double* positions, std::size_t count, DistanceSample* out) const;
 
@@ -119,6 +141,8 @@ public:
   std::int64_t voxelNearest(int i, int j, int k) const;
 
 private:
+  // The cell around x (from `cell` when x is still in it) and x's position in it (0..1 each).
+  const VoxelCell& locate(const double x[3], VoxelCell* cell, double t[3]) const;
   template <typename CornerValue>
   DistanceSample interpolate(const double x[3], VoxelCell* cell, CornerValue cornerValue) const;
 

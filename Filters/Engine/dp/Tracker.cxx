@@ -2,6 +2,7 @@
 #include "dp/Tracker.h"
 
 #include "dp/SurfaceSampler.h"
+#include "dp/detail/BlockSparseMatrix.h"
 
 #include <lbfgs.h>
 
@@ -9,9 +10,11 @@
 #include <Eigen/SparseCholesky>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -20,6 +23,13 @@ namespace dp
 namespace
 {
 constexpr double Pi = 3.14159265358979323846;
+// Gauss-Newton: relative residual at which conjugate gradients stop (an inexact Newton step:
+// tighter solves cost more than the extra iterations they save), and the largest vertex move,
+// in voxels, below which a frame counts as settled (the field resolves nothing finer).
+constexpr double StepTolerance = 0.3;
+constexpr double SettledStep = 0.1;
+// Planes: how far from a data point (in voxels) its tangent plane stands for the surface.
+constexpr double PlaneReach = 2.0;
 
 // What the solvers minimise: the tracker's energy with fixed data weights.
 struct Objective
@@ -111,27 +121,7 @@ double Tracker::energy(const double* x, const DistanceField* field,
                        double* distance) const
 {
   const double eInt = Cloth.addGradient(x, gradient);
-  double eDis = 0;
-  if (field)
-  {
-    const auto& mass = Cloth.vertexMass();
-    const double scale = Options.distanceWeight / Cloth.lengthScale();
-    for (std::size_t v = 0; v < mass.size(); ++v)
-    {
-      if (weights[v] == 0)
-        continue;
-      const DistanceSample s = sampleData(*field, x + 3 * v, v);
-      const double w = scale * mass[v] * weights[v];
-      // Squared: D^2 / (2 voxel), smooth at the data; else the paper's D.
-      const double value =
-          Options.squaredDistance ? 0.5 * s.distance * s.distance / Voxel : s.distance;
-      const double slope = Options.squaredDistance ? s.distance / Voxel : 1.0;
-      eDis += w * value;
-      if (gradient)
-        for (int k = 0; k < 3; ++k)
-          gradient[3 * v + k] += w * slope * s.gradient[k];
-    }
-  }
+  const double eDis = distanceEnergy(x, field, weights, gradient);
   if (internal)
     *internal = eInt;
   if (distance)
@@ -139,12 +129,41 @@ double Tracker::energy(const double* x, const DistanceField* field,
   return eInt + eDis;
 }
 
+double Tracker::distanceEnergy(const double* x, const DistanceField* field,
+                               const std::vector<double>& weights, double* gradient,
+                               double* perVertex) const
+{
+  if (!field)
+    return 0;
+  double e = 0;
+  const auto& mass = Cloth.vertexMass();
+  const double scale = Options.distanceWeight / Cloth.lengthScale();
+  for (std::size_t v = 0; v < mass.size(); ++v)
+  {
+    if (weights[v] == 0)
+      continue;
+    const DistanceSample s = sampleData(*field, x + 3 * v, v);
+    const double w = scale * mass[v] * weights[v];
+    // Squared: D^2 / (2 voxel), smooth at the data; else the paper's D.
+    const double value =
+        Options.squaredDistance ? 0.5 * s.distance * s.distance / Voxel : s.distance;
+    const double slope = Options.squaredDistance ? s.distance / Voxel : 1.0;
+    e += w * value;
+    if (perVertex)
+      perVertex[v] = w * value;
+    if (gradient)
+      for (int k = 0; k < 3; ++k)
+        gradient[3 * v + k] += w * slope * s.gradient[k];
+  }
+  return e;
+}
+
 DistanceSample Tracker::sampleData(const DistanceField& field, const double* x,
                                    std::size_t vertex) const
 {
   VoxelCell* cell = vertex < Cells.size() ? &Cells[vertex] : nullptr;
   if (Options.distanceMeasure == DistanceMeasure::Planes && !FrameNormals.empty())
-    return field.sampleToPlanes(x, FrameNormals.data(), 2 * Voxel, cell);
+    return field.sampleToPlanes(x, FrameNormals.data(), PlaneReach * Voxel, cell);
   return field.sample(x, cell);
 }
 
@@ -153,117 +172,252 @@ std::vector<double> Tracker::predict() const
   return History.empty() ? Template : History.back();
 }
 
+namespace
+{
+// Preconditioned conjugate gradients on the lower-stored symmetric positive definite A, from
+// x = 0, until the residual falls below tolerance * |b| or after `limit` iterations. Every
+// iterate is a descent direction of the quadratic model, so an early stop still gives a usable
+// (inexact Newton) step.
+template <typename Preconditioner>
+Eigen::VectorXd conjugateGradients(const detail::BlockSparseMatrix::Matrix& A,
+                                   const Eigen::VectorXd& b, const Preconditioner& precondition,
+                                   double tolerance, int limit, int& iterations)
+{
+  const auto S = A.selfadjointView<Eigen::Lower>();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(b.size());
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z = precondition(r);
+  Eigen::VectorXd p = z;
+  double rz = r.dot(z);
+  const double target = tolerance * b.norm();
+  for (iterations = 0; iterations < limit && r.norm() > target; ++iterations)
+  {
+    const Eigen::VectorXd q = S * p;
+    const double curvature = p.dot(q);
+    if (!(curvature > 0))
+      break;
+    const double alpha = rz / curvature;
+    x += alpha * p;
+    r -= alpha * q;
+    z = precondition(r);
+    const double next = r.dot(z);
+    p = z + (next / rz) * p;
+    rz = next;
+  }
+  return x;
+}
+} // namespace
+
+// The Gauss-Newton state kept across frames: the matrix pattern is the mesh's, so it and the
+// symbolic analysis of the preconditioner are made once.
+struct Tracker::NewtonState
+{
+  detail::BlockSparseMatrix Hessian;
+  // The preconditioner: P (x) I_3, P the matrix of the 3x3 blocks' traces / 3 (a rotation-
+  // invariant, Laplacian-like approximation of the Gauss-Newton matrix with a third of its
+  // unknowns, so 27x cheaper to factorise), factorised by sparse LDL^T.
+  Eigen::SimplicialLDLT<detail::BlockSparseMatrix::Matrix, Eigen::Lower> Preconditioner;
+  bool Analysed = false;
+  // The blocks each cloth term's pairs add to, in the order ClothEnergy visits them.
+  std::vector<detail::BlockSparseMatrix::Slot> TermSlots;
+
+  Eigen::VectorXd precondition(const Eigen::VectorXd& r) const
+  {
+    const Eigen::Index n = r.size() / 3;
+    using Columns = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+    const Columns z = Preconditioner.solve(Eigen::Map<const Columns>(r.data(), n, 3));
+    return Eigen::Map<const Eigen::VectorXd>(z.data(), 3 * n);
+  }
+};
+
+Tracker::~Tracker() = default;
+
 int Tracker::solveGaussNewton(
     std::vector<double>& x, const DistanceField* field, std::vector<double>& weights,
-    const std::function<void(const std::vector<double>&)>& decideWeights) const
+    const std::function<std::size_t(const std::vector<double>&)>& decideWeights)
 {
-  using Sparse = Eigen::SparseMatrix<double>;
   const std::size_t nv = Mesh.numberOfVertices();
-  const Eigen::Index n = static_cast<Eigen::Index>(3 * nv);
-  const double L = Cloth.lengthScale();
-  const double scale = Options.distanceWeight / L;
+  const auto n = static_cast<Eigen::Index>(3 * nv);
+  const double scale = Options.distanceWeight / Cloth.lengthScale();
   const auto& mass = Cloth.vertexMass();
-  std::vector<Eigen::Triplet<double>> triplets;
-  Eigen::SimplicialLDLT<Sparse> solver;
-  bool analysed = false;
-  std::vector<double> gradient(x.size()), trial(x.size());
-  double damping = 1e-4; // relative to the mean diagonal
-  int evaluations = 0;
-  double e = energy(x.data(), field, weights,
-                    (std::fill(gradient.begin(), gradient.end(), 0.0), gradient.data()));
-  ++evaluations;
-  int iteration = 0;
-  for (; iteration < Options.maxIterations; ++iteration)
+  if (!Newton)
   {
-    // Gauss-Newton matrix: cloth terms, distance terms (reweighted), Levenberg damping.
-    triplets.clear();
-    auto addBlock =
-        [&](std::int64_t a, std::int64_t b, const double* ga, const double* gb, double w)
-    {
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c)
-          triplets.emplace_back(static_cast<int>(3 * a + r), static_cast<int>(3 * b + c),
-                                w * ga[r] * gb[c]);
-    };
-    Cloth.forEachTerm(x.data(),
-                      [&](const ClothTerm& t)
-                      {
-                        for (int a = 0; a < t.count; ++a)
-                          for (int b = 0; b < t.count; ++b)
-                            addBlock(t.vertex[a], t.vertex[b], t.gradient[a], t.gradient[b],
-                                     t.weight);
-                      });
-    const double floor = Voxel;
+    // Pattern: every pair of vertices sharing a term (edges; the opposite vertices of hinges).
+    std::vector<std::array<std::int64_t, 2>> pairs(Mesh.edges().begin(), Mesh.edges().end());
+    for (const auto& h : Mesh.hinges())
+      pairs.push_back({h[2], h[3]});
+    Newton = std::make_unique<NewtonState>();
+    Newton->Hessian = detail::BlockSparseMatrix(nv, pairs);
+  }
+  detail::BlockSparseMatrix& H = Newton->Hessian;
+
+  // The data term's Gauss-Newton model at the current x: vertex v's squared distance near x is
+  // the quadric Q_v(d) = D^2 + 2 b.d + d^T M d of DistanceField::sampleToPlanes (its tangent
+  // planes held, as in ICP; for the distance to the points: (D + g.d)^2, g the field's
+  // gradient), and its penalty c/2 Q_v with c = w / voxel (squared distance) or w / max(D, voxel)
+  // (the paper's D, reweighted: the fixed point minimises the sum of D). Steps are judged by how
+  // much of the decrease the model promises E delivers (Levenberg-Marquardt).
+  const bool planes = Options.distanceMeasure == DistanceMeasure::Planes && !FrameNormals.empty();
+  std::vector<PlaneQuadric> quadric(nv);
+  std::vector<double> c(nv);
+  auto linearise = [&]()
+  {
     for (std::size_t v = 0; v < nv; ++v)
     {
-      double g[3] = {0, 0, 0};
-      double w = 0;
-      if (field && weights[v] != 0)
-      {
-        const DistanceSample sample = sampleData(*field, &x[3 * v], v);
-        w = scale * mass[v] * weights[v] /
-            (Options.squaredDistance ? Voxel : std::max(sample.distance, floor));
-        std::copy(sample.gradient, sample.gradient + 3, g);
-      }
-      addBlock(static_cast<std::int64_t>(v), static_cast<std::int64_t>(v), g, g, w);
-    }
-    Sparse H(n, n);
-    H.setFromTriplets(triplets.begin(), triplets.end());
-    // Every vertex has a (possibly zero) data block, so the diagonal is stored and damping
-    // can be added in place without changing the pattern.
-    const Eigen::VectorXd diagonal = H.diagonal();
-    const double meanDiagonal = std::max(diagonal.mean(), 1e-300);
-    const Eigen::Map<const Eigen::VectorXd> g(gradient.data(), n);
-
-    bool accepted = false;
-    for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
-    {
-      Sparse A = H;
-      A.diagonal().array() += damping * meanDiagonal;
-      if (!analysed)
-      {
-        solver.analyzePattern(A);
-        analysed = true;
-      }
-      solver.factorize(A);
-      if (solver.info() != Eigen::Success)
-      {
-        damping *= 10;
+      c[v] = 0;
+      quadric[v] = PlaneQuadric();
+      if (!field || weights[v] == 0)
         continue;
-      }
-      const Eigen::VectorXd step = solver.solve(-g);
-      for (std::size_t i = 0; i < x.size(); ++i)
-        trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
-      const double eTrial = energy(trial.data(), field, weights, nullptr);
-      ++evaluations;
-      if (eTrial < e)
+      DistanceSample s;
+      if (planes)
       {
-        accepted = true;
-        const double decrease = e - eTrial;
-        x.swap(trial);
-        std::fill(gradient.begin(), gradient.end(), 0.0);
-        e = energy(x.data(), field, weights, gradient.data());
-        ++evaluations;
-        damping = std::max(damping * 0.3, 1e-9);
-        if (decrease <= Options.tolerance * std::abs(e) ||
-            step.cwiseAbs().maxCoeff() <= Options.tolerance * L)
-          return evaluations;
+        s = field->sampleToPlanes(&x[3 * v], FrameNormals.data(), PlaneReach * Voxel, &Cells[v],
+                                  &quadric[v]);
       }
       else
       {
-        damping *= 10;
+        s = sampleData(*field, &x[3 * v], v);
+        PlaneQuadric& q = quadric[v];
+        int m = 0;
+        for (int i = 0; i < 3; ++i)
+        {
+          q.vector[i] = s.distance * s.gradient[i];
+          for (int j = i; j < 3; ++j)
+            q.matrix[m++] = s.gradient[i] * s.gradient[j];
+        }
+        q.constant = s.distance * s.distance;
       }
+      c[v] = scale * mass[v] * weights[v] /
+             (Options.squaredDistance ? Voxel : std::max(s.distance, Voxel));
     }
-    if (!accepted)
-      break; // no step decreases E any more: a (local) minimum
-    if (iteration % 5 == 4)
+  };
+
+  std::vector<double> trial(x.size()), dataAtTrial(nv, 0.0), vertexDamping(nv, 0.0);
+  int decisions = 0;
+  Eigen::VectorXd gradient(n);
+  double damping = 1e-4; // Levenberg damping, relative to the mean diagonal
+  int iteration = 0;
+  for (; iteration < Options.maxIterations; ++iteration)
+  {
+    linearise();
+    // Gauss-Newton matrix and gradient: each cloth term 1/2 k r^2 gives k grad(r) grad(r)^T,
+    // each data term c M.
+    H.setZero();
+    gradient.setZero();
+    double clothAtX = 0;
+    auto& slots = Newton->TermSlots;
+    const bool haveSlots = !slots.empty();
+    std::size_t next = 0;
+    Cloth.forEachTerm(x.data(),
+                      [&](const ClothTerm& t)
+                      {
+                        clothAtX += t.energy;
+                        for (int a = 0; a < t.count; ++a)
+                        {
+                          for (int k = 0; k < 3; ++k)
+                            gradient[3 * t.vertex[a] + k] +=
+                                t.weight * t.residual * t.gradient[a][k];
+                          for (int b = a; b < t.count; ++b)
+                          {
+                            if (!haveSlots)
+                              slots.push_back(H.slotOf(t.vertex[a], t.vertex[b]));
+                            H.addOuter(slots[next++], t.gradient[a], t.gradient[b], t.weight);
+                          }
+                        }
+                      });
+    for (std::size_t v = 0; v < nv; ++v)
+      if (c[v] != 0)
+      {
+        const PlaneQuadric& q = quadric[v];
+        const double block[9] = {c[v] * q.matrix[0], c[v] * q.matrix[1], c[v] * q.matrix[2],
+                                 c[v] * q.matrix[1], c[v] * q.matrix[3], c[v] * q.matrix[4],
+                                 c[v] * q.matrix[2], c[v] * q.matrix[4], c[v] * q.matrix[5]};
+        H.addToDiagonalBlock(static_cast<std::int64_t>(v), block);
+        for (int k = 0; k < 3; ++k)
+          gradient[static_cast<Eigen::Index>(3 * v + k)] += c[v] * q.vector[k];
+      }
+    const double energyAtX = clothAtX + distanceEnergy(x.data(), field, weights, nullptr);
+    const double meanDiagonal = std::max(H.diagonal().mean(), 1e-300);
+
+    // One preconditioner per iteration, at the damping of its first attempt; later attempts
+    // (more damping) reuse it. Damping is global (Levenberg) plus per vertex: where a vertex's
+    // data term keeps breaking the model's promise (it sits on a ridge of the field, between
+    // two parts of the data), that vertex alone is damped, so it does not stall the others.
+    bool accepted = false, converged = false;
+    for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
     {
-      decideWeights(x);
-      std::fill(gradient.begin(), gradient.end(), 0.0);
-      e = energy(x.data(), field, weights, gradient.data());
+      Eigen::VectorXd shift(n);
+      for (std::size_t v = 0; v < nv; ++v)
+        shift.segment<3>(static_cast<Eigen::Index>(3 * v))
+            .setConstant(damping * meanDiagonal + vertexDamping[v]);
+      H.addToDiagonal(shift);
+      if (attempt == 0)
+      {
+        const auto P = H.traceMatrix();
+        if (!Newton->Analysed)
+        {
+          Newton->Preconditioner.analyzePattern(P);
+          Newton->Analysed = true;
+        }
+        Newton->Preconditioner.factorize(P);
+      }
+      int cgIterations = 0;
+      const Eigen::VectorXd step =
+          Newton->Preconditioner.info() == Eigen::Success
+              ? conjugateGradients(
+                    H.matrix(), -gradient,
+                    [&](const Eigen::VectorXd& r) { return Newton->precondition(r); },
+                    StepTolerance, 200, cgIterations)
+              : Eigen::VectorXd(-gradient.cwiseQuotient(shift));
+      H.addToDiagonal(-shift);
+      for (std::size_t i = 0; i < x.size(); ++i)
+        trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
+      // The decrease the quadratic model promises: -(gradient.step + step.H.step / 2).
+      const double predicted =
+          -(gradient.dot(step) + 0.5 * step.dot(H.matrix().selfadjointView<Eigen::Lower>() * step));
+      const double actual =
+          energyAtX - Cloth.value(trial.data()) -
+          distanceEnergy(trial.data(), field, weights, nullptr, dataAtTrial.data());
+      if (predicted > 0 && actual > 0.1 * predicted)
+      {
+        accepted = true;
+        x.swap(trial);
+        if (actual > 0.75 * predicted)
+          damping = std::max(damping * 0.3, 1e-9);
+        for (double& d : vertexDamping)
+          d *= 0.3;
+        converged = actual <= Options.tolerance * std::abs(energyAtX) ||
+                    step.cwiseAbs().maxCoeff() <= SettledStep * Voxel;
+        continue;
+      }
+      // Which vertices broke the promise: their data energy at the trial against the model's.
+      const double shortfall = predicted - actual;
+      bool blamed = false;
+      for (std::size_t v = 0; v < nv && shortfall > 0; ++v)
+      {
+        if (c[v] == 0)
+          continue;
+        const double promised = 0.5 * c[v] * quadric[v](&step[static_cast<Eigen::Index>(3 * v)]);
+        if (dataAtTrial[v] - promised > 0.2 * shortfall)
+        {
+          vertexDamping[v] = 10 * std::max(vertexDamping[v], c[v]);
+          blamed = true;
+        }
+      }
+      if (!blamed)
+        damping *= 10;
     }
+    // Settled: decide the normal test again at the new shape (at most twice a frame); go on only
+    // if that changed which vertices see the data.
+    if (accepted && converged && decisions < 2 && decideWeights(x) > 0)
+    {
+      ++decisions;
+      continue;
+    }
+    if (!accepted || converged)
+      break; // no step decreases E any more, or the last one barely moved: a (local) minimum
   }
-  return evaluations;
+  return iteration + 1;
 }
 
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
@@ -301,10 +455,12 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   // Data weights: the normal test and the outlier cut-off, decided at a given shape.
   std::vector<double> weights(nv, haveData ? 1.0 : 0.0);
   Cells.assign(nv, VoxelCell{}); // a new field
-  auto decideWeights = [&](const std::vector<double>& x)
+  // Returns how many vertices changed side.
+  auto decideWeights = [&](const std::vector<double>& x) -> std::size_t
   {
     if (!haveData)
-      return;
+      return 0;
+    std::size_t changed = 0;
     std::vector<double> vertexNormals(3 * nv);
     Mesh.vertexNormals(x.data(), vertexNormals.data());
     const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
@@ -319,9 +475,11 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
                                  vertexNormals[3 * v + 2] * n[2];
         keep = agreement >= cosLimit;
       }
+      changed += (weights[v] != 0) != keep;
       weights[v] = keep ? 1.0 : 0.0;
       result.rejected[v] = keep ? 0 : 1;
     }
+    return changed;
   };
 
   Objective objective{this, haveData ? &field : nullptr, &weights};
@@ -437,12 +595,13 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       }
       previous = e;
       before = x;
-      // Stop when ten iterations gained less than the tolerance (relative).
       recent.push_back(e);
       if (recent.size() > 10)
       {
         const double gained = recent[recent.size() - 11] - e;
-        if (gained <= Options.tolerance * std::abs(e))
+        // Steepest descent's steps are short (h < 2 / k_max), so its gains are small long before
+        // it settles: it stops at a tenth of the relative gain the other solvers stop at.
+        if (gained <= 0.1 * Options.tolerance * std::abs(e))
           break;
       }
       for (std::size_t v = 0; v < nv; ++v)

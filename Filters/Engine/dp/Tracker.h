@@ -12,7 +12,8 @@
  *          normal and its nearest point's normal differ by more than normalTestDegrees) or is
  *          farther than outlierDistance from the data. P(D) = D in the paper; by default
  *          D^2 / (2 voxel). D is by default the distance to the tangent planes of the nearest
- *          points (DistanceField::sampleToPlanes) rather than to the points themselves.
+ *          points (DistanceField::sampleToPlanes: the weighted RMS over the 8 voxel corners
+ *          around x_i) rather than to the points themselves.
  *
  * Beyond the paper (each measured in BenchmarkTracker; the paper's choices stay as options):
  * the plane distance and the squared penalty remove the pull toward individual samples that
@@ -24,15 +25,21 @@
  * Solvers on the same energy:
  *   SteepestDescent (the paper, eq. 2-3): x <- x - h grad E with h = 1.9 / k_max, k_max the
  *     largest eigenvalue of the Hessian estimated by power iteration (halved where a step
- *     would raise E); stops when ten iterations gain less than the tolerance (relative). With
- *     provisional determination (PD), every 5 iterations a vertex whose net motion is under a
- *     quarter of the path it stepped (it jitters in place) is frozen, until a neighbour moves
- *     steadily (net motion over half its path).
- *   GaussNewton (default): damped Gauss-Newton steps on the same E: each cloth term
- *     1/2 k r^2 contributes k grad(r) grad(r)^T, each distance term s_i D_i contributes
- *     s_i / max(D_i, voxel) grad(D_i) grad(D_i)^T (iteratively reweighted least squares, whose
- *     fixed point is the minimum of the sum of distances); the sparse system is solved by
- *     Eigen's LDL^T with Levenberg damping, and every step is accepted only if E decreases.
+ *     would raise E); stops when ten iterations gain less than a tenth of the tolerance
+ *     (relative). With provisional determination (PD), every 5 iterations a vertex whose net
+ *     motion is under a quarter of the path it stepped (it jitters in place) is frozen, until a
+ *     neighbour moves steadily (net motion over half its path).
+ *   GaussNewton (default): Levenberg-Marquardt on the same E. Each cloth term 1/2 k r^2
+ *     contributes k grad(r) grad(r)^T; each vertex's data term the Gauss-Newton quadric of
+ *     its D^2 with the tangent planes held (DistanceField::sampleToPlanes; for the paper's D,
+ *     reweighted by 1 / max(D, voxel), whose fixed point minimises the sum of distances). The
+ *     matrix has a fixed sparsity pattern (the mesh's), assembled in place; each step is an
+ *     inexact Newton step, conjugate gradients preconditioned by the factorised matrix of its
+ *     3x3 blocks' traces (a third of the unknowns). A step is kept when E falls by at least a
+ *     tenth of what the model promised; where one vertex's data term breaks that promise (it
+ *     sits between two parts of the data), that vertex alone is damped. A frame ends when E's
+ *     relative decrease falls under the tolerance or no vertex moves a tenth of a voxel; the
+ *     normal test is then decided again at the new shape (twice at most).
  *   LBFGS: quasi-Newton (libLBFGS, More-Thuente line search) on the same E and gradient.
  * Motion prediction (MP): the start of frame t is the minimum of E along the constant, linear
  * and quadratic extrapolations of the trajectories (a 1-D search on each).
@@ -52,6 +59,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <vector>
 
 namespace dp
@@ -75,7 +83,7 @@ enum class TrackerSolver
 struct TrackerOptions
 {
   ClothParameters cloth;
-  double distanceWeight = 300.0;   // k_dis
+  double distanceWeight = 100.0;   // k_dis
   double normalTestDegrees = 90.0; // >= 180 switches the normal test off
   double outlierDistance = 0.0;    // world units; 0: no cut-off
   DistanceMeasure distanceMeasure = DistanceMeasure::Planes;
@@ -92,7 +100,7 @@ struct TrackerOptions
   bool motionPrediction = true;
   bool provisionalDetermination = true; // steepest descent only
   int maxIterations = 300;
-  double tolerance = 1e-4; // on the step (x L) and the relative energy decrease
+  double tolerance = 1e-3; // relative energy decrease that ends a solve
 };
 
 struct FrameResult
@@ -117,6 +125,7 @@ public:
   // The cloth energy refers to the tracker's own mesh: a tracker does not move.
   Tracker(const Tracker&) = delete;
   Tracker& operator=(const Tracker&) = delete;
+  ~Tracker();
 
   /**
    * Fits the mesh to the next frame's points (x y z each; normals nx ny nz each or nullptr to
@@ -143,10 +152,13 @@ public:
 
 private:
   std::vector<double> predict() const;
+  double distanceEnergy(const double* x, const DistanceField* field,
+                        const std::vector<double>& weights, double* gradient,
+                        double* perVertex = nullptr) const;
   DistanceSample sampleData(const DistanceField& field, const double* x, std::size_t vertex) const;
   int solveGaussNewton(std::vector<double>& x, const DistanceField* field,
                        std::vector<double>& weights,
-                       const std::function<void(const std::vector<double>&)>& decideWeights) const;
+                       const std::function<std::size_t(const std::vector<double>&)>& decideWeights);
 
   TriangleMesh Mesh;
   std::vector<double> Template;
@@ -159,6 +171,8 @@ private:
   mutable std::vector<VoxelCell> Cells;
   double Voxel = 0;
   std::vector<std::vector<double>> History; // the last three results, most recent last
+  struct NewtonState;
+  std::unique_ptr<NewtonState> Newton; // made at the first Gauss-Newton solve
 };
 
 } // namespace dp
