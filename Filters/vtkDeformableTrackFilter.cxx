@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDeformableTrackFilter.h"
 
+#include "dp/SurfaceReconstruction.h"
 #include "dp/Tracker.h"
 #include "vtkDPPointSetAccess.h"
 
@@ -209,7 +210,8 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
 
     if (!in.Tracker)
     {
-      // The template: input 1, else frame 0's own polygons.
+      // The template: input 1; else frame 0's own polygons; else a surface reconstructed from
+      // frame 0's points.
       vtkPolyData* mesh = vtkPolyData::GetData(inputVector[1], 0);
       const bool fromInput = mesh != nullptr;
       if (!mesh)
@@ -217,14 +219,40 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       std::vector<std::int64_t> triangles;
       std::vector<double> positions;
       const char* why = "";
-      if (!vtkDP::triangleMesh(mesh, triangles, positions, why))
+      if (fromInput || (mesh && mesh->GetNumberOfPolys() > 0))
       {
-        request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-        vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
-                                    : "no template: connect a template mesh to input 1, or give "
-                                      "frame 0 polygons; frame 0 cannot be used: ")
-                      << why);
-        return 0;
+        if (!vtkDP::triangleMesh(mesh, triangles, positions, why))
+        {
+          request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+          vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
+                                      : "frame 0's polygons cannot be used as the template: ")
+                        << why);
+          return 0;
+        }
+      }
+      else
+      {
+        const vtkDP::TargetPoints first = vtkDP::finitePoints(input);
+        try
+        {
+          const std::vector<float> normals =
+              first.normals.empty() ? dp::estimateNormals(first.xyz.data(), first.ids.size())
+                                    : first.normals;
+          dp::ReconstructionOptions reconstruction;
+          reconstruction.targetVertices = static_cast<std::size_t>(this->TemplateVertices);
+          dp::ReconstructedMesh surface = dp::reconstructSurface(first.xyz.data(), normals.data(),
+                                                                 first.ids.size(), reconstruction);
+          triangles = std::move(surface.triangles);
+          positions = std::move(surface.positions);
+        }
+        catch (const std::exception& e)
+        {
+          request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+          vtkErrorMacro(<< "no template: connect a template mesh to input 1, or give frame 0 "
+                           "polygons; a surface could not be reconstructed from frame 0's "
+                        << first.ids.size() << " points: " << e.what());
+          return 0;
+        }
       }
       dp::TrackerOptions options;
       options.cloth = {this->StretchStiffness, this->ShearStiffness, this->BendStiffness};
@@ -324,5 +352,6 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ProvisionalDetermination: " << this->ProvisionalDetermination << "\n";
   os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
   os << indent << "Tolerance: " << this->Tolerance << "\n";
+  os << indent << "TemplateVertices: " << this->TemplateVertices << "\n";
   os << indent << "CachedFrames: " << this->Internal->Cache.size() << "\n";
 }

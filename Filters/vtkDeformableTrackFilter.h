@@ -11,7 +11,10 @@
  * solvers). No skeleton, no correspondences.
  *
  * The template is input 1 when connected (a vtkPolyData with polygons), else frame 0's own
- * polygons. The output has the template's connectivity; its points follow the requested time.
+ * polygons, else a surface reconstructed from frame 0's points (dp::reconstructSurface: signed
+ * distance to the points' tangent planes on an OpenVDB grid, meshed at the voxel size that
+ * gives about TemplateVertices vertices; frame 0's "Normals" are used when present, else
+ * estimated). The output has the template's connectivity; its points follow the requested time.
  * Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's points,
  * -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or outlier
  * cut-off). Field data: "FrameIndex", "Iterations", "InternalEnergy", "DistanceEnergy",
@@ -136,6 +139,13 @@ public:
   vtkGetMacro(Tolerance, double);
   ///@}
 
+  ///@{
+  /** Vertex count wanted for a template reconstructed from frame 0's points (used only without
+   *  input 1 and when frame 0 has no polygons; approximate; default 1000). */
+  vtkSetClampMacro(TemplateVertices, int, 20, 10000000);
+  vtkGetMacro(TemplateVertices, int);
+  ///@}
+
   /** Number of frames computed and cached so far. */
   int GetNumberOfCachedFrames();
 
@@ -164,6 +174,7 @@ protected:
   vtkTypeBool ProvisionalDetermination = true;
   int MaximumIterations = 300;
   double Tolerance = 1e-3;
+  int TemplateVertices = 1000;
 
 private:
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

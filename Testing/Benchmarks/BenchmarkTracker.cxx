@@ -11,6 +11,7 @@
 
 #include "dp/AnimatedMesh.h"
 #include "dp/FrameSequence.h"
+#include "dp/SurfaceReconstruction.h"
 #include "dp/SurfaceSampler.h"
 #include "dp/Tracker.h"
 
@@ -22,6 +23,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkQuadricDecimation.h"
+#include "vtkSmartPointer.h"
 #include "vtkTriangle.h"
 
 #include <cmath>
@@ -37,10 +39,18 @@ namespace
 {
 using namespace dp::bench;
 
-vtkNew<vtkPolyData> toPolyData(const std::vector<double>& positions,
-                               const std::vector<std::int64_t>& triangles)
+bool Verbose = false;          // --verbose: one line per frame
+std::uint64_t SamplerSeed = 1; // --seed: which random samples the frames get
+double NoiseFraction = 0;      // --noise: Gaussian noise on the samples, as a share of the diagonal
+std::size_t Holes = 0;         // --holes: holes cut in every frame (radius 5% of the diagonal)
+// --oracle: diagnostics that start each frame from the ground truth: "previous" (one-step error
+// from the true previous frame), "same" (how far the energy's minimum lies from the truth).
+std::string Oracle;
+
+vtkSmartPointer<vtkPolyData> toPolyData(const std::vector<double>& positions,
+                                        const std::vector<std::int64_t>& triangles)
 {
-  vtkNew<vtkPolyData> pd;
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
   vtkNew<vtkPoints> points;
   points->SetDataTypeToDouble();
   for (std::size_t i = 0; i < positions.size(); i += 3)
@@ -65,30 +75,52 @@ struct Template
   std::vector<double> barycentric;      // 3 per vertex
 };
 
+// How the template is made: frame 0 simplified (vtkQuadricDecimation), or a surface
+// reconstructed from frame 0's random samples (dp::reconstructSurface, the path for data
+// without a template).
+bool Reconstruct = false;
+
 Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
 {
   Template t;
   const std::vector<double> frame0 = mesh.positions(0);
   const auto& full = mesh.triangles();
-  if (targetVertices == 0 || targetVertices >= mesh.numberOfVertices())
-  {
-    t.triangles = full;
-    t.positions = frame0;
-    return t; // vertices are the ground truth's own
-  }
-  vtkNew<vtkQuadricDecimation> decimate;
   auto input = toPolyData(frame0, full);
-  decimate->SetInputData(input);
-  decimate->SetTargetReduction(1.0 - static_cast<double>(targetVertices) /
-                                         static_cast<double>(mesh.numberOfVertices()));
-  decimate->VolumePreservationOn();
-  // Flat regions make the quadrics singular; VTK then warns once per vertex and falls back
-  // to the edge's midpoint, which is fine here.
-  const int warnings = vtkObject::GetGlobalWarningDisplay();
-  vtkObject::GlobalWarningDisplayOff();
-  decimate->Update();
-  vtkObject::SetGlobalWarningDisplay(warnings);
-  vtkPolyData* coarse = decimate->GetOutput();
+  vtkSmartPointer<vtkPolyData> coarse;
+  if (Reconstruct)
+  {
+    dp::SamplerOptions sampling;
+    sampling.seed = SamplerSeed;
+    const dp::PointCloud cloud = dp::sampleSurface(frame0, full, sampling, 0);
+    dp::ReconstructionOptions o;
+    o.targetVertices = targetVertices ? targetVertices : mesh.numberOfVertices();
+    const dp::ReconstructedMesh r = dp::reconstructSurface(
+        cloud.points.data(), cloud.normals.data(), cloud.numberOfPoints(), o);
+    coarse = toPolyData(r.positions, r.triangles);
+  }
+  else
+  {
+    if (targetVertices == 0 || targetVertices >= mesh.numberOfVertices())
+    {
+      t.triangles = full;
+      t.positions = frame0;
+      return t; // vertices are the ground truth's own
+    }
+    vtkNew<vtkQuadricDecimation> decimate;
+    decimate->SetInputData(input);
+    decimate->SetTargetReduction(1.0 - static_cast<double>(targetVertices) /
+                                           static_cast<double>(mesh.numberOfVertices()));
+    decimate->VolumePreservationOn();
+    // Flat regions make the quadrics singular; VTK then warns once per vertex and falls back
+    // to the edge's midpoint, which is fine here.
+    const int warnings = vtkObject::GetGlobalWarningDisplay();
+    vtkObject::GlobalWarningDisplayOff();
+    decimate->Update();
+    vtkObject::SetGlobalWarningDisplay(warnings);
+    coarse = decimate->GetOutput();
+  }
+  // Each template vertex sits at the closest point of the frame-0 mesh: its barycentric
+  // position there, carried through the frames, is its ground truth.
   vtkNew<vtkCellLocator> locator;
   locator->SetDataSet(input);
   locator->BuildLocator();
@@ -100,7 +132,6 @@ Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
     vtkIdType cellId = -1;
     int subId = 0;
     locator->FindClosestPoint(p, closest, cell, cellId, subId, d2);
-    // Barycentric coordinates of the closest point in its triangle.
     const std::int64_t* v = &full[3 * cellId];
     double a[3], b[3], c[3], w[3];
     for (int k = 0; k < 3; ++k)
@@ -110,7 +141,11 @@ Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
       c[k] = frame0[3 * v[2] + k];
     }
     vtkTriangle::BarycentricCoords(closest, a, b, c, w);
-    t.positions.insert(t.positions.end(), closest, closest + 3);
+    // A simplified vertex sits on the surface; a reconstructed one up to half a voxel off it,
+    // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is
+    // then that offset.
+    const double* at = Reconstruct ? p : closest;
+    t.positions.insert(t.positions.end(), at, at + 3);
     t.onTriangle.push_back(cellId);
     t.barycentric.insert(t.barycentric.end(), w, w + 3);
   }
@@ -148,14 +183,6 @@ struct Run
   double vertexRms = 0, surfaceRms = 0, msPerFrame = 0;
   std::size_t frames = 0;
 };
-
-bool Verbose = false;          // --verbose: one line per frame
-std::uint64_t SamplerSeed = 1; // --seed: which random samples the frames get
-double NoiseFraction = 0;      // --noise: Gaussian noise on the samples, as a share of the diagonal
-std::size_t Holes = 0;         // --holes: holes cut in every frame (radius 5% of the diagonal)
-// --oracle: diagnostics that start each frame from the ground truth: "previous" (one-step error
-// from the true previous frame), "same" (how far the energy's minimum lies from the truth).
-std::string Oracle;
 
 Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
           std::size_t frames, std::size_t points)
@@ -328,6 +355,8 @@ int main(int argc, char** argv)
         Holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
       else if (arg == "--seed")
         SamplerSeed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
+      else if (arg == "--template")
+        Reconstruct = oneOf(arg, optionValue(argc, argv, i), "simplified", "reconstructed");
       else if (arg == "--ablation")
         ablation = true;
       else if (arg == "--scaling")

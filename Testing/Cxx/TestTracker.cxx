@@ -289,6 +289,25 @@ TEST(Tracker, RefusesOptionsOutOfRange)
   EXPECT_THROW(make(o), std::invalid_argument);
 }
 
+TEST(Tracker, RefusesATemplateWithADegenerateTriangle)
+{
+  MeshData m = tube();
+  // Squash triangle 7 onto a line: its third vertex onto the middle of the opposite edge.
+  const std::int64_t* t = &m.triangles[3 * 7];
+  for (int k = 0; k < 3; ++k)
+    m.positions[3 * t[2] + k] = 0.5 * (m.positions[3 * t[0] + k] + m.positions[3 * t[1] + k]);
+  try
+  {
+    dp::Tracker tracker(dp::TriangleMesh(m.triangles, m.positions.size() / 3), m.positions,
+                        dp::TrackerOptions{});
+    FAIL() << "a template with a flat triangle was accepted";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("degenerate triangle"), std::string::npos) << e.what();
+  }
+}
+
 TEST(Tracker, FollowsANoisySequenceWithEverySolver)
 {
   const Sequence s = makeSequence(10, 0.002, 0, 6000);

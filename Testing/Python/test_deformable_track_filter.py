@@ -87,12 +87,35 @@ class TestDeformableTrackFilter(TempDirTestCase):
         self.assertLess(rms, 0.03 * diagonal)
         self.assertEqual(f.GetOutput().GetNumberOfPolys(), truth.GetOutput().GetNumberOfPolys())
 
-    def test_without_any_template_it_says_what_to_do(self):
+    def test_without_any_template_it_reconstructs_one_from_frame_zero(self):
+        from scipy.spatial import cKDTree
         f = dynamicpoints.vtkDeformableTrackFilter()
         f.SetInputConnection(self.source.GetOutputPort())
+        f.SetTemplateVertices(300)
+        f.UpdateTimeStep(3)
+        out = dsa.WrapDataObject(f.GetOutput())
+        points = np.asarray(out.Points)
+        self.assertGreater(f.GetOutput().GetNumberOfPolys(), 0)
+        self.assertTrue(150 <= len(points) <= 600, len(points))
+        # The tracked mesh lies on frame 3's true surface (its dense truth vertices).
+        truth = self.truth(3)
+        diagonal = np.linalg.norm(truth.max(axis=0) - truth.min(axis=0))
+        gaps, _ = cKDTree(truth).query(points)
+        self.assertLess(np.median(gaps), 0.01 * diagonal)
+
+    def test_without_a_usable_template_it_says_what_to_do(self):
+        from vtkmodules.vtkCommonCore import vtkPoints
+        pts = vtkPoints()
+        for p in np.random.default_rng(1).random((5, 3)):
+            pts.InsertNextPoint(*p)
+        few = vtkPolyData()
+        few.SetPoints(pts)
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputData(few)
         rec = MessageRecorder(f)
-        f.UpdateTimeStep(0)
+        f.Update()
         self.assertIn("no template", rec.error_text)
+        self.assertIn("could not be reconstructed from frame 0's 5 points", rec.error_text)
         g = self.tracker()
         g.SetTemplateConnection(None)
         g.SetInputData(1, vtkPolyData())

@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace dp
 {
@@ -109,6 +110,23 @@ ClothEnergy::ClothEnergy(const TriangleMesh& mesh, const double* rest, const Clo
   if (!(area > 0) || !std::isfinite(area))
     throw std::invalid_argument("the template mesh has no area");
   L = std::sqrt(area);
+  // A (nearly) degenerate rest triangle makes its corner angles' gradients explode (they go as
+  // 1 / edge length): refuse it by name rather than track with a matrix of 1e20s.
+  const auto& tris = mesh.triangles();
+  const double tiny = 1e-12 * area / static_cast<double>(mesh.numberOfTriangles());
+  for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+  {
+    const V3 a = at(rest, tris[3 * t]), b = at(rest, tris[3 * t + 1]),
+             c = at(rest, tris[3 * t + 2]);
+    const double triangleArea = 0.5 * norm(cross(b - a, c - a));
+    if (!(triangleArea > tiny))
+      throw std::invalid_argument(
+          "the template mesh has a degenerate triangle: triangle " + std::to_string(t) +
+          " (vertices " + std::to_string(tris[3 * t]) + ", " + std::to_string(tris[3 * t + 1]) +
+          ", " + std::to_string(tris[3 * t + 2]) + ") has " +
+          (triangleArea > 0 ? "an area of " + std::to_string(triangleArea / area) + " of the mesh's"
+                            : std::string("no area")));
+  }
   Rest = restStateOf(rest);
   std::vector<double> vertexArea = mesh.vertexAreas(rest);
   for (const auto& h : mesh.hinges())

@@ -15,7 +15,8 @@
  * (its share of the template's area A), so that totals do not change when the same shape is
  * subdivided. vertexMass() gives the matching masses m_i = A_i / A (summing to 1).
  *
- * Limits: degenerate (zero-area) triangles in the *current* shape give zero shear/bend
+ * Limits: the template must have no (nearly) degenerate triangle (area under 1e-12 of the mean:
+ * refused with its index); degenerate triangles in the *current* shape give zero shear/bend
  * gradients for their corners/hinges instead of NaN.
  */
 #pragma once
