@@ -270,6 +270,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
                        : this->Solver == STEEPEST_DESCENT ? dp::TrackerSolver::SteepestDescent
                                                           : dp::TrackerSolver::GaussNewton;
       options.motionPrediction = this->MotionPrediction;
+      options.rigidAlignment = this->RigidAlignment;
       options.provisionalDetermination = this->ProvisionalDetermination;
       options.maxIterations = this->MaximumIterations;
       options.tolerance = this->Tolerance;
@@ -284,6 +285,16 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
         request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
         vtkErrorMacro(<< "cannot track with this template: " << e.what());
         return 0;
+      }
+      // Slivers slide flat without the shear terms: say so once, with the remedy.
+      const double slivers = in.Tracker->mesh().poorlyShapedShare(positions.data());
+      if (this->ShearStiffness == 0 && slivers > 0.002)
+      {
+        vtkWarningMacro(<< 100 * slivers
+                        << "% of the template's triangles are slivers (nearly flat): with "
+                           "ShearStiffness 0 they can fold; set ShearStiffness to about 0.05, "
+                           "or give a better-shaped template (e.g. leave the template input "
+                           "empty to reconstruct one from frame 0's points)");
       }
       in.Polys = vtkSmartPointer<vtkCellArray>::New();
       for (std::size_t t = 0; t < triangles.size(); t += 3)
@@ -349,6 +360,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "VoxelSize: " << this->VoxelSize << "\n";
   os << indent << "BandWidth: " << this->BandWidth << "\n";
   os << indent << "MotionPrediction: " << this->MotionPrediction << "\n";
+  os << indent << "RigidAlignment: " << this->RigidAlignment << "\n";
   os << indent << "ProvisionalDetermination: " << this->ProvisionalDetermination << "\n";
   os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
   os << indent << "Tolerance: " << this->Tolerance << "\n";

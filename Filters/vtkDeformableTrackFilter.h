@@ -87,7 +87,7 @@ public:
   ///@}
 
   ///@{
-  /** Weights of the energy terms (all dimensionless; defaults 100, 1, 0.05, 0.5). */
+  /** Weights of the energy terms (all dimensionless; defaults 50, 1, 0, 0.5). */
   vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(DistanceWeight, double);
   vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
@@ -132,6 +132,14 @@ public:
   ///@}
 
   ///@{
+  /** Move the predicted mesh rigidly onto each frame's points before deforming it (default on):
+   *  keeps a turning shape from slipping along its surface. */
+  vtkSetMacro(RigidAlignment, vtkTypeBool);
+  vtkGetMacro(RigidAlignment, vtkTypeBool);
+  vtkBooleanMacro(RigidAlignment, vtkTypeBool);
+  ///@}
+
+  ///@{
   /** Iteration limit per frame and relative tolerance of the stopping rule. */
   vtkSetClampMacro(MaximumIterations, int, 1, VTK_INT_MAX);
   vtkGetMacro(MaximumIterations, int);
@@ -159,18 +167,19 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   int Solver = GAUSS_NEWTON;
-  double DistanceWeight = 100.0;
+  double DistanceWeight = 50.0;
   int DistanceMeasure = DISTANCE_TO_PLANES;
   vtkTypeBool SquaredDistance = true;
   double RestUpdate = 0.3;
   double StretchStiffness = 1.0;
-  double ShearStiffness = 0.05;
+  double ShearStiffness = 0.0;
   double BendStiffness = 0.5;
   double NormalTestAngle = 90.0;
   double OutlierDistance = 0.0;
   double VoxelSize = 0.0;
   double BandWidth = 0.0;
   vtkTypeBool MotionPrediction = true;
+  vtkTypeBool RigidAlignment = true;
   vtkTypeBool ProvisionalDetermination = true;
   int MaximumIterations = 300;
   double Tolerance = 1e-3;

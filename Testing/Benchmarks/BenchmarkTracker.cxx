@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Benchmark: the paper's experiments on ground-truth animated meshes. Per frame, random surface
-// samples (20k by default) are the data; the template is frame 0, at full resolution or
-// simplified (vtkQuadricDecimation) to a vertex count; the ground truth of a simplified vertex
-// is its barycentric position on the frame-0 mesh, carried through the frames. Prints vertex
+// samples (20k by default) are the data; the template is frame 0 at full resolution, or one of
+// about a given vertex count: reconstructed from frame 0's samples (the default, what the filter
+// does without a template) or frame 0 simplified (vtkQuadricDecimation). The ground truth of a
+// template vertex is the barycentric position of its closest point on the frame-0 mesh,
+// carried through the frames. Prints vertex
 // RMS against the ground truth (the paper's measure) and RMS distance to the true surface,
 // both also in % of the bounding-box diagonal, ms per frame and peak memory; optionally the
 // paper's Table 2 ablation (none / MP / PD / both) for a solver.
@@ -78,7 +80,7 @@ struct Template
 // How the template is made: frame 0 simplified (vtkQuadricDecimation), or a surface
 // reconstructed from frame 0's random samples (dp::reconstructSurface, the path for data
 // without a template).
-bool Reconstruct = false;
+bool Reconstruct = true; // --template reconstructed|simplified
 
 Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
 {
@@ -87,25 +89,25 @@ Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
   const auto& full = mesh.triangles();
   auto input = toPolyData(frame0, full);
   vtkSmartPointer<vtkPolyData> coarse;
+  if (targetVertices == 0 || (!Reconstruct && targetVertices >= mesh.numberOfVertices()))
+  {
+    t.triangles = full;
+    t.positions = frame0;
+    return t; // full resolution: the vertices are the ground truth's own
+  }
   if (Reconstruct)
   {
     dp::SamplerOptions sampling;
     sampling.seed = SamplerSeed;
     const dp::PointCloud cloud = dp::sampleSurface(frame0, full, sampling, 0);
     dp::ReconstructionOptions o;
-    o.targetVertices = targetVertices ? targetVertices : mesh.numberOfVertices();
+    o.targetVertices = targetVertices;
     const dp::ReconstructedMesh r = dp::reconstructSurface(
         cloud.points.data(), cloud.normals.data(), cloud.numberOfPoints(), o);
     coarse = toPolyData(r.positions, r.triangles);
   }
   else
   {
-    if (targetVertices == 0 || targetVertices >= mesh.numberOfVertices())
-    {
-      t.triangles = full;
-      t.positions = frame0;
-      return t; // vertices are the ground truth's own
-    }
     vtkNew<vtkQuadricDecimation> decimate;
     decimate->SetInputData(input);
     decimate->SetTargetReduction(1.0 - static_cast<double>(targetVertices) /
@@ -381,6 +383,8 @@ int main(int argc, char** argv)
                                       : dp::DistanceMeasure::Planes;
       else if (arg == "--no-mp")
         options.motionPrediction = false;
+      else if (arg == "--no-rigid")
+        options.rigidAlignment = false;
       else if (arg == "--penalty")
         options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
       else if (arg == "--oracle")
@@ -414,7 +418,8 @@ int main(int argc, char** argv)
                "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE] "
                "[--tolerance T] [--max-iterations N]\n"
                "       [--measure planes|points] [--penalty squared|linear] [--rest-update B] "
-               "[--no-mp] [--oracle previous|same] [--scaling] [--scaling-sizes N,N,...]\n";
+               "[--no-mp] [--no-rigid] [--oracle previous|same] [--scaling] [--scaling-sizes "
+               "N,N,...]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -450,14 +455,20 @@ int main(int argc, char** argv)
     const std::size_t n =
         frames ? std::min(frames, mesh->numberOfFrames()) : mesh->numberOfFrames();
     const double diagonal = dp::boundingBoxDiagonal(mesh->positions(0));
-    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f, solver %s\n",
+    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f, solver %s, "
+                "%s templates\n",
                 name.c_str(), n, mesh->numberOfFrames(), mesh->numberOfVertices(), diagonal,
-                solverName(options.solver));
+                solverName(options.solver), Reconstruct ? "reconstructed" : "simplified");
     std::printf("%10s %14s %16s %12s %12s\n", "template", "vertex RMS", "surface RMS", "ms/frame",
                 "peak MiB");
     for (std::size_t size : sizes)
     {
       const Template t = makeTemplate(*mesh, size);
+      if (Verbose)
+        std::printf("  template: %zu vertices, %.1f%% of its triangles poorly shaped\n",
+                    t.positions.size() / 3,
+                    100 * dp::TriangleMesh(t.triangles, t.positions.size() / 3)
+                              .poorlyShapedShare(t.positions.data()));
       const Run r = track(*mesh, t, options, n, points);
       std::printf("%10zu %8.5f %5.2f%% %10.5f %5.2f%% %12.1f %12.1f\n", t.positions.size() / 3,
                   r.vertexRms, 100 * r.vertexRms / diagonal, r.surfaceRms,

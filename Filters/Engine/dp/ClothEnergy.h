@@ -15,6 +15,11 @@
  * (its share of the template's area A), so that totals do not change when the same shape is
  * subdivided. vertexMass() gives the matching masses m_i = A_i / A (summing to 1).
  *
+ * Shear is off by default (k_sh = 0): a triangulated surface whose edge lengths are held keeps
+ * its in-plane shape, and the angle terms measurably pull tracked shapes away from the truth
+ * (BenchmarkTracker, README). A template with slivers (nearly flat triangles) needs them: with
+ * edges alone a sliver's apex slides across its base at almost no cost.
+ *
  * Limits: the template must have no (nearly) degenerate triangle (area under 1e-12 of the mean:
  * refused with its index); degenerate triangles in the *current* shape give zero shear/bend
  * gradients for their corners/hinges instead of NaN.
@@ -33,7 +38,7 @@ namespace dp
 struct ClothParameters
 {
   double stretch = 1.0; // k_st
-  double shear = 0.05;  // k_sh
+  double shear = 0.0;   // k_sh: 0 = in-plane shape held by the edges alone (see below)
   double bend = 0.5;    // k_ben
 };
 

@@ -6,6 +6,8 @@
 
 #include <lbfgs.h>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
 
@@ -30,6 +32,12 @@ constexpr double StepTolerance = 0.3;
 constexpr double SettledStep = 0.1;
 // Planes: how far from a data point (in voxels) its tangent plane stands for the surface.
 constexpr double PlaneReach = 2.0;
+// Rigid pre-alignment: Gauss-Newton steps of the rotation and translation (each one is kept only
+// if it lowers the distance energy, so a few are enough to converge or stop).
+constexpr int RigidIterations = 10;
+// ... moving only along rigid motions the data holds at least this share as firmly as the firmest
+// (0.05 still let a waving sheet slide along its waves; 0.2 holds it and keeps a turning body).
+constexpr double RigidConstrained = 0.2;
 
 // What the solvers minimise: the tracker's energy with fixed data weights.
 struct Objective
@@ -420,6 +428,104 @@ int Tracker::solveGaussNewton(
   return iteration + 1;
 }
 
+void Tracker::alignRigidly(std::vector<double>& x, const DistanceField& field,
+                           const std::vector<double>& weights)
+{
+  // Point-to-plane ICP of the whole mesh: minimise sum_v m_v D_v(R x_v + t)^2 over a rotation R
+  // and a translation t, with each vertex's quadric (its tangent planes held) as its model.
+  const std::size_t nv = Mesh.numberOfVertices();
+  const auto& mass = Cloth.vertexMass();
+  const bool planes = Options.distanceMeasure == DistanceMeasure::Planes && !FrameNormals.empty();
+  for (int iteration = 0; iteration < RigidIterations; ++iteration)
+  {
+    Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+    double total = 0;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (weights[v] != 0)
+      {
+        centre += mass[v] * Eigen::Vector3d(&x[3 * v]);
+        total += mass[v];
+      }
+    if (total <= 0)
+      return;
+    centre /= total;
+    // Rotations act on r / radius so that both halves of the 6x6 system have the same units and
+    // the solve rounds alike at any scale of the data.
+    double radius = 0;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (weights[v] != 0)
+        radius += mass[v] * (Eigen::Vector3d(&x[3 * v]) - centre).squaredNorm();
+    radius = std::sqrt(radius / total);
+    if (!(radius > 0))
+      return;
+    Eigen::Matrix<double, 6, 6> A = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> b = Eigen::Matrix<double, 6, 1>::Zero();
+    double before = 0;
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      if (weights[v] == 0)
+        continue;
+      PlaneQuadric q;
+      if (planes)
+        field.sampleToPlanes(&x[3 * v], FrameNormals.data(), PlaneReach * Voxel, &Cells[v], &q);
+      else
+      {
+        const DistanceSample s = field.sample(&x[3 * v], &Cells[v]);
+        int m = 0;
+        for (int i = 0; i < 3; ++i)
+        {
+          q.vector[i] = s.distance * s.gradient[i];
+          for (int j = i; j < 3; ++j)
+            q.matrix[m++] = s.gradient[i] * s.gradient[j];
+        }
+        q.constant = s.distance * s.distance;
+      }
+      before += mass[v] * q.constant;
+      Eigen::Matrix3d M;
+      M << q.matrix[0], q.matrix[1], q.matrix[2], q.matrix[1], q.matrix[3], q.matrix[4],
+          q.matrix[2], q.matrix[4], q.matrix[5];
+      const Eigen::Vector3d g(q.vector[0], q.vector[1], q.vector[2]);
+      // d = w x r + t (r = x - centre): d = J [w; t] with J = [-[r]x, I].
+      const Eigen::Vector3d r = (Eigen::Vector3d(&x[3 * v]) - centre) / radius;
+      Eigen::Matrix<double, 3, 6> J;
+      J << 0, r.z(), -r.y(), 1, 0, 0, -r.z(), 0, r.x(), 0, 1, 0, r.y(), -r.x(), 0, 0, 0, 1;
+      A += mass[v] * J.transpose() * M * J;
+      b += mass[v] * J.transpose() * g;
+    }
+    // Move only along the motions the data pins down: on a flat or round part, sliding along
+    // the surface changes no plane distance, and a step there would follow the noise.
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eigen(A);
+    const double largest = eigen.eigenvalues()[5];
+    if (!(largest > 0))
+      return;
+    Eigen::Matrix<double, 6, 1> step = Eigen::Matrix<double, 6, 1>::Zero();
+    for (int i = 0; i < 6; ++i)
+      if (eigen.eigenvalues()[i] >= RigidConstrained * largest)
+        step -= eigen.eigenvectors().col(i) *
+                (eigen.eigenvectors().col(i).dot(b) / eigen.eigenvalues()[i]);
+    const Eigen::Vector3d w = step.head<3>() / radius, t = step.tail<3>();
+    const double angle = w.norm();
+    const Eigen::Matrix3d R = angle > 0 ? Eigen::AngleAxisd(angle, w / angle).toRotationMatrix()
+                                        : Eigen::Matrix3d::Identity();
+    std::vector<double> trial(x.size());
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      const Eigen::Vector3d y = R * (Eigen::Vector3d(&x[3 * v]) - centre) + centre + t;
+      std::copy(y.data(), y.data() + 3, &trial[3 * v]);
+    }
+    double after = 0;
+    for (std::size_t v = 0; v < nv; ++v)
+      if (weights[v] != 0)
+      {
+        const DistanceSample s = sampleData(field, &trial[3 * v], v);
+        after += mass[v] * s.distance * s.distance;
+      }
+    if (!(after < before))
+      return;
+    x.swap(trial);
+  }
+}
+
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
 {
   const auto start = std::chrono::steady_clock::now();
@@ -531,6 +637,11 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       }
   }
   decideWeights(x);
+  if (haveData && Options.rigidAlignment)
+  {
+    alignRigidly(x, field, weights);
+    decideWeights(x);
+  }
 
   if (!haveData)
   {

@@ -122,4 +122,26 @@ void TriangleMesh::vertexNormals(const double* positions, double* normals) const
   }
 }
 
+double TriangleMesh::poorlyShapedShare(const double* x, double threshold) const
+{
+  if (Triangles.empty())
+    return 0;
+  std::size_t poor = 0;
+  for (std::size_t t = 0; t < Triangles.size(); t += 3)
+  {
+    const double* p[3] = {x + 3 * Triangles[t], x + 3 * Triangles[t + 1], x + 3 * Triangles[t + 2]};
+    double squares = 0;
+    for (int e = 0; e < 3; ++e)
+      for (int k = 0; k < 3; ++k)
+        squares += (p[(e + 1) % 3][k] - p[e][k]) * (p[(e + 1) % 3][k] - p[e][k]);
+    const double u[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+    const double v[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+    const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                         u[0] * v[1] - u[1] * v[0]};
+    const double area = 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    poor += !(squares > 0 && 4 * std::sqrt(3.0) * area / squares >= threshold);
+  }
+  return static_cast<double>(poor) / static_cast<double>(Triangles.size() / 3);
+}
+
 } // namespace dp

@@ -42,6 +42,9 @@ public:
   /** Area-weighted (unnormalised face normals summed), normalised vertex normals. */
   void vertexNormals(const double* positions, double* normals) const;
   double totalArea(const double* positions) const;
+  /** The share of triangles whose shape quality 4 sqrt(3) area / (sum of squared edges) is under
+   *  `threshold` (1 for an equilateral triangle, 0 for a flat one): slivers. */
+  double poorlyShapedShare(const double* positions, double threshold = 0.1) const;
 
 private:
   std::vector<std::int64_t> Triangles;
