@@ -42,11 +42,8 @@ struct vtkDeformableTrackFilter::Internals
   {
     if (TimeSteps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
       return 0;
-    const double t = outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP());
-    // The last frame whose time is <= t (with a little slack for rounding).
-    const auto it =
-        std::upper_bound(TimeSteps.begin(), TimeSteps.end(), t + 1e-9 * std::max(1.0, std::abs(t)));
-    return it == TimeSteps.begin() ? 0 : static_cast<std::size_t>(it - TimeSteps.begin()) - 1;
+    return vtkDP::frameAtTime(TimeSteps,
+                              outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
   }
   void clear()
   {

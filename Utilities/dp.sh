@@ -25,7 +25,7 @@ packages=(
   libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
-  liblbfgs-dev
+  liblbfgs-dev libzstd-dev libtinygltf-dev
   python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri
 )
 

@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDPPointSetAccess.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkDataArray.h"
@@ -87,4 +90,10 @@ bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
   return true;
 }
 
+std::size_t frameAtTime(const std::vector<double>& steps, double t)
+{
+  const auto it =
+      std::upper_bound(steps.begin(), steps.end(), t + 1e-9 * std::max(1.0, std::abs(t)));
+  return it == steps.begin() ? 0 : static_cast<std::size_t>(it - steps.begin()) - 1;
+}
 } // namespace vtkDP

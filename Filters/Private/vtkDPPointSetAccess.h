@@ -28,6 +28,9 @@ TargetPoints finitePoints(vtkPointSet* input);
  *  `why` set) when the mesh has no polygons or a non-finite point. */
 bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
                   std::vector<double>& positions, const char*& why);
+/** The last of the ascending time `steps` at or before `t` (with a little slack for rounding);
+ *  0 when t is before the first. */
+std::size_t frameAtTime(const std::vector<double>& steps, double t);
 } // namespace vtkDP
 
 #endif

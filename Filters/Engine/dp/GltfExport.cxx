@@ -1,0 +1,175 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/GltfExport.h"
+
+#include <tiny_gltf.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <stdexcept>
+
+namespace dp
+{
+namespace
+{
+
+constexpr double FramesPerSecond = 24.0;
+
+// Appends `values` to the buffer (4-byte aligned) and adds a view and an accessor for them.
+int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int type,
+                std::size_t count, bool withBounds, int target)
+{
+  auto& data = model.buffers[0].data;
+  data.resize((data.size() + 3) & ~std::size_t{3});
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = data.size();
+  view.byteLength = values.size() * sizeof(float);
+  if (target)
+    view.target = target;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
+  data.insert(data.end(), bytes, bytes + view.byteLength);
+  model.bufferViews.push_back(view);
+
+  tinygltf::Accessor accessor;
+  accessor.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+  accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+  accessor.count = count;
+  accessor.type = type;
+  if (withBounds)
+  {
+    const std::size_t width = values.size() / std::max<std::size_t>(count, 1);
+    accessor.minValues.assign(width, std::numeric_limits<double>::infinity());
+    accessor.maxValues.assign(width, -std::numeric_limits<double>::infinity());
+    for (std::size_t i = 0; i < values.size(); ++i)
+    {
+      accessor.minValues[i % width] = std::min<double>(accessor.minValues[i % width], values[i]);
+      accessor.maxValues[i % width] = std::max<double>(accessor.maxValues[i % width], values[i]);
+    }
+  }
+  model.accessors.push_back(accessor);
+  return static_cast<int>(model.accessors.size()) - 1;
+}
+
+} // namespace
+
+void writeGlb(const std::string& path, const CompressedSequence& sequence)
+{
+  const PcaModel& m = sequence.pca.model;
+  if (m.layout != PcaLayout::Shapes)
+    throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
+  if (sequence.triangles.empty())
+    throw std::invalid_argument("glTF export needs triangles");
+  const std::size_t nv = m.vertices, nt = m.frames, k = m.components();
+
+  // Rescale each weight track into [0, 1]; fold the offset into the base.
+  Eigen::VectorXd base = m.mean;
+  Eigen::MatrixXd targets = m.basis;
+  Eigen::MatrixXd weights = m.weights; // Nt x k
+  for (std::size_t j = 0; j < k; ++j)
+  {
+    const double lo = weights.col(j).minCoeff(), hi = weights.col(j).maxCoeff();
+    base += lo * m.basis.col(j);
+    if (hi > lo)
+    {
+      targets.col(j) *= hi - lo;
+      weights.col(j) = (weights.col(j).array() - lo) / (hi - lo);
+    }
+    else
+    {
+      targets.col(j).setZero();
+      weights.col(j).setZero();
+    }
+  }
+
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "DynamicPoints";
+  model.buffers.resize(1);
+
+  std::vector<float> positions(base.data(), base.data() + base.size());
+  tinygltf::Primitive primitive;
+  primitive.mode = TINYGLTF_MODE_TRIANGLES;
+  primitive.attributes["POSITION"] =
+      addAccessor(model, positions, TINYGLTF_TYPE_VEC3, nv, true, TINYGLTF_TARGET_ARRAY_BUFFER);
+  {
+    auto& data = model.buffers[0].data;
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = data.size();
+    view.byteLength = sequence.triangles.size() * sizeof(std::uint32_t);
+    view.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+    for (std::int64_t index : sequence.triangles)
+    {
+      const auto v = static_cast<std::uint32_t>(index);
+      const auto* b = reinterpret_cast<const unsigned char*>(&v);
+      data.insert(data.end(), b, b + 4);
+    }
+    model.bufferViews.push_back(view);
+    tinygltf::Accessor indices;
+    indices.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+    indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+    indices.count = sequence.triangles.size();
+    indices.type = TINYGLTF_TYPE_SCALAR;
+    model.accessors.push_back(indices);
+    primitive.indices = static_cast<int>(model.accessors.size()) - 1;
+  }
+  tinygltf::Mesh mesh;
+  mesh.name = "tracked";
+  for (std::size_t j = 0; j < k; ++j)
+  {
+    std::vector<float> target(targets.col(j).data(), targets.col(j).data() + 3 * nv);
+    primitive.targets.push_back({{"POSITION", addAccessor(model, target, TINYGLTF_TYPE_VEC3, nv,
+                                                          true, TINYGLTF_TARGET_ARRAY_BUFFER)}});
+    mesh.weights.push_back(weights(0, static_cast<Eigen::Index>(j)));
+  }
+  mesh.primitives.push_back(primitive);
+  model.meshes.push_back(mesh);
+  tinygltf::Node node;
+  node.mesh = 0;
+  node.name = "tracked";
+  model.nodes.push_back(node);
+  tinygltf::Scene scene;
+  scene.nodes.push_back(0);
+  model.scenes.push_back(scene);
+  model.defaultScene = 0;
+
+  if (k > 0 && nt > 1)
+  {
+    std::vector<float> times(nt), values(nt * k);
+    for (std::size_t t = 0; t < nt; ++t)
+    {
+      times[t] = static_cast<float>(static_cast<double>(t) / FramesPerSecond);
+      for (std::size_t j = 0; j < k; ++j)
+        values[t * k + j] =
+            static_cast<float>(weights(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(j)));
+    }
+    tinygltf::AnimationSampler sampler;
+    sampler.input = addAccessor(model, times, TINYGLTF_TYPE_SCALAR, nt, true, 0);
+    sampler.output = addAccessor(model, values, TINYGLTF_TYPE_SCALAR, nt * k, false, 0);
+    sampler.interpolation = "LINEAR";
+    tinygltf::AnimationChannel channel;
+    channel.sampler = 0;
+    channel.target_node = 0;
+    channel.target_path = "weights";
+    tinygltf::Animation animation;
+    animation.name = "sequence";
+    animation.samplers.push_back(sampler);
+    animation.channels.push_back(channel);
+    model.animations.push_back(animation);
+  }
+
+  const std::string partial = path + ".partial";
+  tinygltf::TinyGLTF writer;
+  if (!writer.WriteGltfSceneToFile(&model, partial, true, true, false, true))
+  {
+    std::remove(partial.c_str());
+    throw std::runtime_error(path + ": cannot write the glTF file");
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0)
+    throw std::runtime_error(path + ": cannot rename " + partial + " into place");
+}
+
+} // namespace dp

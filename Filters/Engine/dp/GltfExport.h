@@ -1,0 +1,29 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file GltfExport.h
+ * @brief A compressed sequence (shape layout) as a glTF 2.0 binary (.glb) with morph targets,
+ *        written with tinygltf: the base mesh, one morph target per basis shape, one animation
+ *        of the morph weights (LINEAR, one key per frame at 24 frames per second).
+ *
+ * Blender (3.4) clamps morph weights to [0, 1], so each weight track is rescaled into [0, 1]:
+ * with lo_j and hi_j its range, the target becomes (hi_j - lo_j) U_j and lo_j U_j is folded into
+ * the base; base + sum_j w'_j target_j is the same shape, so the error does not change (only
+ * float32 rounding is added). Weights, positions and times are float32, as glTF stores them.
+ *
+ * Limits: only the shape layout maps onto morph targets (the trajectory layout is refused);
+ * no normals (viewers compute them); no meshopt compression.
+ */
+#pragma once
+
+#include "dp/PcaCompression.h"
+
+#include <string>
+
+namespace dp
+{
+
+/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout
+ *  or a sequence without triangles, std::runtime_error when the file cannot be written. */
+void writeGlb(const std::string& path, const CompressedSequence& sequence);
+
+} // namespace dp

@@ -1,0 +1,149 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file PcaCompression.h
+ * @brief Compression of a mesh sequence of fixed connectivity by principal component analysis
+ *        of its vertex positions (Shinya, Shioya & Shiraishi, section 8; Alexa & Mueller 2000),
+ *        then quantisation, temporal prediction and entropy coding (zstd).
+ *
+ * The sequence is A, 3Nv x Nt (column t = frame t's x y z per vertex). Two layouts:
+ *   Trajectories (the paper): rows are vertices, B = Nv x 3Nt (row i = vertex i's trajectory);
+ *     X_i[t] = m[t] + sum_j c_ij Y_j[t] with m the centroid trajectory, Y_j orthonormal
+ *     trajectories (basis, 3Nt each) and c_ij per-vertex weights. D1 = 3 Nt nY + Nv nY.
+ *   Shapes (Alexa & Mueller, glTF morph targets): A = m 1^T + sum_j U_j w_j^T with m the mean
+ *     shape, U_j orthonormal shapes (basis, 3Nv each) and w_j per-frame weights.
+ * In both the basis is orthonormal and the weights carry the singular values. The thin SVD is
+ * computed through the Gram matrix of the smaller side (the snapshot method): memory is the
+ * data (3 Nv Nt doubles: 2.4 GB for 100k vertices x 1000 frames), its centred copy, and a
+ * min(3Nv, Nt)^2 (Shapes) or min(Nv, 3Nt)^2 (Trajectories) Gram matrix (8 MB / 72 MB there).
+ *
+ * Error measures: Karni & Gotsman's KG = 100 ||A - A'||_F / ||A - E(A)||_F (E(A): each frame's
+ * centroid), or the largest vertex error relative to the diagonal of the sequence's bounding
+ * box.
+ *
+ * The codec (quantise = true): one quantisation step q in position units; the weights use q,
+ * basis vector j uses q / sigma_j and the mean q / sqrt(times it is repeated), so every stored
+ * number adds about q^2 / 12 to ||A - A'||^2. Integers along time (weights of Shapes; basis of
+ * Trajectories; the centroid trajectory) are predicted from the previous one or two values, the
+ * rest from the previous vertex; the order is chosen per sequence; residuals are zigzag varints
+ * compressed by zstd. The component count and q are chosen for the fewest bytes that meet the
+ * target, checked on the actual reconstruction.
+ *
+ * Limits: the whole sequence is in memory; the SVD through a Gram matrix loses components whose
+ * singular value is under ~1e-8 of the largest (far below any useful target).
+ */
+#pragma once
+
+#include <Eigen/Core>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace dp
+{
+
+enum class PcaLayout : std::uint8_t
+{
+  Trajectories = 0, // the paper: basis = trajectories, weights per vertex
+  Shapes = 1        // Alexa & Mueller: basis = shapes, weights per frame
+};
+
+enum class PcaErrorMeasure
+{
+  KarniGotsman,  // target in percent
+  MaxVertexError // target as a fraction of the bounding-box diagonal
+};
+
+struct PcaOptions
+{
+  PcaLayout layout = PcaLayout::Shapes;
+  PcaErrorMeasure measure = PcaErrorMeasure::KarniGotsman;
+  double target = 0.2;        // KG in %, or max vertex error / diagonal
+  std::size_t components = 0; // > 0: this many, and the target only sets the quantisation
+  bool quantise = true;       // false: the paper's float PCA (no quantisation, no coding)
+};
+
+/** A decomposed sequence: frame(t) = mean + basis x weights, in either layout. */
+struct PcaModel
+{
+  PcaLayout layout = PcaLayout::Shapes;
+  std::size_t vertices = 0, frames = 0;
+  Eigen::VectorXd mean;    // Shapes: 3Nv mean shape; Trajectories: 3Nt centroid trajectory
+  Eigen::MatrixXd basis;   // Shapes: 3Nv x k; Trajectories: 3Nt x k (x y z per frame)
+  Eigen::MatrixXd weights; // Shapes: Nt x k; Trajectories: Nv x k
+
+  std::size_t components() const { return static_cast<std::size_t>(basis.cols()); }
+  /** Frame t's positions, 3 Nv values. */
+  void frame(std::size_t t, double* positions) const;
+  /** All frames, 3Nv x Nt. */
+  Eigen::MatrixXd reconstruct() const;
+};
+
+/** Quantised model: the integers the codec stores and the steps that scale them. */
+struct QuantisedPca
+{
+  PcaModel model;                 // the dequantised values (what a reader reconstructs)
+  double step = 0;                // q, position units
+  double meanStep = 0;            // q / sqrt(repeats of the mean)
+  std::vector<double> basisSteps; // q / sigma_j
+  std::vector<std::int64_t> meanIntegers, basisIntegers, weightIntegers; // column-major
+};
+
+struct PcaReport
+{
+  std::size_t components = 0;
+  double paperD0 = 0, paperD1 = 0, paperRatio = 0; // the paper's counts of numbers
+  double kgError = 0;                              // percent
+  double maxError = 0;                             // position units
+  double maxErrorRelative = 0;                     // / diagonal
+  double diagonal = 0;                             // of the sequence's bounding box
+  double bitsPerVertexFrame = 0; // what is stored for the geometry, per vertex per frame
+  double quantisedPlainBits = 0; // the same integers in fixed-width fields, no coding
+  std::size_t payloadBytes = 0;  // geometry, compressed (0 for float PCA)
+};
+
+struct CompressedSequence
+{
+  QuantisedPca pca;                    // for float PCA: model only, steps 0
+  std::vector<std::int64_t> triangles; // connectivity, stored once
+  std::vector<double> times;           // one per frame
+  PcaReport report;
+};
+
+/**
+ * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at
+ * 3 * vertices * t). Throws std::invalid_argument for empty or non-finite input or a target
+ * out of range. `progress` (may be empty) is called with a fraction in [0, 1]; returning false
+ * aborts (std::runtime_error "aborted").
+ */
+CompressedSequence compressSequence(const double* positions, std::size_t vertices,
+                                    std::size_t frames, const PcaOptions& options,
+                                    const std::vector<std::int64_t>& triangles = {},
+                                    const std::vector<double>& times = {},
+                                    const std::function<bool(double)>& progress = {});
+
+/** KG error in percent of reconstruction `approx` against `original` (both 3Nv x Nt). */
+double karniGotsmanError(const Eigen::Ref<const Eigen::MatrixXd>& original,
+                         const Eigen::Ref<const Eigen::MatrixXd>& approx);
+/** ||A - E(A)||_F (E(A): each frame's centroid repeated), KG's denominator. */
+double centroidSpread(const Eigen::Ref<const Eigen::MatrixXd>& A);
+/** Largest vertex distance between the two (both 3Nv x Nt). */
+double maxVertexError(const Eigen::Ref<const Eigen::MatrixXd>& original,
+                      const Eigen::Ref<const Eigen::MatrixXd>& approx);
+
+/**
+ * The compressed file (.dpz): magic, version, a header with its CRC-32, and one zstd payload
+ * (connectivity, mean, basis, weights as predicted zigzag varints) with its CRC-32. The reader
+ * checks every length, count and checksum and throws std::runtime_error naming the file and
+ * what is wrong; it never returns partial geometry.
+ */
+void writeCompressedSequence(const std::string& path, const CompressedSequence& sequence);
+CompressedSequence readCompressedSequence(const std::string& path);
+/** The same, in memory (the file's bytes). `name` is used in error messages. */
+std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& sequence);
+CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size_t size,
+                                            const std::string& name);
+
+} // namespace dp

@@ -1,0 +1,132 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkCompressedSequenceReader.h"
+
+#include "dp/PcaCompression.h"
+#include "vtkDPPointSetAccess.h"
+
+#include "vtkCellArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <memory>
+
+vtkStandardNewMacro(vtkCompressedSequenceReader);
+
+struct vtkCompressedSequenceReader::Internals
+{
+  std::unique_ptr<dp::CompressedSequence> Sequence;
+  vtkSmartPointer<vtkCellArray> Polys;
+};
+
+vtkCompressedSequenceReader::vtkCompressedSequenceReader() : Internal(new Internals)
+{
+  this->SetNumberOfInputPorts(0);
+}
+
+vtkCompressedSequenceReader::~vtkCompressedSequenceReader()
+{
+  delete this->Internal;
+  this->SetFileName(nullptr);
+}
+
+int vtkCompressedSequenceReader::CanReadFile(const char* name)
+{
+  std::ifstream in(name ? name : "", std::ios::binary);
+  char magic[4] = {};
+  return in.read(magic, 4) && std::memcmp(magic,
+                                          "\x89"
+                                          "DPZ",
+                                          4) == 0
+             ? 1
+             : 0;
+}
+
+int vtkCompressedSequenceReader::RequestInformation(vtkInformation*, vtkInformationVector**,
+                                                    vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  in.Sequence.reset();
+  in.Polys = nullptr;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+  outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_RANGE());
+  if (!this->FileName || !*this->FileName)
+  {
+    vtkErrorMacro(<< "no FileName set");
+    return 0;
+  }
+  try
+  {
+    in.Sequence =
+        std::make_unique<dp::CompressedSequence>(dp::readCompressedSequence(this->FileName));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  in.Polys = vtkSmartPointer<vtkCellArray>::New();
+  const auto& triangles = in.Sequence->triangles;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
+    in.Polys->InsertNextCell(3, ids);
+  }
+  const std::vector<double>& times = in.Sequence->times;
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), times.data(),
+               static_cast<int>(times.size()));
+  const double range[2] = {times.front(), times.back()};
+  outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+  return 1;
+}
+
+int vtkCompressedSequenceReader::RequestData(vtkInformation*, vtkInformationVector**,
+                                             vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  if (!in.Sequence)
+    return 0;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  const std::vector<double>& times = in.Sequence->times;
+  std::size_t frame = 0;
+  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+  {
+    frame = vtkDP::frameAtTime(times,
+                               outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+  }
+  const dp::PcaModel& model = in.Sequence->pca.model;
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(static_cast<vtkIdType>(model.vertices));
+  model.frame(frame, coordinates->GetPointer(0));
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->Initialize();
+  output->SetPoints(points);
+  output->SetPolys(in.Polys);
+  vtkNew<vtkDoubleArray> components;
+  components->SetName("Components");
+  components->InsertNextValue(static_cast<double>(model.components()));
+  output->GetFieldData()->AddArray(components);
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), times[frame]);
+  return 1;
+}
+
+void vtkCompressedSequenceReader::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+}

@@ -1,0 +1,52 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkCompressedSequenceReader
+ * @brief   reads a compressed mesh sequence (.dpz, written by vtkPCACompressFilter) as a
+ *          temporal vtkPolyData source
+ *
+ * RequestInformation reads and checks the whole file (magic, version, lengths, CRC-32 of the
+ * header and of each zstd section; see dp::readCompressedSequence) and publishes its time steps;
+ * a bad file is reported with its name and what is wrong, and the output stays empty. Each
+ * request then rebuilds only the requested frame from the decoded basis and weights (3 Nv k
+ * multiply-adds). Field data: "Components".
+ */
+#ifndef vtkCompressedSequenceReader_h
+#define vtkCompressedSequenceReader_h
+
+#include "DynamicPointsFiltersModule.h" // for export macro
+#include "vtkPolyDataAlgorithm.h"
+
+class DYNAMICPOINTSFILTERS_EXPORT vtkCompressedSequenceReader : public vtkPolyDataAlgorithm
+{
+public:
+  static vtkCompressedSequenceReader* New();
+  vtkTypeMacro(vtkCompressedSequenceReader, vtkPolyDataAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /** The .dpz file. */
+  vtkSetStringMacro(FileName);
+  vtkGetStringMacro(FileName);
+  ///@}
+
+  /** 1 if `name` starts like a compressed sequence (for ParaView's reader choice). */
+  int CanReadFile(const char* name);
+
+protected:
+  vtkCompressedSequenceReader();
+  ~vtkCompressedSequenceReader() override;
+
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  char* FileName = nullptr;
+
+private:
+  vtkCompressedSequenceReader(const vtkCompressedSequenceReader&) = delete;
+  void operator=(const vtkCompressedSequenceReader&) = delete;
+
+  struct Internals;
+  Internals* Internal;
+};
+
+#endif

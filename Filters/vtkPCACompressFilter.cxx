@@ -1,0 +1,278 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "vtkPCACompressFilter.h"
+
+#include "dp/GltfExport.h"
+#include "dp/PcaCompression.h"
+#include "vtkDPPointSetAccess.h"
+
+#include "vtkCellArray.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
+#include "vtkFloatArray.h"
+#include "vtkInformation.h"
+#include "vtkInformationVector.h"
+#include "vtkNew.h"
+#include "vtkObjectFactory.h"
+#include "vtkPointData.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <vector>
+
+vtkStandardNewMacro(vtkPCACompressFilter);
+
+struct vtkPCACompressFilter::Internals
+{
+  std::vector<double> TimeSteps;       // the input's; empty for a static input
+  std::vector<double> Positions;       // frames collected so far, frame-major
+  vtkIdType Vertices = -1;             // of frame 0
+  vtkSmartPointer<vtkCellArray> Polys; // frame 0's
+  std::vector<std::int64_t> Triangles; // frame 0's, for the file
+  std::unique_ptr<dp::CompressedSequence> Result;
+  double LastInputTime = 0;
+
+  std::size_t frameCount() const { return TimeSteps.empty() ? 1 : TimeSteps.size(); }
+  std::size_t collected() const
+  {
+    return Vertices <= 0 ? 0 : Positions.size() / (3 * static_cast<std::size_t>(Vertices));
+  }
+  double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
+  std::size_t frameAt(vtkInformation* outInfo) const
+  {
+    if (TimeSteps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+      return 0;
+    return vtkDP::frameAtTime(TimeSteps,
+                              outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+  }
+  void clear()
+  {
+    Positions.clear();
+    Vertices = -1;
+    Polys = nullptr;
+    Triangles.clear();
+    Result.reset();
+  }
+};
+
+vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals) {}
+
+vtkPCACompressFilter::~vtkPCACompressFilter()
+{
+  delete this->Internal;
+  this->SetFileName(nullptr);
+  this->SetGLBFileName(nullptr);
+}
+
+int vtkPCACompressFilter::RequestInformation(vtkInformation*, vtkInformationVector** inputVector,
+                                             vtkInformationVector* outputVector)
+{
+  // Called again whenever a parameter or anything upstream changed: start over.
+  this->Internal->clear();
+  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  this->Internal->TimeSteps.clear();
+  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()))
+  {
+    const int n = inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    const double* t = inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    this->Internal->TimeSteps.assign(t, t + n);
+    outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), t, n);
+    if (n > 0)
+    {
+      const double range[2] = {t[0], t[n - 1]};
+      outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
+    }
+  }
+  else
+  {
+    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
+    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_RANGE());
+  }
+  return 1;
+}
+
+int vtkPCACompressFilter::RequestUpdateExtent(vtkInformation*, vtkInformationVector** inputVector,
+                                              vtkInformationVector*)
+{
+  Internals& in = *this->Internal;
+  if (in.TimeSteps.empty())
+    return 1;
+  // Collecting: ask for the next frame; done: ask for what upstream already has.
+  const double time = in.Result ? in.LastInputTime : in.timeOf(in.collected());
+  inputVector[0]->GetInformationObject(0)->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
+                                               time);
+  in.LastInputTime = time;
+  return 1;
+}
+
+namespace
+{
+void addValue(vtkPolyData* output, const char* name, double value)
+{
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  a->InsertNextValue(value);
+  output->GetFieldData()->AddArray(a);
+}
+} // namespace
+
+int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVector** inputVector,
+                                      vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  auto fail = [&](const std::string& message)
+  {
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    vtkErrorMacro(<< message);
+    in.clear();
+    return 0;
+  };
+
+  if (!in.Result)
+  {
+    const std::size_t frame = in.collected();
+    vtkPolyData* input = vtkPolyData::GetData(inputVector[0], 0);
+    if (!input || input->GetNumberOfPoints() == 0)
+      return fail("frame " + std::to_string(frame) + ": the input has no points");
+    if (frame == 0)
+    {
+      std::vector<double> positions;
+      const char* why = "";
+      in.Triangles.clear();
+      if (input->GetNumberOfPolys() > 0 &&
+          !vtkDP::triangleMesh(input, in.Triangles, positions, why))
+        return fail(std::string("frame 0: ") + why);
+      in.Vertices = input->GetNumberOfPoints();
+      in.Polys = input->GetPolys();
+    }
+    else if (input->GetNumberOfPoints() != in.Vertices ||
+             input->GetNumberOfPolys() != in.Polys->GetNumberOfCells())
+      return fail(
+          "frame " + std::to_string(frame) + " has " + std::to_string(input->GetNumberOfPoints()) +
+          " points and " + std::to_string(input->GetNumberOfPolys()) + " polygons, frame 0 " +
+          std::to_string(in.Vertices) + " and " + std::to_string(in.Polys->GetNumberOfCells()) +
+          ": PCA needs one connectivity through the sequence");
+    for (vtkIdType i = 0; i < in.Vertices; ++i)
+    {
+      double p[3];
+      input->GetPoint(i, p);
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+        return fail("frame " + std::to_string(frame) + ": point " + std::to_string(i) +
+                    " is not finite");
+      in.Positions.insert(in.Positions.end(), p, p + 3);
+    }
+    const std::size_t frames = in.frameCount();
+    this->UpdateProgress(0.5 * static_cast<double>(in.collected()) / static_cast<double>(frames));
+    if (this->GetAbortExecute())
+      return fail("aborted while reading frame " + std::to_string(frame));
+    if (in.collected() < frames)
+    {
+      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+      return 1;
+    }
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+
+    dp::PcaOptions options;
+    options.layout = this->Layout == SHAPES ? dp::PcaLayout::Shapes : dp::PcaLayout::Trajectories;
+    options.measure = this->ErrorMeasure == MAX_VERTEX ? dp::PcaErrorMeasure::MaxVertexError
+                                                       : dp::PcaErrorMeasure::KarniGotsman;
+    options.target = this->ErrorTarget;
+    options.components = static_cast<std::size_t>(this->NumberOfComponents);
+    options.quantise = this->Quantize;
+    std::vector<double> times = in.TimeSteps;
+    if (times.empty())
+      times.push_back(0.0);
+    try
+    {
+      in.Result = std::make_unique<dp::CompressedSequence>(
+          dp::compressSequence(in.Positions.data(), static_cast<std::size_t>(in.Vertices), frames,
+                               options, in.Triangles, times,
+                               [this](double f)
+                               {
+                                 this->UpdateProgress(0.5 + 0.5 * f);
+                                 return !this->GetAbortExecute();
+                               }));
+    }
+    catch (const std::exception& e)
+    {
+      return fail(std::string("cannot compress: ") + e.what());
+    }
+    // Files: written beside and renamed, so a failure never leaves a broken file behind.
+    try
+    {
+      if (this->FileName && *this->FileName)
+        dp::writeCompressedSequence(this->FileName, *in.Result);
+    }
+    catch (const std::exception& e)
+    {
+      vtkErrorMacro(<< e.what());
+    }
+    try
+    {
+      if (this->GLBFileName && *this->GLBFileName)
+        dp::writeGlb(this->GLBFileName, *in.Result);
+    }
+    catch (const std::exception& e)
+    {
+      vtkErrorMacro(<< e.what());
+    }
+  }
+
+  const std::size_t frame = std::min(in.frameAt(outInfo), in.frameCount() - 1);
+  const dp::CompressedSequence& result = *in.Result;
+  const auto n = in.Vertices;
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(n);
+  result.pca.model.frame(frame, coordinates->GetPointer(0));
+  vtkNew<vtkFloatArray> error;
+  error->SetName("CompressionError");
+  error->SetNumberOfTuples(n);
+  const double* original = in.Positions.data() + 3 * static_cast<std::size_t>(n) * frame;
+  const double* rebuilt = coordinates->GetPointer(0);
+  for (vtkIdType i = 0; i < n; ++i)
+    error->SetValue(
+        i, static_cast<float>(std::sqrt(std::pow(original[3 * i] - rebuilt[3 * i], 2) +
+                                        std::pow(original[3 * i + 1] - rebuilt[3 * i + 1], 2) +
+                                        std::pow(original[3 * i + 2] - rebuilt[3 * i + 2], 2))));
+  output->Initialize();
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->SetPoints(points);
+  output->SetPolys(in.Polys);
+  output->GetPointData()->SetScalars(error);
+  const dp::PcaReport& r = result.report;
+  addValue(output, "Components", static_cast<double>(r.components));
+  addValue(output, "PaperD0", r.paperD0);
+  addValue(output, "PaperD1", r.paperD1);
+  addValue(output, "PaperRatio", r.paperRatio);
+  addValue(output, "BitsPerVertexFrame", r.bitsPerVertexFrame);
+  addValue(output, "QuantizedPlainBitsPerVertexFrame", r.quantisedPlainBits);
+  addValue(output, "KGError", r.kgError);
+  addValue(output, "MaxError", r.maxError);
+  addValue(output, "MaxErrorRelative", r.maxErrorRelative);
+  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+    output->GetInformation()->Set(
+        vtkDataObject::DATA_TIME_STEP(),
+        outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+  return 1;
+}
+
+void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)
+{
+  this->Superclass::PrintSelf(os, indent);
+  os << indent << "Layout: " << this->Layout << "\n";
+  os << indent << "ErrorMeasure: " << this->ErrorMeasure << "\n";
+  os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
+  os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
+  os << indent << "Quantize: " << this->Quantize << "\n";
+  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
+  os << indent << "GLBFileName: " << (this->GLBFileName ? this->GLBFileName : "(none)") << "\n";
+}

@@ -1,0 +1,118 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkPCACompressFilter
+ * @brief   compresses a temporal mesh sequence of fixed connectivity by PCA; outputs the
+ *          reconstruction and, optionally, writes the compressed file
+ *
+ * Input: temporal vtkPolyData whose every time step has the same number of points and the same
+ * polygons (the output of vtkDeformableTrackFilter, or an animated mesh read from disk). The
+ * filter reads every time step in order (CONTINUE_EXECUTING, with progress and abort), then
+ * compresses them with dp::compressSequence: principal components of the vertex positions in
+ * the paper's layout (basis = trajectories, weights per vertex) or Alexa & Mueller's (basis =
+ * shapes, weights per frame), the component count chosen for an error target (Karni-Gotsman
+ * error in percent, or the largest vertex error as a fraction of the bounding-box diagonal)
+ * or given; then, unless Quantize is off (the paper's float PCA), quantised, predicted over
+ * time and zstd-coded.
+ *
+ * Output: the reconstruction at the requested time (the input's time steps), the input's
+ * polygons, point array "CompressionError" (distance of each vertex to its input position).
+ * Field data: "Components", "PaperD0", "PaperD1", "PaperRatio" (the paper's counts of
+ * numbers), "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "KGError" (percent),
+ * "MaxError" (world units), "MaxErrorRelative" (of the diagonal).
+ *
+ * With FileName set, the compressed sequence is also written there (.dpz, read back by
+ * vtkCompressedSequenceReader); with GLBFileName set, as a glTF 2.0 binary with morph targets
+ * (needs the shape layout).
+ *
+ * The result is kept: any time is answered without recomputing until a parameter or the input
+ * changes. Memory: the input's positions for every frame (24 bytes per vertex and frame) plus
+ * the decomposition (see dp::PcaCompression.h).
+ */
+#ifndef vtkPCACompressFilter_h
+#define vtkPCACompressFilter_h
+
+#include "DynamicPointsFiltersModule.h" // for export macro
+#include "vtkPolyDataAlgorithm.h"
+
+class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkPolyDataAlgorithm
+{
+public:
+  static vtkPCACompressFilter* New();
+  vtkTypeMacro(vtkPCACompressFilter, vtkPolyDataAlgorithm);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  enum LayoutType
+  {
+    TRAJECTORIES = 0, // the paper: basis = trajectories, weights per vertex
+    SHAPES = 1        // Alexa & Mueller: basis = shapes, weights per frame (glTF morph targets)
+  };
+  enum ErrorMeasureType
+  {
+    KARNI_GOTSMAN = 0, // ErrorTarget in percent
+    MAX_VERTEX = 1     // ErrorTarget as a fraction of the bounding-box diagonal
+  };
+
+  ///@{
+  /** Layout of the decomposition (default SHAPES). */
+  vtkSetClampMacro(Layout, int, TRAJECTORIES, SHAPES);
+  vtkGetMacro(Layout, int);
+  ///@}
+
+  ///@{
+  /** What ErrorTarget measures (default KARNI_GOTSMAN) and its value (default 0.2 %). */
+  vtkSetClampMacro(ErrorMeasure, int, KARNI_GOTSMAN, MAX_VERTEX);
+  vtkGetMacro(ErrorMeasure, int);
+  vtkSetMacro(ErrorTarget, double);
+  vtkGetMacro(ErrorTarget, double);
+  ///@}
+
+  ///@{
+  /** Number of components; 0 (default) chooses the fewest bytes that meet ErrorTarget. */
+  vtkSetClampMacro(NumberOfComponents, int, 0, VTK_INT_MAX);
+  vtkGetMacro(NumberOfComponents, int);
+  ///@}
+
+  ///@{
+  /** Quantise and code (default on); off: the paper's float PCA. */
+  vtkSetMacro(Quantize, vtkTypeBool);
+  vtkGetMacro(Quantize, vtkTypeBool);
+  vtkBooleanMacro(Quantize, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /** Where to write the compressed sequence (.dpz); empty (default): not written. */
+  vtkSetStringMacro(FileName);
+  vtkGetStringMacro(FileName);
+  ///@}
+
+  ///@{
+  /** Where to write a glTF binary (.glb) with morph targets; empty (default): not written. */
+  vtkSetStringMacro(GLBFileName);
+  vtkGetStringMacro(GLBFileName);
+  ///@}
+
+protected:
+  vtkPCACompressFilter();
+  ~vtkPCACompressFilter() override;
+
+  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+
+  int Layout = SHAPES;
+  int ErrorMeasure = KARNI_GOTSMAN;
+  double ErrorTarget = 0.2;
+  int NumberOfComponents = 0;
+  vtkTypeBool Quantize = true;
+  char* FileName = nullptr;
+  char* GLBFileName = nullptr;
+
+private:
+  vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;
+  void operator=(const vtkPCACompressFilter&) = delete;
+
+  struct Internals;
+  Internals* Internal;
+};
+
+#endif

@@ -1,0 +1,130 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// Benchmark: PCA compression of ground-truth animated meshes (../shared/data) or the built-in
+// bending tube. For each KG error target it prints, per layout: components, bits per vertex per
+// frame (raw float32 = 96) and the ratio against raw, for float PCA (the paper), quantised plain
+// PCA (the codec's integers in fixed-width fields) and the full codec (prediction + zstd);
+// compression time (median of --repeats runs) and peak memory.
+#include "BenchmarkUtilities.h"
+#include "CommandLine.h"
+
+#include "dp/AnimatedMesh.h"
+#include "dp/FrameSequence.h"
+#include "dp/PcaCompression.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+int main(int argc, char** argv)
+{
+  using namespace dp::cli;
+  using namespace dp::bench;
+  std::string data = "../shared/data";
+  std::vector<std::string> sequences = {"horse-collapse", "horse-gallop"};
+  std::vector<double> targets = {0.5, 0.2, 0.1};
+  std::size_t repeats = 3;
+  try
+  {
+    for (int i = 1; i < argc; ++i)
+    {
+      const std::string arg = argv[i];
+      if (arg == "--data")
+        data = optionValue(argc, argv, i);
+      else if (arg == "--sequence")
+        sequences = {optionValue(argc, argv, i)};
+      else if (arg == "--target")
+        targets = {parseDouble(arg, optionValue(argc, argv, i), 1e-6, 99.0)};
+      else if (arg == "--repeats")
+        repeats = parseCount(arg, optionValue(argc, argv, i), 1, 100);
+      else
+      {
+        std::cerr << "Usage: BenchmarkCompression [--data DIR] [--sequence NAME|tube] "
+                     "[--target KG_PERCENT] [--repeats N]\n";
+        return arg == "-h" || arg == "--help" ? 0 : 2;
+      }
+    }
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << e.what() << "\n";
+    return 2;
+  }
+  std::printf("machine: %s, %u hardware threads; Release build; median of %zu runs\n",
+              cpuModel().c_str(), std::thread::hardware_concurrency(), repeats);
+  for (const std::string& name : sequences)
+  {
+    std::unique_ptr<dp::AnimatedMesh> mesh;
+    if (name == "tube")
+      mesh = std::make_unique<dp::BendingTube>();
+    else
+    {
+      const std::string folder = data + "/" + name;
+      if (!std::filesystem::is_directory(folder))
+      {
+        std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
+        continue;
+      }
+      mesh = std::make_unique<dp::MeshSequenceFiles>(
+          dp::FrameSequence::fromDirectory(folder, "*.ply"));
+    }
+    const std::size_t nv = mesh->numberOfVertices(), nt = mesh->numberOfFrames();
+    std::vector<double> positions;
+    positions.reserve(3 * nv * nt);
+    for (std::size_t t = 0; t < nt; ++t)
+    {
+      const std::vector<double> p = mesh->positions(t);
+      positions.insert(positions.end(), p.begin(), p.end());
+    }
+    std::printf("\n== %s: %zu vertices, %zu frames (raw float32: 96 bits per vertex per frame)\n",
+                name.c_str(), nv, nt);
+    std::printf("%6s %-12s %-14s %5s %9s %8s %9s %10s %9s\n", "KG %", "layout", "coding", "comp",
+                "bpvf", "vs raw", "KG got", "ms", "peak MiB");
+    for (double target : targets)
+      for (dp::PcaLayout layout : {dp::PcaLayout::Trajectories, dp::PcaLayout::Shapes})
+      {
+        const char* layoutName = layout == dp::PcaLayout::Shapes ? "shapes" : "trajectories";
+        dp::PcaOptions o;
+        o.layout = layout;
+        o.target = target;
+        double floatBits = 0;
+        for (bool quantise : {false, true})
+        {
+          o.quantise = quantise;
+          std::vector<double> ms;
+          dp::CompressedSequence s;
+          for (std::size_t r = 0; r < repeats; ++r)
+          {
+            const double start = now();
+            s = dp::compressSequence(positions.data(), nv, nt, o, mesh->triangles());
+            ms.push_back(1000 * (now() - start));
+          }
+          const dp::PcaReport& report = s.report;
+          auto row = [&](const char* coding, double bits)
+          {
+            std::printf("%6.2f %-12s %-14s %5zu %9.3f %7.1fx %9.4f %10.1f %9.1f\n", target,
+                        layoutName, coding, report.components, bits, 96.0 / bits, report.kgError,
+                        median(ms), peakMiB());
+          };
+          if (!quantise)
+          {
+            floatBits = report.bitsPerVertexFrame;
+            row("float PCA", floatBits);
+          }
+          else
+          {
+            row("quantised", report.quantisedPlainBits);
+            row("full codec", report.bitsPerVertexFrame);
+            std::printf("%6s %-12s full codec: %.2fx fewer bits than quantised plain PCA, %.2fx "
+                        "fewer than float PCA\n",
+                        "", "", report.quantisedPlainBits / report.bitsPerVertexFrame,
+                        floatBits / report.bitsPerVertexFrame);
+          }
+        }
+      }
+  }
+  return 0;
+}

@@ -1,0 +1,272 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// PCA compression: error targets, the paper's counts, the codec, the file and its failures.
+#include "dp/AnimatedMesh.h"
+#include "dp/PcaCompression.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <string>
+
+namespace
+{
+
+struct Animation
+{
+  std::vector<double> positions; // frame-major
+  std::vector<std::int64_t> triangles;
+  std::size_t vertices = 0, frames = 0;
+};
+
+Animation bendingTube(std::size_t frames = 30)
+{
+  dp::BendingTube::Options o;
+  o.frames = frames;
+  const dp::BendingTube tube(o);
+  Animation a;
+  a.vertices = tube.numberOfVertices();
+  a.frames = frames;
+  a.triangles = tube.triangles();
+  for (std::size_t t = 0; t < frames; ++t)
+  {
+    const std::vector<double> p = tube.positions(t);
+    a.positions.insert(a.positions.end(), p.begin(), p.end());
+  }
+  return a;
+}
+
+Eigen::Map<const Eigen::MatrixXd> matrix(const Animation& a)
+{
+  return {a.positions.data(), static_cast<Eigen::Index>(3 * a.vertices),
+          static_cast<Eigen::Index>(a.frames)};
+}
+
+std::string temporaryPath(const std::string& name)
+{
+  return (std::filesystem::temp_directory_path() /
+          ("dp_pca_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+} // namespace
+
+std::string
+pcaTargetName(const ::testing::TestParamInfo<std::tuple<dp::PcaLayout, bool, double>>& info)
+{
+  const dp::PcaLayout layout = std::get<0>(info.param);
+  return std::string(layout == dp::PcaLayout::Shapes ? "Shapes" : "Trajectories") +
+         (std::get<1>(info.param) ? "Codec" : "Float") + "KG" +
+         std::to_string(static_cast<int>(std::lround(std::get<2>(info.param) * 100)));
+}
+
+class PcaTargets : public ::testing::TestWithParam<std::tuple<dp::PcaLayout, bool, double>>
+{
+};
+
+TEST_P(PcaTargets, MeetsTheKarniGotsmanTarget)
+{
+  const auto [layout, quantise, target] = GetParam();
+  const Animation a = bendingTube();
+  dp::PcaOptions o;
+  o.layout = layout;
+  o.quantise = quantise;
+  o.target = target;
+  const dp::CompressedSequence s =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, o, a.triangles);
+  const Eigen::MatrixXd approx = s.pca.model.reconstruct();
+  const double kg = dp::karniGotsmanError(matrix(a), approx);
+  EXPECT_LE(kg, target);
+  EXPECT_NEAR(kg, s.report.kgError, 1e-9);
+  // Not lossless either: the codec spends the budget it is given.
+  EXPECT_GT(kg, 0.2 * target);
+  EXPECT_GT(s.report.components, 0u);
+  if (quantise)
+  {
+    EXPECT_LT(s.report.bitsPerVertexFrame, s.report.quantisedPlainBits);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(LayoutsAndTargets, PcaTargets,
+                         ::testing::Combine(::testing::Values(dp::PcaLayout::Shapes,
+                                                              dp::PcaLayout::Trajectories),
+                                            ::testing::Bool(), ::testing::Values(0.5, 0.2, 0.1)),
+                         pcaTargetName);
+
+TEST(PcaCompression, MeetsAMaximumVertexErrorTarget)
+{
+  const Animation a = bendingTube();
+  for (dp::PcaLayout layout : {dp::PcaLayout::Shapes, dp::PcaLayout::Trajectories})
+  {
+    dp::PcaOptions o;
+    o.layout = layout;
+    o.measure = dp::PcaErrorMeasure::MaxVertexError;
+    o.target = 0.002;
+    const dp::CompressedSequence s =
+        dp::compressSequence(a.positions.data(), a.vertices, a.frames, o);
+    const double worst = dp::maxVertexError(matrix(a), s.pca.model.reconstruct());
+    EXPECT_LE(worst, o.target * s.report.diagonal);
+    EXPECT_GT(worst, 0.1 * o.target * s.report.diagonal);
+  }
+}
+
+TEST(PcaCompression, ThePapersCountsAndAnExactLowRankSequence)
+{
+  // mean + two shapes with independent weights: rank 2 exactly, so float PCA needs 2 components
+  // in the shape layout and reproduces the sequence to rounding.
+  const std::size_t nv = 50, nt = 20;
+  std::mt19937 random(7);
+  std::normal_distribution<double> normal;
+  std::vector<double> mean(3 * nv), s1(3 * nv), s2(3 * nv), positions;
+  for (std::size_t i = 0; i < 3 * nv; ++i)
+  {
+    mean[i] = normal(random);
+    s1[i] = normal(random);
+    s2[i] = normal(random);
+  }
+  for (std::size_t t = 0; t < nt; ++t)
+    for (std::size_t i = 0; i < 3 * nv; ++i)
+      positions.push_back(mean[i] + std::sin(0.3 * t) * s1[i] + 0.5 * std::cos(0.7 * t) * s2[i]);
+  dp::PcaOptions o;
+  o.quantise = false;
+  o.target = 1e-4;
+  const dp::CompressedSequence s = dp::compressSequence(positions.data(), nv, nt, o);
+  EXPECT_EQ(s.report.components, 2u);
+  EXPECT_LT(s.report.kgError, 1e-8);
+  EXPECT_DOUBLE_EQ(s.report.paperD0, 3.0 * nt * nv);
+  EXPECT_DOUBLE_EQ(s.report.paperD1, 3.0 * nt * 2 + nv * 2.0);
+  EXPECT_DOUBLE_EQ(s.report.paperRatio, (3.0 * nt * nv) / (3.0 * nt * 2 + nv * 2.0));
+  // Float PCA stores 32-bit numbers: the mean, the basis and the weights.
+  EXPECT_DOUBLE_EQ(s.report.bitsPerVertexFrame,
+                   32.0 * (3 * nv + 2 * 3 * nv + 2 * nt) / static_cast<double>(nv * nt));
+}
+
+TEST(PcaCompression, AGivenComponentCountIsKept)
+{
+  const Animation a = bendingTube();
+  dp::PcaOptions o;
+  o.components = 3;
+  o.target = 0.01; // out of reach with 3: the quantisation then adds almost nothing
+  const dp::CompressedSequence s =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, o);
+  EXPECT_EQ(s.pca.model.components(), 3u);
+  o.quantise = false;
+  const dp::CompressedSequence plain =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, o);
+  EXPECT_GT(plain.report.kgError, 0.01);
+  EXPECT_LE(s.report.kgError, 1.011 * plain.report.kgError);
+}
+
+TEST(PcaCompression, RoundTripThroughTheFileIsExact)
+{
+  const Animation a = bendingTube();
+  for (dp::PcaLayout layout : {dp::PcaLayout::Shapes, dp::PcaLayout::Trajectories})
+  {
+    dp::PcaOptions o;
+    o.layout = layout;
+    std::vector<double> times;
+    for (std::size_t t = 0; t < a.frames; ++t)
+      times.push_back(0.04 * t);
+    const dp::CompressedSequence s =
+        dp::compressSequence(a.positions.data(), a.vertices, a.frames, o, a.triangles, times);
+    const std::string path = temporaryPath("roundtrip.dpz");
+    dp::writeCompressedSequence(path, s);
+    const dp::CompressedSequence r = dp::readCompressedSequence(path);
+    std::filesystem::remove(path);
+    EXPECT_EQ(r.triangles, a.triangles);
+    EXPECT_EQ(r.times, times);
+    EXPECT_EQ(r.pca.model.layout, layout);
+    EXPECT_EQ(r.pca.model.reconstruct(), s.pca.model.reconstruct()); // bit for bit
+    std::vector<double> frame(3 * a.vertices);
+    r.pca.model.frame(7, frame.data());
+    EXPECT_EQ(Eigen::Map<const Eigen::VectorXd>(frame.data(), frame.size()),
+              s.pca.model.reconstruct().col(7));
+  }
+}
+
+TEST(PcaCompression, CorruptOrTruncatedFilesAreRefusedByName)
+{
+  const Animation a = bendingTube(12);
+  const dp::CompressedSequence s =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, dp::PcaOptions{}, a.triangles);
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  // Every truncation.
+  for (std::size_t n = 0; n < bytes.size(); ++n)
+  {
+    try
+    {
+      dp::decodeCompressedSequence(bytes.data(), n, "cut.dpz");
+      ADD_FAILURE() << "a file cut at " << n << " of " << bytes.size() << " bytes was read";
+    }
+    catch (const std::runtime_error& e)
+    {
+      ASSERT_EQ(std::string(e.what()).rfind("cut.dpz", 0), 0u) << e.what();
+    }
+  }
+  // Every single-byte change: refused, or (in bytes no checksum covers: none) the same result.
+  for (std::size_t i = 0; i < bytes.size(); ++i)
+  {
+    std::vector<std::uint8_t> bad = bytes;
+    bad[i] ^= 0x5a;
+    EXPECT_THROW(dp::decodeCompressedSequence(bad.data(), bad.size(), "bad.dpz"),
+                 std::runtime_error)
+        << "byte " << i;
+  }
+  std::vector<std::uint8_t> longer = bytes;
+  longer.push_back(0);
+  EXPECT_THROW(dp::decodeCompressedSequence(longer.data(), longer.size(), "x"), std::runtime_error);
+  try
+  {
+    dp::readCompressedSequence("/nonexistent/sequence.dpz");
+    ADD_FAILURE();
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/sequence.dpz"), std::string::npos);
+  }
+}
+
+TEST(PcaCompression, BadInputIsRefusedClearly)
+{
+  const Animation a = bendingTube(5);
+  std::vector<double> p = a.positions;
+  p[3 * 17 + 1] = std::nan("");
+  EXPECT_THROW(dp::compressSequence(p.data(), a.vertices, a.frames, dp::PcaOptions{}),
+               std::invalid_argument);
+  EXPECT_THROW(dp::compressSequence(p.data(), 0, a.frames, dp::PcaOptions{}),
+               std::invalid_argument);
+  for (double target : {0.0, -1.0, 100.0, std::nan("")})
+  {
+    dp::PcaOptions o;
+    o.target = target;
+    EXPECT_THROW(dp::compressSequence(a.positions.data(), a.vertices, a.frames, o),
+                 std::invalid_argument)
+        << target;
+  }
+  EXPECT_THROW(dp::compressSequence(a.positions.data(), a.vertices, a.frames, dp::PcaOptions{},
+                                    {0, 1, static_cast<std::int64_t>(a.vertices)}),
+               std::invalid_argument);
+  // Aborting through the progress callback.
+  EXPECT_THROW(dp::compressSequence(a.positions.data(), a.vertices, a.frames, dp::PcaOptions{}, {},
+                                    {}, [](double) { return false; }),
+               std::runtime_error);
+}
+
+TEST(PcaCompression, AStillSequenceCompressesToItsMean)
+{
+  const Animation a = bendingTube(1);
+  std::vector<double> still;
+  for (int t = 0; t < 6; ++t)
+    still.insert(still.end(), a.positions.begin(), a.positions.end());
+  const dp::CompressedSequence s =
+      dp::compressSequence(still.data(), a.vertices, 6, dp::PcaOptions{}, a.triangles);
+  EXPECT_EQ(s.pca.model.components(), 0u);
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  const dp::CompressedSequence r =
+      dp::decodeCompressedSequence(bytes.data(), bytes.size(), "still");
+  const Eigen::Map<const Eigen::MatrixXd> original(still.data(), 3 * a.vertices, 6);
+  EXPECT_LT(dp::maxVertexError(original, r.pca.model.reconstruct()), 1e-3);
+}

@@ -1,0 +1,160 @@
+"""vtkPCACompressFilter and vtkCompressedSequenceReader in a VTK pipeline: the error target on a
+generated animated mesh, the file round trip, a damaged file, the glTF export read back by VTK's
+own glTF reader, and a sequence whose connectivity changes."""
+import os
+import unittest
+
+import numpy as np
+from vtkmodules.numpy_interface import dataset_adapter as dsa
+from vtkmodules.vtkIOGeometry import vtkGLTFReader
+
+import dynamicpoints
+from dp_testing import MessageRecorder, TempDirTestCase, run_tool
+
+FRAMES = 16
+
+
+def first_polydata(data):
+    """The first vtkPolyData leaf of a composite data set."""
+    it = data.NewIterator()
+    it.InitTraversal()
+    while not it.IsDoneWithTraversal():
+        leaf = it.GetCurrentDataObject()
+        if leaf.IsA("vtkPolyData"):
+            return leaf
+        it.GoToNextItem()
+    raise AssertionError("no polydata in the glTF reader's output")
+
+
+class TestPCACompressFilter(TempDirTestCase):
+    def setUp(self):
+        super().setUp()
+        # The ground-truth meshes of the built-in bending tube: one connectivity, 16 frames.
+        run_tool("dynamicpoints-sample", "--mesh", "tube", "--frames", FRAMES, "--points", 100,
+                 "--truth", self.path("seq"))
+        truth = self.path("seq", "truth")
+        self.files = sorted(os.path.join(truth, f) for f in os.listdir(truth) if f.endswith(".ply"))
+        self.assertEqual(len(self.files), FRAMES)
+        self.source = dynamicpoints.vtkPointSequenceSource()
+        for f in self.files:
+            self.source.AddFileName(f)
+
+    def original(self, frame):
+        self.source.UpdateTimeStep(frame)
+        return np.array(dsa.WrapDataObject(self.source.GetOutput()).Points)
+
+    def compressor(self, **settings):
+        f = dynamicpoints.vtkPCACompressFilter()
+        f.SetInputConnection(self.source.GetOutputPort())
+        for name, value in settings.items():
+            getattr(f, "Set" + name)(value)
+        return f
+
+    def test_meets_the_error_target_and_reports_it(self):
+        originals = np.stack([self.original(t) for t in range(FRAMES)])
+        for layout in (0, 1):
+            f = self.compressor(Layout=layout, ErrorTarget=0.2)
+            rebuilt = []
+            for t in range(FRAMES):
+                f.UpdateTimeStep(t)
+                out = dsa.WrapDataObject(f.GetOutput())
+                rebuilt.append(np.array(out.Points))
+                np.testing.assert_allclose(
+                    out.PointData["CompressionError"],
+                    np.linalg.norm(rebuilt[-1] - originals[t], axis=1), rtol=1e-5, atol=1e-7)
+                self.assertEqual(out.GetNumberOfPolys(), self.source.GetOutput().GetNumberOfPolys())
+            rebuilt = np.stack(rebuilt)
+            centred = originals - originals.mean(axis=1, keepdims=True)
+            kg = 100 * np.linalg.norm(originals - rebuilt) / np.linalg.norm(centred)
+            fd = dsa.WrapDataObject(f.GetOutput()).FieldData
+            self.assertLessEqual(kg, 0.2)
+            self.assertGreater(kg, 0.02)
+            self.assertAlmostEqual(fd["KGError"][0], kg, places=6)
+            k = fd["Components"][0]
+            nv = originals.shape[1]
+            self.assertEqual(fd["PaperD0"][0], 3 * FRAMES * nv)
+            self.assertEqual(fd["PaperD1"][0], 3 * FRAMES * k + nv * k)
+            self.assertLess(fd["BitsPerVertexFrame"][0], fd["QuantizedPlainBitsPerVertexFrame"][0])
+
+    def test_the_file_reads_back_the_same_sequence(self):
+        path = self.path("tube.dpz")
+        f = self.compressor(FileName=path)
+        f.UpdateTimeStep(0)
+        self.assertTrue(os.path.exists(path))
+        self.assertFalse(os.path.exists(path + ".partial"))
+        reader = dynamicpoints.vtkCompressedSequenceReader()
+        self.assertEqual(reader.CanReadFile(path), 1)
+        self.assertEqual(reader.CanReadFile(self.files[0]), 0)
+        reader.SetFileName(path)
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        self.assertEqual(len(steps), FRAMES)
+        for t in (0, 5, FRAMES - 1):
+            f.UpdateTimeStep(t)
+            reader.UpdateTimeStep(steps[t])
+            np.testing.assert_array_equal(dsa.WrapDataObject(reader.GetOutput()).Points,
+                                          dsa.WrapDataObject(f.GetOutput()).Points)
+            self.assertEqual(reader.GetOutput().GetNumberOfPolys(),
+                             f.GetOutput().GetNumberOfPolys())
+
+    def test_a_damaged_file_is_named_in_the_error_and_gives_no_geometry(self):
+        path = self.path("tube.dpz")
+        self.compressor(FileName=path).Update()
+        data = open(path, "rb").read()
+        for name, content in (("cut.dpz", data[: len(data) // 2]),
+                              ("flipped.dpz", data[:-10] + bytes([data[-10] ^ 0xFF]) + data[-9:]),
+                              ("text.dpz", b"hello")):
+            with open(self.path(name), "wb") as out:
+                out.write(content)
+            reader = dynamicpoints.vtkCompressedSequenceReader()
+            reader.SetFileName(self.path(name))
+            rec = MessageRecorder(reader)
+            reader.Update()
+            self.assertIn(name, rec.error_text)
+            self.assertEqual(reader.GetOutput().GetNumberOfPoints(), 0)
+
+    def test_the_gltf_export_plays_back_in_vtk_within_the_target(self):
+        glb = self.path("tube.glb")
+        f = self.compressor(GLBFileName=glb, ErrorTarget=0.2)
+        f.Update()
+        self.assertTrue(os.path.exists(glb))
+        k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
+        reader = vtkGLTFReader()
+        reader.SetFileName(glb)
+        reader.UpdateInformation()
+        self.assertEqual(reader.GetNumberOfAnimations(), 1)
+        reader.EnableAnimation(0)
+        reader.SetApplyDeformationsToGeometry(True)
+        reader.SetFrameRate(24)  # the export keys one frame every 1/24 s
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        self.assertEqual(len(steps), FRAMES)
+        originals = np.stack([self.original(t) for t in range(FRAMES)])
+        played = []
+        for t in range(FRAMES):
+            reader.UpdateTimeStep(steps[t])
+            mesh = first_polydata(reader.GetOutput())
+            played.append(np.array(dsa.WrapDataObject(mesh).Points))
+        played = np.stack(played)
+        self.assertEqual(played.shape, originals.shape)
+        centred = originals - originals.mean(axis=1, keepdims=True)
+        kg = 100 * np.linalg.norm(originals - played) / np.linalg.norm(centred)
+        self.assertLessEqual(kg, 0.2 * 1.01)  # float32 storage
+        self.assertGreater(k, 0)
+
+    def test_a_change_of_connectivity_is_refused_by_frame(self):
+        other = self.path("other.ply")
+        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 1, "--points", 100,
+                 "--truth", self.path("sheet"))
+        sheet = self.path("sheet", "truth")
+        self.source.AddFileName(os.path.join(sheet, sorted(os.listdir(sheet))[0]))
+        f = self.compressor()
+        rec = MessageRecorder(f)
+        f.Update()
+        self.assertIn(f"frame {FRAMES} has", rec.error_text)
+        self.assertIn("one connectivity", rec.error_text)
+        self.assertFalse(os.path.exists(other))
+
+
+if __name__ == "__main__":
+    unittest.main()
