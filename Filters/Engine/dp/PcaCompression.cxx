@@ -244,30 +244,20 @@ void putRaw(std::vector<std::uint8_t>& out, T v)
   out.insert(out.end(), p, p + sizeof(T));
 }
 
-// Strides of the prediction: along time where the data runs along time.
-std::size_t meanStride(PcaLayout)
-{
-  return 3;
-}
-std::size_t basisStride(PcaLayout)
-{
-  return 3;
-}
-std::size_t weightStride(PcaLayout)
-{
-  return 1;
-}
+// Strides of the prediction, the same in both layouts: x y z interleaved in the mean and the
+// basis (3: the same coordinate one frame or one vertex back), one value per row in the weights.
+constexpr std::size_t MeanStride = 3, BasisStride = 3, WeightStride = 1;
 
 void putGeometry(std::vector<std::uint8_t>& out, const QuantisedPca& q)
 {
   const PcaModel& m = q.model;
-  putSequence(out, q.meanIntegers.data(), q.meanIntegers.size(), meanStride(m.layout));
+  putSequence(out, q.meanIntegers.data(), q.meanIntegers.size(), MeanStride);
   const std::size_t rows = static_cast<std::size_t>(m.basis.rows());
   for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.basisIntegers.data() + j * rows, rows, basisStride(m.layout));
+    putSequence(out, q.basisIntegers.data() + j * rows, rows, BasisStride);
   const std::size_t wrows = static_cast<std::size_t>(m.weights.rows());
   for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.weightIntegers.data() + j * wrows, wrows, weightStride(m.layout));
+    putSequence(out, q.weightIntegers.data() + j * wrows, wrows, WeightStride);
 }
 
 std::vector<std::uint8_t> zstdCompress(const std::vector<std::uint8_t>& raw)
@@ -798,13 +788,13 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
         getSection(in, bytes, "geometry", 10 * numbers + 1 + 2 * k);
     ByteReader g(raw.data(), raw.size(), name + " (geometry)");
     q.meanIntegers.resize(meanCount);
-    g.sequence(q.meanIntegers.data(), meanCount, meanStride(m.layout));
+    g.sequence(q.meanIntegers.data(), meanCount, MeanStride);
     q.basisIntegers.resize(k * basisRows);
     for (std::uint64_t j = 0; j < k; ++j)
-      g.sequence(q.basisIntegers.data() + j * basisRows, basisRows, basisStride(m.layout));
+      g.sequence(q.basisIntegers.data() + j * basisRows, basisRows, BasisStride);
     q.weightIntegers.resize(k * weightRows);
     for (std::uint64_t j = 0; j < k; ++j)
-      g.sequence(q.weightIntegers.data() + j * weightRows, weightRows, weightStride(m.layout));
+      g.sequence(q.weightIntegers.data() + j * weightRows, weightRows, WeightStride);
     if (g.remaining() != 0)
       g.fail("unexpected bytes after the weights");
   }
