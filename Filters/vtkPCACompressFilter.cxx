@@ -75,24 +75,7 @@ int vtkPCACompressFilter::RequestInformation(vtkInformation*, vtkInformationVect
   this->Internal->clear();
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  this->Internal->TimeSteps.clear();
-  if (inInfo->Has(vtkStreamingDemandDrivenPipeline::TIME_STEPS()))
-  {
-    const int n = inInfo->Length(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
-    const double* t = inInfo->Get(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
-    this->Internal->TimeSteps.assign(t, t + n);
-    outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_STEPS(), t, n);
-    if (n > 0)
-    {
-      const double range[2] = {t[0], t[n - 1]};
-      outInfo->Set(vtkStreamingDemandDrivenPipeline::TIME_RANGE(), range, 2);
-    }
-  }
-  else
-  {
-    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_STEPS());
-    outInfo->Remove(vtkStreamingDemandDrivenPipeline::TIME_RANGE());
-  }
+  this->Internal->TimeSteps = vtkDP::forwardTimeSteps(inInfo, outInfo);
   return 1;
 }
 

@@ -1,17 +1,17 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDPPointSetAccess.h"
 
-#include <algorithm>
-#include <cmath>
-
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkDataArray.h"
+#include "vtkInformation.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
+#include "vtkStreamingDemandDrivenPipeline.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace vtkDP
@@ -88,6 +88,26 @@ bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
     return false;
   }
   return true;
+}
+
+std::vector<double> forwardTimeSteps(vtkInformation* inInfo, vtkInformation* outInfo)
+{
+  using SDDP = vtkStreamingDemandDrivenPipeline;
+  if (!inInfo->Has(SDDP::TIME_STEPS()))
+  {
+    outInfo->Remove(SDDP::TIME_STEPS());
+    outInfo->Remove(SDDP::TIME_RANGE());
+    return {};
+  }
+  const int n = inInfo->Length(SDDP::TIME_STEPS());
+  const double* t = inInfo->Get(SDDP::TIME_STEPS());
+  outInfo->Set(SDDP::TIME_STEPS(), t, n);
+  if (n > 0)
+  {
+    const double range[2] = {t[0], t[n - 1]};
+    outInfo->Set(SDDP::TIME_RANGE(), range, 2);
+  }
+  return std::vector<double>(t, t + n);
 }
 
 std::size_t frameAtTime(const std::vector<double>& steps, double t)

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+class vtkInformation;
 class vtkPointSet;
 class vtkPolyData;
 
@@ -28,6 +29,10 @@ TargetPoints finitePoints(vtkPointSet* input);
  *  `why` set) when the mesh has no polygons or a non-finite point. */
 bool triangleMesh(vtkPolyData* mesh, std::vector<std::int64_t>& triangles,
                   std::vector<double>& positions, const char*& why);
+/** Publishes the input's TIME_STEPS and TIME_RANGE on the output (or removes them for a static
+ *  input) and returns the steps (empty for a static input). */
+std::vector<double> forwardTimeSteps(vtkInformation* inInfo, vtkInformation* outInfo);
+
 /** The last of the ascending time `steps` at or before `t` (with a little slack for rounding);
  *  0 when t is before the first. */
 std::size_t frameAtTime(const std::vector<double>& steps, double t);

@@ -4,6 +4,7 @@
 // frame (raw float32 = 96) and the ratio against raw, for float PCA (the paper), quantised plain
 // PCA (the codec's integers in fixed-width fields) and the full codec (prediction + zstd);
 // compression time (median of --repeats runs) and peak memory.
+#include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
@@ -57,20 +58,9 @@ int main(int argc, char** argv)
               cpuModel().c_str(), std::thread::hardware_concurrency(), repeats);
   for (const std::string& name : sequences)
   {
-    std::unique_ptr<dp::AnimatedMesh> mesh;
-    if (name == "tube")
-      mesh = std::make_unique<dp::BendingTube>();
-    else
-    {
-      const std::string folder = data + "/" + name;
-      if (!std::filesystem::is_directory(folder))
-      {
-        std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
-        continue;
-      }
-      mesh = std::make_unique<dp::MeshSequenceFiles>(
-          dp::FrameSequence::fromDirectory(folder, "*.ply"));
-    }
+    const std::unique_ptr<dp::AnimatedMesh> mesh = loadAnimation(data, name);
+    if (!mesh)
+      continue;
     const std::size_t nv = mesh->numberOfVertices(), nt = mesh->numberOfFrames();
     std::vector<double> positions;
     positions.reserve(3 * nv * nt);

@@ -8,6 +8,7 @@
 // RMS against the ground truth (the paper's measure) and RMS distance to the true surface,
 // both also in % of the bounding-box diagonal, ms per frame and peak memory; optionally the
 // paper's Table 2 ablation (none / MP / PD / both) for a solver.
+#include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
@@ -438,20 +439,9 @@ int main(int argc, char** argv)
   }
   for (const std::string& name : sequences)
   {
-    std::unique_ptr<dp::AnimatedMesh> mesh;
-    if (name == "tube")
-      mesh = std::make_unique<dp::BendingTube>();
-    else
-    {
-      const std::string folder = data + "/" + name;
-      if (!std::filesystem::is_directory(folder))
-      {
-        std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
-        continue;
-      }
-      mesh = std::make_unique<dp::MeshSequenceFiles>(
-          dp::FrameSequence::fromDirectory(folder, "*.ply"));
-    }
+    const std::unique_ptr<dp::AnimatedMesh> mesh = loadAnimation(data, name);
+    if (!mesh)
+      continue;
     const std::size_t n =
         frames ? std::min(frames, mesh->numberOfFrames()) : mesh->numberOfFrames();
     const double diagonal = dp::boundingBoxDiagonal(mesh->positions(0));

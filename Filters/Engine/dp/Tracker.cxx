@@ -39,6 +39,21 @@ constexpr int RigidIterations = 10;
 // (0.05 still let a waving sheet slide along its waves; 0.2 holds it and keeps a turning body).
 constexpr double RigidConstrained = 0.2;
 
+// The Gauss-Newton model of D^2 around a sample: (D + g.(y - x))^2.
+PlaneQuadric quadricOf(const DistanceSample& s)
+{
+  PlaneQuadric q;
+  int m = 0;
+  for (int i = 0; i < 3; ++i)
+  {
+    q.vector[i] = s.distance * s.gradient[i];
+    for (int j = i; j < 3; ++j)
+      q.matrix[m++] = s.gradient[i] * s.gradient[j];
+  }
+  q.constant = s.distance * s.distance;
+  return q;
+}
+
 // What the solvers minimise: the tracker's energy with fixed data weights.
 struct Objective
 {
@@ -285,15 +300,7 @@ int Tracker::solveGaussNewton(
       else
       {
         s = sampleData(*field, &x[3 * v], v);
-        PlaneQuadric& q = quadric[v];
-        int m = 0;
-        for (int i = 0; i < 3; ++i)
-        {
-          q.vector[i] = s.distance * s.gradient[i];
-          for (int j = i; j < 3; ++j)
-            q.matrix[m++] = s.gradient[i] * s.gradient[j];
-        }
-        q.constant = s.distance * s.distance;
+        quadric[v] = quadricOf(s);
       }
       c[v] = scale * mass[v] * weights[v] /
              (Options.squaredDistance ? Voxel : std::max(s.distance, Voxel));
@@ -470,15 +477,7 @@ void Tracker::alignRigidly(std::vector<double>& x, const DistanceField& field,
         field.sampleToPlanes(&x[3 * v], FrameNormals.data(), PlaneReach * Voxel, &Cells[v], &q);
       else
       {
-        const DistanceSample s = field.sample(&x[3 * v], &Cells[v]);
-        int m = 0;
-        for (int i = 0; i < 3; ++i)
-        {
-          q.vector[i] = s.distance * s.gradient[i];
-          for (int j = i; j < 3; ++j)
-            q.matrix[m++] = s.gradient[i] * s.gradient[j];
-        }
-        q.constant = s.distance * s.distance;
+        q = quadricOf(sampleData(field, &x[3 * v], v));
       }
       before += mass[v] * q.constant;
       Eigen::Matrix3d M;

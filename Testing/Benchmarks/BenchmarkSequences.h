@@ -1,0 +1,31 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The animated meshes the benchmarks run on: the built-in tube or a folder of ../shared/data.
+#pragma once
+
+#include "dp/AnimatedMesh.h"
+#include "dp/FrameSequence.h"
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+
+namespace dp::bench
+{
+
+/** "tube" or the PLY frames of data/name; nullptr (with a line saying so) when not there. */
+inline std::unique_ptr<dp::AnimatedMesh> loadAnimation(const std::string& data,
+                                                       const std::string& name)
+{
+  if (name == "tube")
+    return std::make_unique<dp::BendingTube>();
+  const std::string folder = data + "/" + name;
+  if (!std::filesystem::is_directory(folder))
+  {
+    std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
+    return nullptr;
+  }
+  return std::make_unique<dp::MeshSequenceFiles>(dp::FrameSequence::fromDirectory(folder, "*.ply"));
+}
+
+} // namespace dp::bench
