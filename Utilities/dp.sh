@@ -27,7 +27,10 @@ packages=(
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
   liblbfgs-dev libzstd-dev libtinygltf-dev
   python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri
+  nodejs blender
 )
+# The Khronos glTF validator, from the npm registry, for the tests of the .glb export.
+gltf_validator_version=2.0.0-dev.3.10
 
 install_packages() {
   local missing=()
@@ -44,6 +47,19 @@ install_packages() {
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
   fi
+  # npm comes with some nodejs builds and is Debian's package npm with others.
+  if ! command -v npm >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends npm >/dev/null
+  fi
+}
+
+install_gltf_validator() {
+  local folder="$build/tools/gltf-validator"
+  [[ -f "$folder/node_modules/gltf-validator/package.json" ]] && return
+  echo "== installing gltf-validator $gltf_validator_version (npm) in $folder"
+  mkdir -p "$folder"
+  npm install --prefix "$folder" --no-audit --no-fund --silent \
+    "gltf-validator@$gltf_validator_version" >/dev/null
 }
 
 build_project() {
@@ -54,6 +70,7 @@ build_project() {
   fi
   echo "== building"
   cmake --build "$build" -j "$(nproc)" -- --quiet
+  install_gltf_validator
 }
 
 command="${1:-}"

@@ -3,15 +3,19 @@
 // bending tube. For each KG error target it prints, per layout: components, bits per vertex per
 // frame (raw float32 = 96) and the ratio against raw, for float PCA (the paper), quantised plain
 // PCA (the codec's integers in fixed-width fields) and the full codec (prediction + zstd);
-// compression time (median of --repeats runs) and peak memory.
+// compression time (median of --repeats runs) and peak memory. --tube-size builds a bigger tube
+// for the memory figure; --glb writes the full codec's shape-layout export of every run (for
+// Blender or a web viewer).
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
 #include "dp/AnimatedMesh.h"
 #include "dp/FrameSequence.h"
+#include "dp/GltfExport.h"
 #include "dp/PcaCompression.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -28,6 +32,9 @@ int main(int argc, char** argv)
   std::vector<std::string> sequences = {"horse-collapse", "horse-gallop"};
   std::vector<double> targets = {0.5, 0.2, 0.1};
   std::size_t repeats = 3;
+  std::size_t tubeVertices = 0, tubeFrames = 0;
+  std::vector<dp::PcaLayout> layouts = {dp::PcaLayout::Trajectories, dp::PcaLayout::Shapes};
+  std::string glbFolder;
   try
   {
     for (int i = 1; i < argc; ++i)
@@ -41,10 +48,30 @@ int main(int argc, char** argv)
         targets = {parseDouble(arg, optionValue(argc, argv, i), 1e-6, 99.0)};
       else if (arg == "--repeats")
         repeats = parseCount(arg, optionValue(argc, argv, i), 1, 100);
+      else if (arg == "--tube-size")
+      {
+        const std::string value = optionValue(argc, argv, i);
+        const std::size_t comma = value.find(',');
+        if (comma == std::string::npos)
+          throw UsageError("--tube-size wants VERTICES,FRAMES");
+        tubeVertices = parseCount(arg, value.substr(0, comma), 100, 10000000);
+        tubeFrames = parseCount(arg, value.substr(comma + 1), 2, 100000);
+        sequences = {"tube"};
+      }
+      else if (arg == "--layout")
+      {
+        const std::string value = optionValue(argc, argv, i);
+        if (value != "shapes" && value != "trajectories")
+          throw UsageError("--layout is shapes or trajectories, not '" + value + "'");
+        layouts = {value == "shapes" ? dp::PcaLayout::Shapes : dp::PcaLayout::Trajectories};
+      }
+      else if (arg == "--glb")
+        glbFolder = optionValue(argc, argv, i);
       else
       {
         std::cerr << "Usage: BenchmarkCompression [--data DIR] [--sequence NAME|tube] "
-                     "[--target KG_PERCENT] [--repeats N]\n";
+                     "[--tube-size VERTICES,FRAMES] [--layout shapes|trajectories] "
+                     "[--target KG_PERCENT] [--repeats N] [--glb FOLDER]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -58,7 +85,18 @@ int main(int argc, char** argv)
               cpuModel().c_str(), std::thread::hardware_concurrency(), repeats);
   for (const std::string& name : sequences)
   {
-    const std::unique_ptr<dp::AnimatedMesh> mesh = loadAnimation(data, name);
+    std::unique_ptr<dp::AnimatedMesh> mesh;
+    if (tubeVertices)
+    {
+      // About tubeVertices vertices: rings of 48 around the axis.
+      dp::BendingTube::Options tube;
+      tube.segments = 48;
+      tube.rings = std::max<std::size_t>(2, tubeVertices / tube.segments);
+      tube.frames = tubeFrames;
+      mesh = std::make_unique<dp::BendingTube>(tube);
+    }
+    else
+      mesh = loadAnimation(data, name);
     if (!mesh)
       continue;
     const std::size_t nv = mesh->numberOfVertices(), nt = mesh->numberOfFrames();
@@ -74,7 +112,7 @@ int main(int argc, char** argv)
     std::printf("%6s %-12s %-14s %5s %9s %8s %9s %10s %9s\n", "KG %", "layout", "coding", "comp",
                 "bpvf", "vs raw", "KG got", "ms", "peak MiB");
     for (double target : targets)
-      for (dp::PcaLayout layout : {dp::PcaLayout::Trajectories, dp::PcaLayout::Shapes})
+      for (dp::PcaLayout layout : layouts)
       {
         const char* layoutName = layout == dp::PcaLayout::Shapes ? "shapes" : "trajectories";
         dp::PcaOptions o;
@@ -112,6 +150,15 @@ int main(int argc, char** argv)
                         "fewer than float PCA\n",
                         "", "", report.quantisedPlainBits / report.bitsPerVertexFrame,
                         floatBits / report.bitsPerVertexFrame);
+            if (!glbFolder.empty() && layout == dp::PcaLayout::Shapes)
+            {
+              std::filesystem::create_directories(glbFolder);
+              char file[64];
+              std::snprintf(file, sizeof(file), "-kg%.2f.glb", target);
+              const std::string path = (std::filesystem::path(glbFolder) / (name + file)).string();
+              dp::writeGlb(path, s);
+              std::printf("%6s %-12s wrote %s\n", "", "", path.c_str());
+            }
           }
         }
       }

@@ -1,5 +1,7 @@
 """Shared helpers for the Python tests: where the build put things, and an error recorder."""
+import json
 import os
+import shutil
 import subprocess
 import tempfile
 import unittest
@@ -8,6 +10,8 @@ from vtkmodules.vtkCommonCore import vtkCommand
 
 BIN_DIR = os.environ.get("DP_BIN_DIR", "")
 PLUGIN = os.environ.get("DP_PLUGIN", "")
+GLTF_VALIDATOR = os.environ.get("DP_GLTF_VALIDATOR", "")
+UTILITIES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Utilities")
 
 
 def tool(name):
@@ -25,6 +29,36 @@ def run_tool(name, *args, check=True):
     if check and result.returncode != 0:
         raise AssertionError(f"{name} {args} failed ({result.returncode}):\n{result.stderr}")
     return result
+
+
+def validate_gltf(path):
+    """The Khronos glTF validator's report on a file (dict: errors, warnings, messages, info)."""
+    module = os.path.join(GLTF_VALIDATOR, "node_modules")
+    if not os.path.isdir(os.path.join(module, "gltf-validator")):
+        raise AssertionError(f"gltf-validator not found in {GLTF_VALIDATOR!r}: "
+                             "Utilities/dp.sh build installs it (npm)")
+    result = subprocess.run(["node", os.path.join(UTILITIES, "gltf", "validate_gltf.js"), path],
+                            capture_output=True, text=True, timeout=120,
+                            env=dict(os.environ, NODE_PATH=module))
+    if result.returncode != 0:
+        raise AssertionError(f"the validator did not run on {path}:\n{result.stderr}")
+    return json.loads(result.stdout)
+
+
+def blender_report(path, frames=()):
+    """What Blender (batch mode) makes of a .glb: see Utilities/gltf/blender_glb_report.py."""
+    blender = shutil.which("blender")
+    if not blender:
+        raise AssertionError("blender not found: Utilities/dp.sh build installs it (apt)")
+    result = subprocess.run(
+        [blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P",
+         os.path.join(UTILITIES, "gltf", "blender_glb_report.py"), "--", path,
+         *map(str, frames)], capture_output=True, text=True, timeout=300)
+    lines = [l for l in result.stdout.splitlines() if l.startswith("DP-REPORT ")]
+    if result.returncode != 0 or not lines:
+        raise AssertionError(f"Blender could not import {path}:\n{result.stdout[-2000:]}\n"
+                             f"{result.stderr[-2000:]}")
+    return json.loads(lines[-1][len("DP-REPORT "):])
 
 
 class MessageRecorder:

@@ -9,7 +9,8 @@ from vtkmodules.numpy_interface import dataset_adapter as dsa
 from vtkmodules.vtkIOGeometry import vtkGLTFReader
 
 import dynamicpoints
-from dp_testing import MessageRecorder, TempDirTestCase, run_tool
+from dp_testing import (MessageRecorder, TempDirTestCase, blender_report, run_tool,
+                        validate_gltf)
 
 FRAMES = 16
 
@@ -100,7 +101,8 @@ class TestPCACompressFilter(TempDirTestCase):
     def test_a_damaged_file_is_named_in_the_error_and_gives_no_geometry(self):
         path = self.path("tube.dpz")
         self.compressor(FileName=path).Update()
-        data = open(path, "rb").read()
+        with open(path, "rb") as f:
+            data = f.read()
         for name, content in (("cut.dpz", data[: len(data) // 2]),
                               ("flipped.dpz", data[:-10] + bytes([data[-10] ^ 0xFF]) + data[-9:]),
                               ("text.dpz", b"hello")):
@@ -141,6 +143,39 @@ class TestPCACompressFilter(TempDirTestCase):
         kg = 100 * np.linalg.norm(originals - played) / np.linalg.norm(centred)
         self.assertLessEqual(kg, 0.2 * 1.01)  # float32 storage
         self.assertGreater(k, 0)
+
+    def test_the_gltf_export_passes_the_khronos_validator(self):
+        glb = self.path("tube.glb")
+        self.compressor(GLBFileName=glb, ErrorTarget=0.2).Update()
+        report = validate_gltf(glb)
+        self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
+        self.assertEqual(report["info"]["animationCount"], 1)
+        self.assertEqual(report["info"]["drawCallCount"], 1)
+        # A deliberately broken copy is caught, so the check above can fail.
+        with open(glb, "rb") as f:
+            data = bytearray(f.read())
+        data[8:12] = (len(data) + 4).to_bytes(4, "little")  # header length disagrees with size
+        with open(self.path("broken.glb"), "wb") as out:
+            out.write(data)
+        self.assertGreater(validate_gltf(self.path("broken.glb"))["errors"], 0)
+
+    def test_blender_imports_every_frame_and_morph_target(self):
+        glb = self.path("tube.glb")
+        f = self.compressor(GLBFileName=glb, ErrorTarget=0.2)
+        f.Update()
+        k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
+        report = blender_report(glb, (0, 7, FRAMES - 1))
+        self.assertEqual(report["mesh_objects"], 1)
+        self.assertEqual(report["morph_targets"], k)
+        self.assertEqual(report["frames"], FRAMES)
+        self.assertEqual(report["fps"], 24)
+        for t in (0, 7, FRAMES - 1):
+            f.UpdateTimeStep(t)
+            rebuilt = np.array(dsa.WrapDataObject(f.GetOutput()).Points)
+            played = np.array(report["positions"][str(t)])
+            self.assertEqual(played.shape, rebuilt.shape)
+            # Same vertices in the same order, at Blender's float32 precision.
+            np.testing.assert_allclose(played, rebuilt, atol=1e-5)
 
     def test_a_change_of_connectivity_is_refused_by_frame(self):
         other = self.path("other.ply")

@@ -151,8 +151,58 @@ std::int64_t unzigzag(std::uint64_t v)
   return static_cast<std::int64_t>(v >> 1) ^ -static_cast<std::int64_t>(v & 1);
 }
 
-std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride, int order)
+// For each vertex, its mesh neighbours with a smaller index: the values a decoder going through
+// the vertices in order already has, so a per-vertex sequence can be predicted from them.
+struct EarlierNeighbours
 {
+  EarlierNeighbours(const std::vector<std::int64_t>& triangles, std::size_t vertices)
+  {
+    std::vector<std::pair<std::size_t, std::size_t>> edges; // (later, earlier)
+    edges.reserve(triangles.size());
+    for (std::size_t t = 0; t + 2 < triangles.size(); t += 3)
+      for (int e = 0; e < 3; ++e)
+      {
+        const auto a = static_cast<std::size_t>(triangles[t + e]);
+        const auto b = static_cast<std::size_t>(triangles[t + (e + 1) % 3]);
+        if (a != b)
+          edges.emplace_back(std::max(a, b), std::min(a, b));
+      }
+    std::sort(edges.begin(), edges.end());
+    edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+    start.assign(vertices + 1, 0);
+    for (const auto& e : edges)
+      ++start[e.first + 1];
+    for (std::size_t v = 0; v < vertices; ++v)
+      start[v + 1] += start[v];
+    index.reserve(edges.size());
+    for (const auto& e : edges)
+      index.push_back(e.second);
+  }
+  std::vector<std::size_t> start; // neighbours of v: index[start[v] .. start[v + 1])
+  std::vector<std::size_t> index;
+};
+
+// Prediction orders: 0 none, 1 the value one stride back, 2 linear from two strides back,
+// 3 (per-vertex sequences only) the rounded mean of the same coordinate at the vertex's
+// earlier mesh neighbours, falling back to order 1 for a vertex without any.
+constexpr int MeshOrder = 3;
+
+std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride, int order,
+                       const EarlierNeighbours* mesh)
+{
+  if (order == MeshOrder)
+  {
+    const std::size_t vertex = i / stride, c = i % stride;
+    const std::size_t first = mesh->start[vertex], last = mesh->start[vertex + 1];
+    if (last > first)
+    {
+      std::int64_t sum = 0;
+      for (std::size_t n = first; n < last; ++n)
+        sum += v[mesh->index[n] * stride + c];
+      return std::llround(static_cast<double>(sum) / static_cast<double>(last - first));
+    }
+    order = 1;
+  }
   if (order == 0 || i < stride)
     return 0;
   if (order == 1 || i < 2 * stride)
@@ -160,16 +210,18 @@ std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride,
   return 2 * v[i - stride] - v[i - 2 * stride];
 }
 
+// `mesh` is given for sequences of `stride` values per vertex, which may then use MeshOrder.
 void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::size_t count,
-                 std::size_t stride)
+                 std::size_t stride, const EarlierNeighbours* mesh = nullptr)
 {
   int best = 0;
   double bestCost = std::numeric_limits<double>::infinity();
-  for (int order = 0; order <= 2; ++order)
+  for (int order = 0; order <= (mesh ? MeshOrder : 2); ++order)
   {
     double cost = 0;
     for (std::size_t i = 0; i < count; ++i)
-      cost += std::log2(1.0 + static_cast<double>(zigzag(v[i] - predicted(v, i, stride, order))));
+      cost +=
+          std::log2(1.0 + static_cast<double>(zigzag(v[i] - predicted(v, i, stride, order, mesh))));
     if (cost < bestCost)
     {
       bestCost = cost;
@@ -178,7 +230,7 @@ void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::siz
   }
   out.push_back(static_cast<std::uint8_t>(best));
   for (std::size_t i = 0; i < count; ++i)
-    putVarint(out, zigzag(v[i] - predicted(v, i, stride, best)));
+    putVarint(out, zigzag(v[i] - predicted(v, i, stride, best, mesh)));
 }
 
 class ByteReader
@@ -220,13 +272,14 @@ public:
     Position += sizeof(T);
     return v;
   }
-  void sequence(std::int64_t* v, std::size_t count, std::size_t stride)
+  void sequence(std::int64_t* v, std::size_t count, std::size_t stride,
+                const EarlierNeighbours* mesh = nullptr)
   {
     const int order = byte();
-    if (order > 2)
+    if (order > (mesh ? MeshOrder : 2))
       fail("unknown prediction order " + std::to_string(order));
     for (std::size_t i = 0; i < count; ++i)
-      v[i] = unzigzag(varint()) + predicted(v, i, stride, order);
+      v[i] = unzigzag(varint()) + predicted(v, i, stride, order, mesh);
   }
   std::size_t position() const { return Position; }
   std::size_t remaining() const { return Size - Position; }
@@ -248,16 +301,22 @@ void putRaw(std::vector<std::uint8_t>& out, T v)
 // basis (3: the same coordinate one frame or one vertex back), one value per row in the weights.
 constexpr std::size_t MeanStride = 3, BasisStride = 3, WeightStride = 1;
 
-void putGeometry(std::vector<std::uint8_t>& out, const QuantisedPca& q)
+// The per-vertex parts: the mean and the basis in the shape layout, the weights in the
+// trajectory layout. They may be predicted from mesh neighbours; the others run along time.
+void putGeometry(std::vector<std::uint8_t>& out, const QuantisedPca& q,
+                 const EarlierNeighbours& mesh)
 {
   const PcaModel& m = q.model;
-  putSequence(out, q.meanIntegers.data(), q.meanIntegers.size(), MeanStride);
+  const bool shapes = m.layout == PcaLayout::Shapes;
+  const EarlierNeighbours* perVertex = shapes ? &mesh : nullptr;
+  putSequence(out, q.meanIntegers.data(), q.meanIntegers.size(), MeanStride, perVertex);
   const std::size_t rows = static_cast<std::size_t>(m.basis.rows());
   for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.basisIntegers.data() + j * rows, rows, BasisStride);
+    putSequence(out, q.basisIntegers.data() + j * rows, rows, BasisStride, perVertex);
   const std::size_t wrows = static_cast<std::size_t>(m.weights.rows());
   for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.weightIntegers.data() + j * wrows, wrows, WeightStride);
+    putSequence(out, q.weightIntegers.data() + j * wrows, wrows, WeightStride,
+                shapes ? nullptr : &mesh);
 }
 
 std::vector<std::uint8_t> zstdCompress(const std::vector<std::uint8_t>& raw)
@@ -440,6 +499,7 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
   if (triangles.size() % 3)
     throw std::invalid_argument("triangles: not a multiple of 3 indices");
   validateFinite(positions, 3 * vertices * frames);
+  const EarlierNeighbours mesh(triangles, vertices);
   auto report = [&](double fraction)
   {
     if (progress && !progress(fraction))
@@ -580,7 +640,7 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
       }
       passes(good, q);
       std::vector<std::uint8_t> raw;
-      putGeometry(raw, q);
+      putGeometry(raw, q, mesh);
       payload = zstdCompress(raw);
       bits = 8.0 * static_cast<double>(payload.size());
       plainBits = fixedWidthBits(q.meanIntegers.data(), q.meanIntegers.size());
@@ -700,7 +760,7 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   putSequence(connectivity, s.triangles.data(), s.triangles.size(), 3);
   putSection(out, connectivity);
   std::vector<std::uint8_t> geometry;
-  putGeometry(geometry, q);
+  putGeometry(geometry, q, EarlierNeighbours(s.triangles, m.vertices));
   putSection(out, geometry);
   return out;
 }
@@ -787,14 +847,18 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
     const std::vector<std::uint8_t> raw =
         getSection(in, bytes, "geometry", 10 * numbers + 1 + 2 * k);
     ByteReader g(raw.data(), raw.size(), name + " (geometry)");
+    const EarlierNeighbours mesh(s.triangles, nv);
+    const bool shapes = m.layout == PcaLayout::Shapes;
+    const EarlierNeighbours* perVertex = shapes ? &mesh : nullptr;
     q.meanIntegers.resize(meanCount);
-    g.sequence(q.meanIntegers.data(), meanCount, MeanStride);
+    g.sequence(q.meanIntegers.data(), meanCount, MeanStride, perVertex);
     q.basisIntegers.resize(k * basisRows);
     for (std::uint64_t j = 0; j < k; ++j)
-      g.sequence(q.basisIntegers.data() + j * basisRows, basisRows, BasisStride);
+      g.sequence(q.basisIntegers.data() + j * basisRows, basisRows, BasisStride, perVertex);
     q.weightIntegers.resize(k * weightRows);
     for (std::uint64_t j = 0; j < k; ++j)
-      g.sequence(q.weightIntegers.data() + j * weightRows, weightRows, WeightStride);
+      g.sequence(q.weightIntegers.data() + j * weightRows, weightRows, WeightStride,
+                 shapes ? nullptr : &mesh);
     if (g.remaining() != 0)
       g.fail("unexpected bytes after the weights");
   }

@@ -23,10 +23,12 @@
  * The codec (quantise = true): one quantisation step q in position units; the weights use q,
  * basis vector j uses q / sigma_j and the mean q / sqrt(times it is repeated), so every stored
  * number adds about q^2 / 12 to ||A - A'||^2. Integers along time (weights of Shapes; basis of
- * Trajectories; the centroid trajectory) are predicted from the previous one or two values, the
- * rest from the previous vertex; the order is chosen per sequence; residuals are zigzag varints
- * compressed by zstd. The component count and q are chosen for the fewest bytes that meet the
- * target, checked on the actual reconstruction.
+ * Trajectories; the centroid trajectory) are predicted from the previous one or two values; the
+ * per-vertex ones (mean and basis of Shapes, weights of Trajectories) from the previous vertex
+ * or from the mean of the vertex's mesh neighbours of smaller index (which the decoder already
+ * has); the predictor is chosen per sequence; residuals are zigzag varints compressed by zstd. The
+ * component count and q are chosen for the fewest bytes that meet the target, checked on the actual
+ * reconstruction.
  *
  * Limits: the whole sequence is in memory; the SVD through a Gram matrix loses components whose
  * singular value is under ~1e-8 of the largest (far below any useful target).
