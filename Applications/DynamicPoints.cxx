@@ -1,41 +1,84 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// dynamicpoints: the main job. Today it reads a point sequence through the VTK pipeline and
-// prints a summary of every frame; tracking and compression join it as they land.
+// dynamicpoints: the main job. A point sequence in; out: the tracked mesh sequence (.pvd + .vtp,
+// written frame by frame so an interrupted run keeps what it finished), the compressed file
+// (.dpz), the glTF animation (.glb) and a report (JSON + PNG plot). The work is done by the
+// VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkPCACompressFilter;
+// this file only drives it, writes the files and talks to the user.
 #include "CommandLine.h"
+#include "FramePlot.h"
 
 #include "dp/AnimatedMesh.h"
 #include "dp/SurfaceSampler.h"
 
+#include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
+#include "vtkDataArray.h"
+#include "vtkDeformableTrackFilter.h"
+#include "vtkExecutive.h"
+#include "vtkFieldData.h"
 #include "vtkNew.h"
+#include "vtkPCACompressFilter.h"
 #include "vtkPointData.h"
 #include "vtkPointSequenceSource.h"
 #include "vtkPolyData.h"
+#include "vtkXMLPolyDataWriter.h"
 
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <sstream>
+#include <unistd.h>
 
 namespace
 {
+namespace fs = std::filesystem;
 
 const char* const Usage = R"(Usage: dynamicpoints [OPTIONS] [INPUT]
 
-Reads a time series of point clouds and prints a summary of every frame.
+Turns a time series of point clouds into one deforming triangle mesh of fixed
+connectivity, tracked frame by frame; then compresses it and writes it for ParaView, VTK
+and glTF viewers.
 
 INPUT is a folder of point files (one per frame), a ParaView .series file, or one point
 file. Readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk.
 Without INPUT, the built-in sample sequence is generated first: a bending, twisting tube,
 30 frames of 20000 random surface points with normals, written to OUTPUT/input/.
 
-Options:
-  --pattern GLOB   files of an INPUT folder to read (default: *)
-  --output DIR     where generated and result files go (default: dynamicpoints-output)
-  -h, --help       show this help
+Written to OUTPUT:
+  tracked.pvd, tracked/*.vtp  the tracked mesh, one file per frame (open the .pvd in
+                              ParaView); brought up to date after every frame
+  tracked.dpz                 the compressed sequence (ParaView or vtkCompressedSequenceReader)
+  tracked.glb                 glTF 2.0 animation: morph targets, 24 frames per second
+  report.json, report.png     per-frame residual and time; compression figures
 
-Exit status: 0 when every frame was read, 1 when a frame failed, 2 for a bad command line.
+Options:
+  --pattern GLOB      files of an INPUT folder to read (default: *)
+  --template FILE     mesh to deform (.ply .obj .vtp .vtk ...); default: a mesh
+                      reconstructed from the first frame's points
+  --vertices N        vertex count of the reconstructed template (default: 1000)
+  --frames N          track only the first N frames (default: all)
+  --error-target KG   compression error target, Karni-Gotsman error in percent
+                      (default: 0.2)
+  --output DIR        where results go (default: dynamicpoints-output)
+  --quiet             no per-frame table and no progress bar
+  -h, --help          show this help
+
+Exit status: 0 when every output was written; 1 when a frame or an output failed (the
+frames tracked before it stay readable); 2 for a bad command line; 130 when interrupted.
 )";
+
+volatile std::sig_atomic_t Interrupted = 0;
+extern "C" void onInterrupt(int)
+{
+  Interrupted = 1;
+}
 
 // Turns VTK errors and warnings into single lines on stderr and counts the errors.
 class MessagePrinter : public vtkCommand
@@ -52,95 +95,428 @@ public:
       line = line.substr(colon + 3);
     while (!line.empty() && (line.back() == '\n' || line.back() == ' '))
       line.pop_back();
+    if (ProgressShown)
+      std::cerr << "\r\033[K";
     std::cerr << (event == vtkCommand::ErrorEvent ? "error: " : "warning: ") << line << "\n";
     if (event == vtkCommand::ErrorEvent)
       ++Errors;
   }
   int Errors = 0;
+  bool ProgressShown = false;
 };
 
-int run(int argc, char** argv)
+// A one-line progress bar on stderr, drawn only when stderr is a terminal.
+class ProgressBar
+{
+public:
+  explicit ProgressBar(bool enabled) : Enabled(enabled && isatty(STDERR_FILENO)) {}
+  void show(const std::string& what, double fraction)
+  {
+    if (!Enabled)
+      return;
+    const int width = 30, filled = static_cast<int>(std::lround(width * fraction));
+    std::fprintf(stderr, "\r\033[K%-24s [%s%s] %3d%%", what.c_str(),
+                 std::string(filled, '#').c_str(), std::string(width - filled, '.').c_str(),
+                 static_cast<int>(std::lround(100 * fraction)));
+    std::fflush(stderr);
+  }
+  void clear()
+  {
+    if (Enabled)
+      std::fprintf(stderr, "\r\033[K");
+  }
+  bool enabled() const { return Enabled; }
+
+private:
+  bool Enabled;
+};
+
+// Aborts a filter when Ctrl-C was pressed, and moves the progress bar.
+class ProgressWatcher : public vtkCommand
+{
+public:
+  static ProgressWatcher* New() { return new ProgressWatcher; }
+  void Execute(vtkObject* caller, unsigned long, void* callData) override
+  {
+    if (Interrupted)
+      static_cast<vtkAlgorithm*>(caller)->SetAbortExecute(1);
+    else if (Bar)
+      Bar->show(What, *static_cast<double*>(callData));
+  }
+  ProgressBar* Bar = nullptr;
+  std::string What;
+};
+
+/** Writes `text` to `path` through a file beside it, so a reader never sees half a file. */
+void writeAtomically(const fs::path& path, const std::string& text)
+{
+  const fs::path partial = path.string() + ".partial";
+  {
+    std::ofstream out(partial, std::ios::trunc);
+    out << text;
+    if (!out)
+      throw std::runtime_error(path.string() + ": cannot write");
+  }
+  fs::rename(partial, path);
+}
+
+// The ParaView collection file listing the frames written so far.
+std::string pvdText(const std::vector<std::pair<double, std::string>>& frames)
+{
+  std::ostringstream s;
+  s.precision(17);
+  s << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [time, file] : frames)
+    s << "    <DataSet timestep=\"" << time << "\" part=\"0\" file=\"" << file << "\"/>\n";
+  s << "  </Collection>\n</VTKFile>\n";
+  return s.str();
+}
+
+double fieldValue(vtkDataObject* data, const char* name)
+{
+  vtkDataArray* a = vtkArrayDownCast<vtkDataArray>(data->GetFieldData()->GetAbstractArray(name));
+  return a && a->GetNumberOfTuples() > 0 ? a->GetComponent(0, 0) : std::nan("");
+}
+
+struct FrameRecord
+{
+  int frame;
+  double time, rmsResidual, maxResidual, milliseconds;
+  long long points, iterations;
+};
+
+struct Settings
+{
+  std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
+  int vertices = 1000;
+  long long frames = 0; // 0: all
+  double errorTarget = 0.2;
+  bool quiet = false;
+};
+
+Settings parse(int argc, char** argv, bool& help)
 {
   using namespace dp::cli;
-  std::string input, pattern = "*", output = "dynamicpoints-output";
+  Settings s;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     if (arg == "-h" || arg == "--help")
-    {
-      std::cout << Usage;
-      return 0;
-    }
+      help = true;
     else if (arg == "--pattern")
-      pattern = optionValue(argc, argv, i);
+      s.pattern = optionValue(argc, argv, i);
     else if (arg == "--output")
-      output = optionValue(argc, argv, i);
+      s.output = optionValue(argc, argv, i);
+    else if (arg == "--template")
+      s.templateFile = optionValue(argc, argv, i);
+    else if (arg == "--vertices")
+      s.vertices = static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 20, 10000000));
+    else if (arg == "--frames")
+      s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
+    else if (arg == "--error-target")
+      s.errorTarget = parseDouble(arg, optionValue(argc, argv, i), 1e-4, 50);
+    else if (arg == "--quiet")
+      s.quiet = true;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
-    else if (input.empty())
-      input = arg;
+    else if (s.input.empty())
+      s.input = arg;
     else
-      throw UsageError("more than one INPUT given ('" + input + "', '" + arg + "')");
+      throw UsageError("more than one INPUT given ('" + s.input + "', '" + arg + "')");
   }
+  return s;
+}
 
-  vtkNew<vtkPointSequenceSource> source;
-  vtkNew<MessagePrinter> printer;
-  source->AddObserver(vtkCommand::ErrorEvent, printer);
-  source->AddObserver(vtkCommand::WarningEvent, printer);
-
-  if (input.empty())
+int run(int argc, char** argv)
+{
+  bool help = false;
+  const Settings settings = parse(argc, argv, help);
+  if (help)
   {
-    const std::string folder = (std::filesystem::path(output) / "input").string();
+    std::cout << Usage;
+    return 0;
+  }
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  const auto started = std::chrono::steady_clock::now();
+
+  vtkNew<MessagePrinter> printer;
+  // The executives only repeat "returned failure" after the algorithm has said why: quiet.
+  vtkNew<vtkCallbackCommand> quiet;
+  auto watch = [&](vtkAlgorithm* a)
+  {
+    a->AddObserver(vtkCommand::ErrorEvent, printer);
+    a->AddObserver(vtkCommand::WarningEvent, printer);
+    a->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, quiet);
+  };
+  ProgressBar bar(!settings.quiet);
+  printer->ProgressShown = bar.enabled();
+
+  // --- The input sequence ---------------------------------------------------------------------
+  vtkNew<vtkPointSequenceSource> source;
+  watch(source);
+  const fs::path output = settings.output;
+  std::string inputName = settings.input;
+  if (settings.input.empty())
+  {
+    const std::string folder = (output / "input").string();
     std::cout << "No input given: generating the built-in sample sequence in " << folder << "\n";
     dp::SamplerOptions sampling;
     sampling.pointsPerFrame = 20000;
     sampling.seed = 1;
-    source->SetFileName(dp::writeSampledSequence(dp::BendingTube(), sampling, folder).c_str());
+    inputName = dp::writeSampledSequence(dp::BendingTube(), sampling, folder);
+    source->SetFileName(inputName.c_str());
   }
-  else if (std::filesystem::is_directory(input))
+  else if (fs::is_directory(settings.input))
   {
-    source->SetDirectoryName(input.c_str());
-    source->SetFilePattern(pattern.c_str());
+    source->SetDirectoryName(settings.input.c_str());
+    source->SetFilePattern(settings.pattern.c_str());
   }
   else
-  {
-    source->SetFileName(input.c_str());
-  }
-
-  const int frames = source->GetNumberOfFrames();
+    source->SetFileName(settings.input.c_str());
+  int frames = source->GetNumberOfFrames();
   if (frames < 0)
     return 1; // the printer has said why
-  std::cout << "Sequence: " << frames << " frame(s)\n";
-  std::printf("%6s %10s %9s %8s  %-52s %s\n", "frame", "time", "points", "dropped",
-              "bounds (xmin xmax ymin ymax zmin zmax)", "point arrays");
-  int failed = 0;
-  for (int f = 0; f < frames; ++f)
+  if (settings.frames > 0 && settings.frames < frames)
   {
-    const int before = printer->Errors;
-    source->UpdateTimeStep(source->GetFrameTime(f));
-    if (printer->Errors > before)
-    {
-      ++failed;
-      continue;
-    }
-    vtkPolyData* frame = source->GetOutput();
-    double b[6];
-    frame->GetBounds(b);
-    std::ostringstream arrays;
-    for (int a = 0; a < frame->GetPointData()->GetNumberOfArrays(); ++a)
-      arrays << (a ? "," : "") << frame->GetPointData()->GetArrayName(a);
-    char bounds[128];
-    std::snprintf(bounds, sizeof(bounds), "%8.3g %8.3g %8.3g %8.3g %8.3g %8.3g", b[0], b[1], b[2],
-                  b[3], b[4], b[5]);
-    std::printf("%6d %10.4g %9lld %8lld  %-52s %s\n", f, source->GetFrameTime(f),
-                static_cast<long long>(frame->GetNumberOfPoints()),
-                static_cast<long long>(source->GetNumberOfDroppedPoints()), bounds,
-                arrays.str().c_str());
+    // Only the first N frames: the same files, listed one by one (times kept).
+    std::vector<std::string> paths;
+    for (int f = 0; f < settings.frames; ++f)
+      paths.emplace_back(source->GetFramePath(f));
+    const double interval =
+        settings.frames > 1 ? source->GetFrameTime(1) - source->GetFrameTime(0) : 1.0;
+    source->SetFileName(nullptr);
+    source->SetDirectoryName(nullptr);
+    for (const std::string& p : paths)
+      source->AddFileName(p.c_str());
+    if (interval > 0)
+      source->SetFrameInterval(interval);
+    frames = source->GetNumberOfFrames();
   }
-  std::cout << (frames - failed) << " of " << frames << " frame(s) read";
-  if (failed)
-    std::cout << ", " << failed << " failed (see the errors above)";
-  std::cout << ".\n";
+  std::cout << "Sequence: " << frames << " frame(s) from " << inputName << "\n";
+
+  // --- Tracking ----------------------------------------------------------------------------
+  vtkNew<vtkDeformableTrackFilter> tracker;
+  watch(tracker);
+  tracker->SetInputConnection(source->GetOutputPort());
+  tracker->SetTemplateVertices(settings.vertices);
+  vtkNew<vtkPointSequenceSource> templateReader;
+  if (!settings.templateFile.empty())
+  {
+    watch(templateReader);
+    templateReader->SetFileName(settings.templateFile.c_str());
+    if (templateReader->GetNumberOfFrames() < 0)
+      return 1;
+    templateReader->Update();
+    if (printer->Errors)
+      return 1;
+    if (templateReader->GetOutput()->GetNumberOfPolys() == 0)
+    {
+      std::cerr << "error: " << settings.templateFile
+                << ": has no polygons, so it cannot be the template mesh\n";
+      return 1;
+    }
+    tracker->SetTemplateConnection(templateReader->GetOutputPort());
+  }
+  vtkNew<ProgressWatcher> trackProgress;
+  trackProgress->Bar = &bar;
+  tracker->AddObserver(vtkCommand::ProgressEvent, trackProgress);
+
+  const fs::path trackedFolder = output / "tracked";
+  fs::create_directories(trackedFolder);
+  for (const auto& entry : fs::directory_iterator(trackedFolder)) // a previous run's frames
+    if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
+      fs::remove(entry.path());
+  const fs::path pvd = output / "tracked.pvd";
+  std::vector<std::pair<double, std::string>> written;
+  std::vector<FrameRecord> records;
+  vtkNew<vtkXMLPolyDataWriter> writer;
+  writer->SetDataModeToAppended();
+  writer->SetCompressorTypeToZLib();
+  watch(writer);
+  double diagonal = 0;
+  long long templateVertices = 0, templateTriangles = 0;
+  if (!settings.quiet)
+    std::printf("%6s %10s %9s %6s %12s %12s %9s\n", "frame", "time", "points", "iter", "rms dist",
+                "max dist", "ms");
+  bool failed = false;
+  for (int f = 0; f < frames && !Interrupted; ++f)
+  {
+    const double time = source->GetFrameTime(f);
+    const int errorsBefore = printer->Errors;
+    trackProgress->What = "tracking frame " + std::to_string(f + 1) + "/" + std::to_string(frames);
+    tracker->UpdateTimeStep(time);
+    if (Interrupted)
+      break;
+    vtkPolyData* mesh = tracker->GetOutput();
+    if (printer->Errors > errorsBefore || mesh->GetNumberOfPoints() == 0 ||
+        tracker->GetNumberOfCachedFrames() != f + 1)
+    {
+      bar.clear();
+      std::cerr << "error: tracking stopped at frame " << f << " (" << source->GetFramePath(f)
+                << "); frames 0-" << f - 1 << " are in " << pvd.string() << "\n";
+      failed = true;
+      break;
+    }
+    if (f == 0)
+    {
+      double b[6];
+      mesh->GetBounds(b);
+      diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+                           (b[5] - b[4]) * (b[5] - b[4]));
+      templateVertices = mesh->GetNumberOfPoints();
+      templateTriangles = mesh->GetNumberOfPolys();
+    }
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
+    const fs::path file = trackedFolder / name;
+    const std::string partial = file.string() + ".partial";
+    writer->SetInputData(mesh);
+    writer->SetFileName(partial.c_str());
+    if (!writer->Write())
+    {
+      bar.clear();
+      std::cerr << "error: " << file.string() << ": cannot write\n";
+      failed = true;
+      break;
+    }
+    fs::rename(partial, file);
+    written.emplace_back(time, (fs::path("tracked") / name).string());
+    writeAtomically(pvd, pvdText(written));
+
+    vtkDataArray* residual = mesh->GetPointData()->GetArray("Residual");
+    double sum = 0, largest = 0;
+    for (vtkIdType i = 0; residual && i < residual->GetNumberOfTuples(); ++i)
+    {
+      const double r = residual->GetComponent(i, 0);
+      sum += r * r;
+      largest = std::max(largest, r);
+    }
+    const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
+    const FrameRecord record{f,
+                             time,
+                             std::sqrt(sum / n),
+                             largest,
+                             1000 * fieldValue(mesh, "Seconds"),
+                             static_cast<long long>(source->GetOutput()->GetNumberOfPoints()),
+                             static_cast<long long>(fieldValue(mesh, "Iterations"))};
+    records.push_back(record);
+    if (!settings.quiet)
+    {
+      bar.clear();
+      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f\n", f, time, record.points,
+                  record.iterations, record.rmsResidual, record.maxResidual, record.milliseconds);
+      std::fflush(stdout);
+    }
+  }
+  bar.clear();
+  if (Interrupted)
+  {
+    std::cerr << "interrupted: " << written.size() << " of " << frames << " frame(s) tracked, in "
+              << pvd.string() << "; nothing compressed\n";
+    return 130;
+  }
+  std::cout << written.size() << " of " << frames << " frame(s) tracked: " << pvd.string() << " ("
+            << templateVertices << " vertices, " << templateTriangles << " triangles)\n";
+
+  // --- Compression -------------------------------------------------------------------------
+  nlohmann::json compression;
+  const fs::path dpz = output / "tracked.dpz", glb = output / "tracked.glb";
+  if (!failed)
+  {
+    vtkNew<vtkPCACompressFilter> compressor;
+    watch(compressor);
+    compressor->SetInputConnection(tracker->GetOutputPort());
+    compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
+    compressor->SetErrorTarget(settings.errorTarget);
+    compressor->SetFileName(dpz.string().c_str());
+    compressor->SetGLBFileName(glb.string().c_str());
+    vtkNew<ProgressWatcher> compressProgress;
+    compressProgress->Bar = &bar;
+    compressProgress->What = "compressing";
+    compressor->AddObserver(vtkCommand::ProgressEvent, compressProgress);
+    const int errorsBefore = printer->Errors;
+    compressor->Update();
+    bar.clear();
+    if (Interrupted)
+    {
+      std::cerr << "interrupted while compressing: the tracked frames are in " << pvd.string()
+                << "\n";
+      return 130;
+    }
+    if (printer->Errors > errorsBefore)
+    {
+      std::cerr << "error: compression failed; the tracked frames are in " << pvd.string() << "\n";
+      failed = true;
+    }
+    else
+    {
+      vtkPolyData* result = compressor->GetOutput();
+      for (const char* name :
+           {"Components", "KGError", "MaxError", "MaxErrorRelative", "BitsPerVertexFrame",
+            "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1", "PaperRatio"})
+        compression[name] = fieldValue(result, name);
+      compression["ErrorTargetKG"] = settings.errorTarget;
+      compression["Bytes"] = fs::file_size(dpz);
+      std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame (%.1fx "
+                  "smaller than float32), KG error %.3g%%\n",
+                  dpz.string().c_str(), fieldValue(result, "Components"),
+                  fieldValue(result, "BitsPerVertexFrame"),
+                  96.0 / fieldValue(result, "BitsPerVertexFrame"), fieldValue(result, "KGError"));
+      std::printf("glTF: %s\n", glb.string().c_str());
+    }
+  }
+
+  // --- Report ------------------------------------------------------------------------------
+  nlohmann::json report;
+  report["input"] = inputName;
+  report["frames"] = frames;
+  report["framesTracked"] = written.size();
+  report["template"] = {{"source", settings.templateFile.empty() ? "reconstructed from frame 0"
+                                                                 : settings.templateFile},
+                        {"vertices", templateVertices},
+                        {"triangles", templateTriangles}};
+  report["boundingBoxDiagonal"] = diagonal;
+  nlohmann::json perFrame = nlohmann::json::array();
+  std::vector<double> rms, largest, ms;
+  for (const FrameRecord& r : records)
+  {
+    perFrame.push_back({{"frame", r.frame},
+                        {"time", r.time},
+                        {"points", r.points},
+                        {"iterations", r.iterations},
+                        {"rmsResidual", r.rmsResidual},
+                        {"maxResidual", r.maxResidual},
+                        {"milliseconds", r.milliseconds}});
+    rms.push_back(diagonal > 0 ? 100 * r.rmsResidual / diagonal : r.rmsResidual);
+    largest.push_back(diagonal > 0 ? 100 * r.maxResidual / diagonal : r.maxResidual);
+    ms.push_back(r.milliseconds);
+  }
+  report["perFrame"] = perFrame;
+  std::vector<double> sorted = ms;
+  std::sort(sorted.begin(), sorted.end());
+  report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+  if (!compression.empty())
+    report["compression"] = compression;
+  nlohmann::json outputs = {{"tracked", pvd.string()}, {"plot", (output / "report.png").string()}};
+  if (!compression.empty())
+  {
+    outputs["compressed"] = dpz.string();
+    outputs["gltf"] = glb.string();
+  }
+  report["outputs"] = outputs;
+  report["wallSeconds"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  writeAtomically(output / "report.json", report.dump(1) + "\n");
+  dp::cli::PlotPanel residualPanel{
+      "distance to the points, % of diagonal",
+      {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}}};
+  dp::cli::PlotPanel timePanel{"tracking time, ms", {{"per frame", ms, {44, 160, 44}}}};
+  dp::cli::writeFramePlot((output / "report.png").string(),
+                          "DynamicPoints: " + fs::path(inputName).filename().string(),
+                          {residualPanel, timePanel});
+  std::cout << "Report: " << (output / "report.json").string() << ", "
+            << (output / "report.png").string() << "\n";
   return failed ? 1 : 0;
 }
 

@@ -144,6 +144,28 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertLessEqual(kg, 0.2 * 1.01)  # float32 storage
         self.assertGreater(k, 0)
 
+    def test_vtk_plays_each_frame_once_whatever_the_count(self):
+        # Key times sit at or below t/24 s, so a player stepping 1/24 s from 0 ends on the
+        # last key (float32 rounding above it once gave an extra step for 2, 3, 5, 9... frames).
+        for n in (2, 3, 5, 9, 12, FRAMES):
+            source = dynamicpoints.vtkPointSequenceSource()
+            for f in self.files[:n]:
+                source.AddFileName(f)
+            glb = self.path(f"tube{n}.glb")
+            f = dynamicpoints.vtkPCACompressFilter()
+            f.SetInputConnection(source.GetOutputPort())
+            f.SetNumberOfComponents(2)
+            f.SetGLBFileName(glb)
+            f.Update()
+            reader = vtkGLTFReader()
+            reader.SetFileName(glb)
+            reader.UpdateInformation()
+            reader.EnableAnimation(0)
+            reader.SetFrameRate(24)
+            reader.UpdateInformation()
+            steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+            self.assertEqual(len(steps), n)
+
     def test_the_gltf_export_passes_the_khronos_validator(self):
         glb = self.path("tube.glb")
         self.compressor(GLBFileName=glb, ErrorTarget=0.2).Update()

@@ -141,7 +141,12 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence)
     std::vector<float> times(nt), values(nt * k);
     for (std::size_t t = 0; t < nt; ++t)
     {
-      times[t] = static_cast<float>(static_cast<double>(t) / FramesPerSecond);
+      // The float at or just below t/24: players that step at 1/24 s from 0 (VTK's glTF reader)
+      // then meet the last key exactly once instead of a rounding step after it.
+      const double seconds = static_cast<double>(t) / FramesPerSecond;
+      times[t] = static_cast<float>(seconds);
+      if (static_cast<double>(times[t]) > seconds)
+        times[t] = std::nextafter(times[t], 0.0f);
       for (std::size_t j = 0; j < k; ++j)
         values[t * k + j] =
             static_cast<float>(weights(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(j)));

@@ -1,0 +1,281 @@
+"""The main job as a user meets it: `dynamicpoints` with no arguments writes every output, and
+each is read back by a real consumer (ParaView's PVD reader and the plugin's reader in pvpython,
+the Khronos validator and VTK's glTF reader, the product's .dpz reader, a PNG reader); an
+interrupted run keeps the frames it finished; every bad input gets a clear message."""
+import json
+import os
+import shutil
+import signal
+import subprocess
+import time
+import unittest
+
+import numpy as np
+from vtkmodules.numpy_interface import dataset_adapter as dsa
+from vtkmodules.vtkIOGeometry import vtkGLTFReader
+from vtkmodules.vtkIOImage import vtkPNGReader
+from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
+
+import dynamicpoints
+from dp_testing import PLUGIN, TempDirTestCase, run_tool, tool, validate_gltf
+
+FRAMES = 30  # the built-in sequence
+
+
+def pvd_files(path):
+    """(time, absolute file) of each DataSet in a ParaView collection file."""
+    import xml.etree.ElementTree as ET
+    root = ET.parse(path).getroot()
+    folder = os.path.dirname(path)
+    return [(float(d.get("timestep")), os.path.join(folder, d.get("file")))
+            for d in root.iter("DataSet")]
+
+
+def read_vtp(path):
+    reader = vtkXMLPolyDataReader()
+    reader.SetFileName(path)
+    reader.Update()
+    return reader.GetOutput()
+
+
+def first_polydata(data):
+    it = data.NewIterator()
+    it.InitTraversal()
+    while not it.IsDoneWithTraversal():
+        if it.GetCurrentDataObject().IsA("vtkPolyData"):
+            return it.GetCurrentDataObject()
+        it.GoToNextItem()
+    raise AssertionError("no polydata")
+
+
+class TestDefaultRun(TempDirTestCase):
+    """One run of the README's main-job command; every output checked by its consumer."""
+
+    @classmethod
+    def setUpClass(cls):
+        import tempfile
+        cls._out = tempfile.TemporaryDirectory(prefix="dp-main-")
+        cls.out = os.path.join(cls._out.name, "out")
+        cls.result = run_tool("dynamicpoints", "--output", cls.out)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls._out.cleanup()
+
+    def output(self, *parts):
+        return os.path.join(self.out, *parts)
+
+    def tracked(self):
+        files = pvd_files(self.output("tracked.pvd"))
+        return np.stack([np.array(dsa.WrapDataObject(read_vtp(f)).Points) for _, f in files])
+
+    def test_it_says_what_it_did(self):
+        out = self.result.stdout
+        self.assertIn(f"Sequence: {FRAMES} frame(s)", out)
+        self.assertIn(f"{FRAMES} of {FRAMES} frame(s) tracked", out)
+        self.assertIn("Compressed: ", out)
+        self.assertEqual(self.result.stderr.count("error"), 0, self.result.stderr)
+        rows = [l.split() for l in out.splitlines()
+                if len(l.split()) == 7 and l.split()[0].isdigit()]
+        self.assertEqual([int(r[0]) for r in rows], list(range(FRAMES)))
+
+    def test_the_tracked_frames_are_a_pvd_sequence_of_one_mesh(self):
+        files = pvd_files(self.output("tracked.pvd"))
+        self.assertEqual([t for t, _ in files], [float(t) for t in range(FRAMES)])
+        meshes = [read_vtp(f) for _, f in files]
+        self.assertTrue(all(m.GetNumberOfPoints() == meshes[0].GetNumberOfPoints() for m in meshes))
+        self.assertGreater(meshes[0].GetNumberOfPolys(), 500)
+        self.assertIsNotNone(meshes[5].GetPointData().GetArray("Residual"))
+        # The mesh moves with the tube (which bends and comes back).
+        p = self.tracked()
+        self.assertGreater(max(np.abs(q - p[0]).max() for q in p), 0.1)
+
+    def test_paraview_opens_the_pvd_and_the_compressed_file(self):
+        result = subprocess.run(
+            [shutil.which("pvpython"), "--dr", "--force-offscreen-rendering",
+             os.path.join(os.path.dirname(__file__), "pv_main_job_outputs.py"), self.out],
+            capture_output=True, text=True, timeout=300, env=dict(os.environ, DP_PLUGIN=PLUGIN))
+        lines = [l for l in result.stdout.splitlines() if l.startswith("DP-PV ")]
+        self.assertTrue(lines, result.stdout + result.stderr)
+        seen = json.loads(lines[0][len("DP-PV "):])
+        nv = self.tracked().shape[1]
+        for name, reader in (("tracked.pvd", "PVDReader"), ("tracked.dpz",
+                                                             "CompressedSequenceReader")):
+            self.assertEqual(seen[name]["reader"], reader)
+            self.assertEqual(len(seen[name]["steps"]), FRAMES, name)
+            self.assertEqual(seen[name]["first_last_counts"][0][0], nv, name)
+            self.assertEqual(seen[name]["first_last_counts"][1][0], nv, name)
+
+    def test_the_compressed_file_reads_back_within_the_target(self):
+        reader = dynamicpoints.vtkCompressedSequenceReader()
+        reader.SetFileName(self.output("tracked.dpz"))
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        self.assertEqual(len(steps), FRAMES)
+        rebuilt = []
+        for t in steps:
+            reader.UpdateTimeStep(t)
+            rebuilt.append(np.array(dsa.WrapDataObject(reader.GetOutput()).Points))
+        original = self.tracked()
+        centred = original - original.mean(axis=1, keepdims=True)
+        kg = 100 * np.linalg.norm(original - np.stack(rebuilt)) / np.linalg.norm(centred)
+        self.assertLessEqual(kg, 0.2 * 1.001)
+        self.assertGreater(kg, 0.01)
+
+    def test_the_gltf_file_validates_and_plays_in_vtk(self):
+        glb = self.output("tracked.glb")
+        report = validate_gltf(glb)
+        self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
+        reader = vtkGLTFReader()
+        reader.SetFileName(glb)
+        reader.UpdateInformation()
+        reader.EnableAnimation(0)
+        reader.SetApplyDeformationsToGeometry(True)
+        reader.SetFrameRate(24)
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        self.assertEqual(len(steps), FRAMES)
+        original = self.tracked()
+        reader.UpdateTimeStep(steps[17])
+        played = np.array(dsa.WrapDataObject(first_polydata(reader.GetOutput())).Points)
+        diagonal = json.load(open(self.output("report.json")))["boundingBoxDiagonal"]
+        self.assertLess(np.abs(played - original[17]).max(), 0.02 * diagonal)
+
+    def test_the_report_holds_every_frame_and_the_compression(self):
+        with open(self.output("report.json")) as f:
+            report = json.load(f)
+        self.assertEqual(report["framesTracked"], FRAMES)
+        self.assertEqual(len(report["perFrame"]), FRAMES)
+        diagonal = report["boundingBoxDiagonal"]
+        self.assertGreater(diagonal, 0.5)
+        for frame in report["perFrame"]:
+            self.assertLess(frame["rmsResidual"], 0.005 * diagonal, frame)
+            self.assertGreater(frame["milliseconds"], 0)
+            self.assertEqual(frame["points"], 20000)
+        self.assertLessEqual(report["compression"]["KGError"], 0.2)
+        self.assertEqual(report["compression"]["Bytes"],
+                         os.path.getsize(self.output("tracked.dpz")))
+        for path in report["outputs"].values():
+            self.assertTrue(os.path.exists(path), path)
+
+    def test_the_plot_is_a_picture_with_lines(self):
+        reader = vtkPNGReader()
+        reader.SetFileName(self.output("report.png"))
+        reader.Update()
+        image = reader.GetOutput()
+        self.assertEqual(image.GetDimensions()[:2], (960, 680))
+        pixels = dsa.WrapDataObject(image).PointData[0].reshape(-1, 3)
+        colours = {tuple(p) for p in pixels[::7]}
+        # Background, grid, text and the three line colours at least.
+        self.assertGreater(len(colours), 6)
+        self.assertTrue(any(np.all(pixels == (255, 127, 14), axis=1)))  # the "largest" line
+
+
+class TestInterruptions(TempDirTestCase):
+    def start_and_stop_at_frame(self, sig, frame=3):
+        process = subprocess.Popen([tool("dynamicpoints"), "--output", self.path("out")],
+                                   stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        marker = self.path("out", "tracked", f"frame_{frame:04d}.vtp")
+        deadline = time.time() + 120
+        while not os.path.exists(marker) and process.poll() is None and time.time() < deadline:
+            time.sleep(0.02)
+        process.send_signal(sig)
+        stdout, stderr = process.communicate(timeout=120)
+        return process.returncode, stdout, stderr
+
+    def check_finished_frames_readable(self, at_least):
+        files = pvd_files(self.path("out", "tracked.pvd"))
+        self.assertGreaterEqual(len(files), at_least)
+        self.assertLess(len(files), FRAMES)
+        for t, f in files:
+            self.assertGreater(read_vtp(f).GetNumberOfPoints(), 100, f)
+
+    def test_ctrl_c_stops_cleanly_and_keeps_the_finished_frames(self):
+        code, _, stderr = self.start_and_stop_at_frame(signal.SIGINT)
+        self.assertEqual(code, 130, stderr)
+        self.assertIn("interrupted", stderr)
+        self.check_finished_frames_readable(4)
+        self.assertFalse(os.path.exists(self.path("out", "tracked.dpz")))
+
+    def test_a_killed_run_leaves_a_readable_pvd(self):
+        code, _, _ = self.start_and_stop_at_frame(signal.SIGKILL)
+        self.assertEqual(code, -signal.SIGKILL)
+        self.check_finished_frames_readable(4)
+
+
+class TestBadInput(TempDirTestCase):
+    def run_main(self, *args):
+        result = run_tool("dynamicpoints", "--output", self.path("out"), "--quiet", *args,
+                          check=False)
+        self.assertNotIn("Segmentation", result.stderr)
+        self.assertNotIn("Traceback", result.stderr)
+        return result
+
+    def small_sequence(self, frames=4):
+        run_tool("dynamicpoints-sample", "--frames", frames, "--points", 3000, self.path("seq"))
+        return self.path("seq", "points.series")
+
+    def test_missing_folder(self):
+        result = self.run_main(self.path("no-such-folder"))
+        self.assertEqual(result.returncode, 1)
+        self.assertIn(self.path("no-such-folder"), result.stderr)
+
+    def test_empty_folder(self):
+        os.makedirs(self.path("empty"))
+        result = self.run_main(self.path("empty"))
+        self.assertEqual(result.returncode, 1)
+        self.assertIn("no point files match", result.stderr)
+
+    def test_unreadable_frame_stops_there_and_keeps_the_frames_before(self):
+        series = self.small_sequence()
+        with open(self.path("seq", "frame_0002.ply"), "r+b") as f:
+            f.truncate(300)
+        result = self.run_main(series, "--vertices", 300)
+        self.assertEqual(result.returncode, 1)
+        self.assertIn("frame_0002.ply", result.stderr)
+        self.assertIn("truncated", result.stderr)
+        self.assertIn("tracking stopped at frame 2", result.stderr)
+        self.assertIn("2 of 4 frame(s) tracked", result.stdout)
+        self.assertEqual(len(pvd_files(self.path("out", "tracked.pvd"))), 2)
+        self.assertFalse(os.path.exists(self.path("out", "tracked.dpz")))
+        with open(self.path("out", "report.json")) as f:
+            self.assertEqual(json.load(f)["framesTracked"], 2)
+
+    def test_wrong_options_exit_2_with_a_hint(self):
+        for args, message in ((["--bogus"], "unknown option '--bogus'"),
+                              (["--output"], "option --output needs a value"),
+                              (["a", "b"], "more than one INPUT"),
+                              (["--vertices", "5"], "is outside [20"),
+                              (["--frames", "x"], "is not a whole number"),
+                              (["--error-target", "-1"], "is outside"),
+                              (["--error-target", "nan"], "is not a number")):
+            result = run_tool("dynamicpoints", *args, check=False)
+            self.assertEqual(result.returncode, 2, args)
+            self.assertIn(message, result.stderr)
+            self.assertIn("--help", result.stderr)
+
+    def test_a_template_that_is_missing_or_has_no_polygons(self):
+        series = self.small_sequence(2)
+        result = self.run_main(series, "--template", self.path("nowhere.ply"))
+        self.assertEqual(result.returncode, 1)
+        self.assertIn("nowhere.ply", result.stderr)
+        result = self.run_main(series, "--template", self.path("seq", "frame_0000.ply"))
+        self.assertEqual(result.returncode, 1)
+        self.assertIn("has no polygons", result.stderr)
+
+    def test_a_given_template_is_the_mesh_tracked(self):
+        run_tool("dynamicpoints-sample", "--frames", 3, "--points", 3000, "--truth",
+                 self.path("seq"))
+        truth = self.path("seq", "truth", sorted(os.listdir(self.path("seq", "truth")))[0])
+        result = self.run_main(self.path("seq", "points.series"), "--template", truth)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        template = dynamicpoints.vtkPointSequenceSource()
+        template.SetFileName(truth)
+        template.Update()
+        first = read_vtp(pvd_files(self.path("out", "tracked.pvd"))[0][1])
+        self.assertEqual(first.GetNumberOfPoints(), template.GetOutput().GetNumberOfPoints())
+        self.assertEqual(first.GetNumberOfPolys(), template.GetOutput().GetNumberOfPolys())
+
+
+if __name__ == "__main__":
+    unittest.main()
