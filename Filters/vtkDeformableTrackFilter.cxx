@@ -102,7 +102,7 @@ int vtkDeformableTrackFilter::RequestUpdateExtent(vtkInformation*,
   Internals& in = *this->Internal;
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
   const std::size_t target = in.frameAt(outputVector->GetInformationObject(0));
-  if (in.TimeSteps.empty())
+  if (in.TimeSteps.empty() || vtkDP::isSecondaryPiece(outputVector->GetInformationObject(0)))
     return 1;
   // Computing: ask for the next frame. Answering from the cache: ask for what upstream already
   // has, so that nothing re-executes.
@@ -177,6 +177,13 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
   Internals& in = *this->Internal;
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  if (vtkDP::isSecondaryPiece(outInfo))
+  {
+    // Under MPI the whole sequence is on process 0 (see vtkDP::isSecondaryPiece).
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    output->Initialize();
+    return 1;
+  }
   const std::size_t target = in.frameAt(outInfo);
   const double requestedTime =
       outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())

@@ -80,10 +80,10 @@ int vtkPCACompressFilter::RequestInformation(vtkInformation*, vtkInformationVect
 }
 
 int vtkPCACompressFilter::RequestUpdateExtent(vtkInformation*, vtkInformationVector** inputVector,
-                                              vtkInformationVector*)
+                                              vtkInformationVector* outputVector)
 {
   Internals& in = *this->Internal;
-  if (in.TimeSteps.empty())
+  if (in.TimeSteps.empty() || vtkDP::isSecondaryPiece(outputVector->GetInformationObject(0)))
     return 1;
   // Collecting: ask for the next frame; done: ask for what upstream already has.
   const double time = in.Result ? in.LastInputTime : in.timeOf(in.collected());
@@ -110,6 +110,13 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
   Internals& in = *this->Internal;
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  if (vtkDP::isSecondaryPiece(outInfo))
+  {
+    // Under MPI the whole sequence is on process 0 (see vtkDP::isSecondaryPiece).
+    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    output->Initialize();
+    return 1;
+  }
   auto fail = [&](const std::string& message)
   {
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());

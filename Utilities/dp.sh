@@ -18,7 +18,7 @@ packages=(
   cmake ninja-build g++ pkg-config
   paraview paraview-dev python3-paraview python3-dev python3-numpy python3-mpi4py
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
-  qtxmlpatterns5-dev-tools libopenmpi-dev
+  qtxmlpatterns5-dev-tools libopenmpi-dev openmpi-bin
   libdouble-conversion-dev libhdf5-openmpi-dev libnetcdf-dev libgdal-dev libexpat1-dev
   libfreetype-dev libgl2ps-dev libglew-dev libgl-dev libjpeg-dev liblz4-dev liblzma-dev
   libxml2-dev libpng-dev libtheora-dev libtiff-dev libx11-dev zlib1g-dev libutfcpp-dev

@@ -116,4 +116,10 @@ std::size_t frameAtTime(const std::vector<double>& steps, double t)
       std::upper_bound(steps.begin(), steps.end(), t + 1e-9 * std::max(1.0, std::abs(t)));
   return it == steps.begin() ? 0 : static_cast<std::size_t>(it - steps.begin()) - 1;
 }
+bool isSecondaryPiece(vtkInformation* outInfo)
+{
+  return outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&
+         outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) > 0;
+}
+
 } // namespace vtkDP

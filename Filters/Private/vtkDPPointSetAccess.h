@@ -36,6 +36,11 @@ std::vector<double> forwardTimeSteps(vtkInformation* inInfo, vtkInformation* out
 /** The last of the ascending time `steps` at or before `t` (with a little slack for rounding);
  *  0 when t is before the first. */
 std::size_t frameAtTime(const std::vector<double>& steps, double t);
+
+/** True when the output request is for a piece other than 0. The sources hand the whole frame
+ *  to piece 0 (they do not split), so under MPI the tracker and the compressor run on process 0
+ *  and give the other processes an empty output, without errors or files. */
+bool isSecondaryPiece(vtkInformation* outInfo);
 } // namespace vtkDP
 
 #endif
