@@ -99,12 +99,14 @@ class TestDefaultRun(TempDirTestCase):
         self.assertTrue(lines, result.stdout + result.stderr)
         seen = json.loads(lines[0][len("DP-PV "):])
         nv = self.tracked().shape[1]
-        for name, reader in (("tracked.pvd", "PVDReader"), ("tracked.dpz",
-                                                             "CompressedSequenceReader")):
+        for name, reader in (("tracked.pvd", "PVDReader"),
+                             ("tracked.dpz", "CompressedSequenceReader"),
+                             ("saved.dpz", "CompressedSequenceReader")):
             self.assertEqual(seen[name]["reader"], reader)
             self.assertEqual(len(seen[name]["steps"]), FRAMES, name)
             self.assertEqual(seen[name]["first_last_counts"][0][0], nv, name)
             self.assertEqual(seen[name]["first_last_counts"][1][0], nv, name)
+        self.assertEqual(validate_gltf(self.output("saved.glb"))["errors"], 0)
 
     def test_the_compressed_file_reads_back_within_the_target(self):
         reader = dynamicpoints.vtkCompressedSequenceReader()

@@ -98,6 +98,29 @@ class TestPCACompressFilter(TempDirTestCase):
             self.assertEqual(reader.GetOutput().GetNumberOfPolys(),
                              f.GetOutput().GetNumberOfPolys())
 
+    def test_the_writer_writes_what_the_filter_writes(self):
+        self.compressor(FileName=self.path("filter.dpz"), GLBFileName=self.path("filter.glb"),
+                        ErrorTarget=0.5).Update()
+        writer = dynamicpoints.vtkCompressedSequenceWriter()
+        writer.SetInputConnection(self.source.GetOutputPort())
+        writer.SetErrorTarget(0.5)
+        for name in ("writer.dpz", "writer.glb"):
+            writer.SetFileName(self.path(name))
+            self.assertEqual(writer.Write(), 1)
+        for ext in ("dpz", "glb"):
+            with open(self.path("filter." + ext), "rb") as a, open(self.path("writer." + ext),
+                                                                   "rb") as b:
+                self.assertEqual(a.read(), b.read(), ext)
+        # A file that cannot be written: an error naming it, nothing left behind.
+        rec = MessageRecorder(writer)
+        writer.SetFileName(self.path("no-such-folder", "x.dpz"))
+        self.assertEqual(writer.Write(), 0)
+        self.assertIn("no-such-folder/x.dpz", rec.error_text)
+        self.assertFalse(os.path.exists(self.path("no-such-folder")))
+        writer.SetFileName(None)
+        self.assertEqual(writer.Write(), 0)
+        self.assertIn("no FileName", rec.error_text)
+
     def test_a_damaged_file_is_named_in_the_error_and_gives_no_geometry(self):
         path = self.path("tube.dpz")
         self.compressor(FileName=path).Update()

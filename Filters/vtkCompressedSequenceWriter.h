@@ -1,0 +1,72 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @class   vtkCompressedSequenceWriter
+ * @brief   writes a whole temporal mesh sequence compressed: .dpz, or glTF 2.0 (.glb)
+ *
+ * Input: temporal vtkPolyData of fixed connectivity (the output of vtkDeformableTrackFilter, or
+ * an animated mesh read from disk). Write() pulls every time step of the input, compresses the
+ * sequence with the codec of vtkPCACompressFilter (principal components chosen for ErrorTarget,
+ * quantised, predicted, zstd-coded; see dp/PcaCompression.h) and writes FileName in the format
+ * its extension names:
+ *  - .dpz: DynamicPoints' compressed sequence (version, checksums), read back by
+ *    vtkCompressedSequenceReader;
+ *  - .glb: glTF 2.0 binary, one morph target per shape component and one animation of the
+ *    weights at 24 frames per second (always the shape layout, which glTF needs).
+ * The file is written beside its name and renamed when complete, so a failure never leaves a
+ * broken file. In ParaView this is File > Save Data for .dpz and .glb.
+ *
+ * Under MPI only process 0 writes (the sequence is whole there; see vtkPCACompressFilter).
+ * Memory and time: as vtkPCACompressFilter, which this writer runs on its input.
+ */
+#ifndef vtkCompressedSequenceWriter_h
+#define vtkCompressedSequenceWriter_h
+
+#include "DynamicPointsFiltersModule.h" // for export macro
+#include "vtkWriter.h"
+
+class DYNAMICPOINTSFILTERS_EXPORT vtkCompressedSequenceWriter : public vtkWriter
+{
+public:
+  static vtkCompressedSequenceWriter* New();
+  vtkTypeMacro(vtkCompressedSequenceWriter, vtkWriter);
+  void PrintSelf(ostream& os, vtkIndent indent) override;
+
+  ///@{
+  /** The file to write; its extension (.dpz or .glb) chooses the format. */
+  vtkSetStringMacro(FileName);
+  vtkGetStringMacro(FileName);
+  ///@}
+
+  ///@{
+  /** As vtkPCACompressFilter: Layout (default SHAPES; .glb is always SHAPES), ErrorMeasure
+   *  (default KARNI_GOTSMAN), ErrorTarget (default 0.2), NumberOfComponents (0: chosen for
+   *  the target). */
+  vtkSetClampMacro(Layout, int, 0, 1);
+  vtkGetMacro(Layout, int);
+  vtkSetClampMacro(ErrorMeasure, int, 0, 1);
+  vtkGetMacro(ErrorMeasure, int);
+  vtkSetMacro(ErrorTarget, double);
+  vtkGetMacro(ErrorTarget, double);
+  vtkSetClampMacro(NumberOfComponents, int, 0, VTK_INT_MAX);
+  vtkGetMacro(NumberOfComponents, int);
+  ///@}
+
+protected:
+  vtkCompressedSequenceWriter();
+  ~vtkCompressedSequenceWriter() override;
+
+  int FillInputPortInformation(int port, vtkInformation* info) override;
+  void WriteData() override;
+
+  char* FileName = nullptr;
+  int Layout = 1;
+  int ErrorMeasure = 0;
+  double ErrorTarget = 0.2;
+  int NumberOfComponents = 0;
+
+private:
+  vtkCompressedSequenceWriter(const vtkCompressedSequenceWriter&) = delete;
+  void operator=(const vtkCompressedSequenceWriter&) = delete;
+};
+
+#endif
