@@ -331,7 +331,8 @@ int run(int argc, char** argv)
   std::vector<std::pair<double, std::string>> written;
   std::vector<FrameRecord> records;
   vtkNew<vtkXMLPolyDataWriter> writer;
-  writer->SetDataModeToAppended();
+  // Inline data: appended data trips ParaView 5.11's XML readers here (README, platform notes).
+  writer->SetDataModeToBinary();
   writer->SetCompressorTypeToZLib();
   watch(writer);
   double diagonal = 0;

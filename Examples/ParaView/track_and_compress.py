@@ -12,8 +12,9 @@ the environment instead.
 import os
 import sys
 
-from paraview.simple import (ColorBy, Delete, GetActiveViewOrCreate, LoadPlugin, OpenDataFile,
-                             Render, ResetCamera, SaveScreenshot, Show, servermanager)
+from paraview.simple import (ColorBy, Delete, GetActiveViewOrCreate, GetColorTransferFunction,
+                             GetScalarBar, LoadPlugin, OpenDataFile, Render, ResetCamera,
+                             SaveScreenshot, Show, servermanager)
 
 
 def main(plugin, series, output, in_gui=False):
@@ -38,6 +39,10 @@ def main(plugin, series, output, in_gui=False):
     ColorBy(mesh, ("POINTS", "Residual"))
     mesh.RescaleTransferFunctionToDataRange(True, False)
     mesh.SetScalarBarVisibility(view, True)
+    bar = GetScalarBar(GetColorTransferFunction("Residual"), view)
+    bar.Title = "distance to the points"
+    bar.ComponentTitle = ""
+    bar.TitleColor = bar.LabelColor = [0.1, 0.1, 0.1]  # on the white background below
 
     # The view shows one time at a time; ParaView's time controls list the data's time steps.
     times = list(points.TimestepValues)
