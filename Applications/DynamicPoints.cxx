@@ -63,7 +63,8 @@ Options:
   --template FILE     mesh to deform (.ply .obj .vtp .vtk ...); default: a mesh
                       reconstructed from the first frame's points
   --vertices N        vertex count of the reconstructed template (default: 1000)
-  --frames N          track only the first N frames (default: all)
+  --frames N          track only the first N frames (default: all; they are listed
+                      with their times in OUTPUT/first-frames.series)
   --error-target KG   compression error target, Karni-Gotsman error in percent
                       (default: 0.2)
   --output DIR        where results go (default: dynamicpoints-output)
@@ -279,19 +280,21 @@ int run(int argc, char** argv)
     return 1; // the printer has said why
   if (settings.frames > 0 && settings.frames < frames)
   {
-    // Only the first N frames: the same files, listed one by one (times kept).
-    std::vector<std::string> paths;
+    // Only the first N frames: a .series file listing them with their times, which the
+    // source then reads (and the user can see what was tracked).
+    nlohmann::json files = nlohmann::json::array();
     for (int f = 0; f < settings.frames; ++f)
-      paths.emplace_back(source->GetFramePath(f));
-    const double interval =
-        settings.frames > 1 ? source->GetFrameTime(1) - source->GetFrameTime(0) : 1.0;
-    source->SetFileName(nullptr);
+      files.push_back({{"name", fs::absolute(source->GetFramePath(f)).string()},
+                       {"time", source->GetFrameTime(f)}});
+    fs::create_directories(output);
+    const fs::path series = output / "first-frames.series";
+    writeAtomically(series,
+                    nlohmann::json{{"file-series-version", "1.0"}, {"files", files}}.dump(1));
     source->SetDirectoryName(nullptr);
-    for (const std::string& p : paths)
-      source->AddFileName(p.c_str());
-    if (interval > 0)
-      source->SetFrameInterval(interval);
+    source->SetFileName(series.string().c_str());
     frames = source->GetNumberOfFrames();
+    if (frames < 0)
+      return 1;
   }
   std::cout << "Sequence: " << frames << " frame(s) from " << inputName << "\n";
 

@@ -265,6 +265,16 @@ class TestBadInput(TempDirTestCase):
         self.assertEqual(result.returncode, 1)
         self.assertIn("has no polygons", result.stderr)
 
+    def test_only_the_first_frames_keep_their_times(self):
+        run_tool("dynamicpoints-sample", "--frames", 5, "--points", 3000, "--interval", 0.25,
+                 self.path("seq"))
+        result = self.run_main(self.path("seq", "points.series"), "--frames", 3, "--vertices",
+                               300)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("3 of 3 frame(s) tracked", result.stdout)
+        self.assertEqual([t for t, _ in pvd_files(self.path("out", "tracked.pvd"))],
+                         [0.0, 0.25, 0.5])
+
     def test_a_given_template_is_the_mesh_tracked(self):
         run_tool("dynamicpoints-sample", "--frames", 3, "--points", 3000, "--truth",
                  self.path("seq"))
