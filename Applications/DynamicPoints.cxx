@@ -415,18 +415,16 @@ int run(int argc, char** argv)
   }
   bar.clear();
   if (Interrupted)
-  {
     std::cerr << "interrupted: " << written.size() << " of " << frames << " frame(s) tracked, in "
               << pvd.string() << "; nothing compressed\n";
-    return 130;
-  }
-  std::cout << written.size() << " of " << frames << " frame(s) tracked: " << pvd.string() << " ("
-            << templateVertices << " vertices, " << templateTriangles << " triangles)\n";
+  else
+    std::cout << written.size() << " of " << frames << " frame(s) tracked: " << pvd.string() << " ("
+              << templateVertices << " vertices, " << templateTriangles << " triangles)\n";
 
   // --- Compression -------------------------------------------------------------------------
   nlohmann::json compression;
   const fs::path dpz = output / "tracked.dpz", glb = output / "tracked.glb";
-  if (!failed)
+  if (!failed && !Interrupted)
   {
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
@@ -443,12 +441,9 @@ int run(int argc, char** argv)
     compressor->Update();
     bar.clear();
     if (Interrupted)
-    {
       std::cerr << "interrupted while compressing: the tracked frames are in " << pvd.string()
                 << "\n";
-      return 130;
-    }
-    if (printer->Errors > errorsBefore)
+    else if (printer->Errors > errorsBefore)
     {
       std::cerr << "error: compression failed; the tracked frames are in " << pvd.string() << "\n";
       failed = true;
@@ -476,6 +471,7 @@ int run(int argc, char** argv)
   report["input"] = inputName;
   report["frames"] = frames;
   report["framesTracked"] = written.size();
+  report["interrupted"] = Interrupted != 0;
   report["template"] = {{"source", settings.templateFile.empty() ? "reconstructed from frame 0"
                                                                  : settings.templateFile},
                         {"vertices", templateVertices},
@@ -521,7 +517,7 @@ int run(int argc, char** argv)
                           {residualPanel, timePanel});
   std::cout << "Report: " << (output / "report.json").string() << ", "
             << (output / "report.png").string() << "\n";
-  return failed ? 1 : 0;
+  return Interrupted ? 130 : failed ? 1 : 0;
 }
 
 } // namespace

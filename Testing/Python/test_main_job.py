@@ -198,6 +198,12 @@ class TestInterruptions(TempDirTestCase):
         self.assertIn("interrupted", stderr)
         self.check_finished_frames_readable(4)
         self.assertFalse(os.path.exists(self.path("out", "tracked.dpz")))
+        # The report still tells what was done.
+        with open(self.path("out", "report.json")) as f:
+            report = json.load(f)
+        self.assertTrue(report["interrupted"])
+        self.assertEqual(report["framesTracked"],
+                         len(pvd_files(self.path("out", "tracked.pvd"))))
 
     def test_a_killed_run_leaves_a_readable_pvd(self):
         code, _, _ = self.start_and_stop_at_frame(signal.SIGKILL)
