@@ -26,9 +26,11 @@
  * Trajectories; the centroid trajectory) are predicted from the previous one or two values; the
  * per-vertex ones (mean and basis of Shapes, weights of Trajectories) from the previous vertex
  * or from the mean of the vertex's mesh neighbours of smaller index (which the decoder already
- * has); the predictor is chosen per sequence; residuals are zigzag varints compressed by zstd. The
- * component count and q are chosen for the fewest bytes that meet the target, checked on the actual
- * reconstruction.
+ * has); the predictor is chosen per sequence; residuals are zigzag varints compressed by zstd.
+ * The component count and q are chosen for the fewest bytes that meet the target: for the KG
+ * error q is searched on an estimate computed from k x k blocks (no reconstruction), and the
+ * chosen q is checked on the actual reconstruction (stepped down until it holds); the max
+ * vertex error is searched on reconstructions.
  *
  * Limits: the whole sequence is in memory; the SVD through a Gram matrix loses components whose
  * singular value is under ~1e-8 of the largest (far below any useful target).
