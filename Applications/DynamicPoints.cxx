@@ -358,7 +358,11 @@ int run(int argc, char** argv)
     {
       bar.clear();
       std::cerr << "error: tracking stopped at frame " << f << " (" << source->GetFramePath(f)
-                << "); frames 0-" << f - 1 << " are in " << pvd.string() << "\n";
+                << "); ";
+      if (f == 0)
+        std::cerr << "no frame was tracked\n";
+      else
+        std::cerr << "frames 0-" << f - 1 << " are in " << pvd.string() << "\n";
       failed = true;
       break;
     }
