@@ -69,6 +69,7 @@ void vtkCompressedSequenceWriter::WriteData()
   codec->SetErrorMeasure(this->ErrorMeasure);
   codec->SetErrorTarget(this->ErrorTarget);
   codec->SetNumberOfComponents(this->NumberOfComponents);
+  codec->SetGLBMeshoptCompression(this->MeshoptCompression);
   if (glb)
     codec->SetGLBFileName(name.c_str());
   else
@@ -96,4 +97,5 @@ void vtkCompressedSequenceWriter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ErrorMeasure: " << this->ErrorMeasure << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
+  os << indent << "MeshoptCompression: " << this->MeshoptCompression << "\n";
 }

@@ -51,6 +51,13 @@ public:
   vtkGetMacro(NumberOfComponents, int);
   ///@}
 
+  ///@{
+  /** .glb only: buffers compressed by meshoptimizer (see vtkPCACompressFilter). Default off. */
+  vtkSetMacro(MeshoptCompression, vtkTypeBool);
+  vtkGetMacro(MeshoptCompression, vtkTypeBool);
+  vtkBooleanMacro(MeshoptCompression, vtkTypeBool);
+  ///@}
+
 protected:
   vtkCompressedSequenceWriter();
   ~vtkCompressedSequenceWriter() override;
@@ -63,6 +70,7 @@ protected:
   int ErrorMeasure = 0;
   double ErrorTarget = 0.2;
   int NumberOfComponents = 0;
+  vtkTypeBool MeshoptCompression = false;
 
 private:
   vtkCompressedSequenceWriter(const vtkCompressedSequenceWriter&) = delete;

@@ -207,7 +207,11 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
     try
     {
       if (this->GLBFileName && *this->GLBFileName)
-        dp::writeGlb(this->GLBFileName, *in.Result);
+      {
+        dp::GlbOptions glb;
+        glb.meshopt = this->GLBMeshoptCompression;
+        dp::writeGlb(this->GLBFileName, *in.Result, glb);
+      }
     }
     catch (const std::exception& e)
     {
@@ -265,4 +269,5 @@ void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "Quantize: " << this->Quantize << "\n";
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
   os << indent << "GLBFileName: " << (this->GLBFileName ? this->GLBFileName : "(none)") << "\n";
+  os << indent << "GLBMeshoptCompression: " << this->GLBMeshoptCompression << "\n";
 }

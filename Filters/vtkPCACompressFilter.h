@@ -91,6 +91,15 @@ public:
   vtkGetStringMacro(GLBFileName);
   ///@}
 
+  ///@{
+  /** Store the .glb's buffers compressed by meshoptimizer (EXT_meshopt_compression, then
+   *  required by the file): smaller files for web viewers (three.js, Babylon.js); Blender 3.4
+   *  and VTK 9.2 cannot read them. Default off. */
+  vtkSetMacro(GLBMeshoptCompression, vtkTypeBool);
+  vtkGetMacro(GLBMeshoptCompression, vtkTypeBool);
+  vtkBooleanMacro(GLBMeshoptCompression, vtkTypeBool);
+  ///@}
+
 protected:
   vtkPCACompressFilter();
   ~vtkPCACompressFilter() override;
@@ -106,6 +115,7 @@ protected:
   vtkTypeBool Quantize = true;
   char* FileName = nullptr;
   char* GLBFileName = nullptr;
+  vtkTypeBool GLBMeshoptCompression = false;
 
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;

@@ -25,12 +25,13 @@ packages=(
   libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
-  liblbfgs-dev libzstd-dev libtinygltf-dev
+  liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev
   python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri
   nodejs blender
 )
-# The Khronos glTF validator, from the npm registry, for the tests of the .glb export.
-gltf_validator_version=2.0.0-dev.3.10
+# From the npm registry, for the tests of the .glb export: the Khronos glTF validator and
+# meshoptimizer's reference decoder (the version of Debian's libmeshoptimizer).
+node_tools=(gltf-validator@2.0.0-dev.3.10 meshoptimizer@0.18.1)
 
 install_packages() {
   local missing=()
@@ -53,13 +54,13 @@ install_packages() {
   fi
 }
 
-install_gltf_validator() {
-  local folder="$build/tools/gltf-validator"
-  [[ -f "$folder/node_modules/gltf-validator/package.json" ]] && return
-  echo "== installing gltf-validator $gltf_validator_version (npm) in $folder"
+install_node_tools() {
+  local folder="$build/tools/node"
+  [[ -f "$folder/.installed" && "$(cat "$folder/.installed")" == "${node_tools[*]}" ]] && return
+  echo "== installing ${node_tools[*]} (npm) in $folder"
   mkdir -p "$folder"
-  npm install --prefix "$folder" --no-audit --no-fund --silent \
-    "gltf-validator@$gltf_validator_version" >/dev/null
+  npm install --prefix "$folder" --no-audit --no-fund --silent "${node_tools[@]}" >/dev/null
+  echo "${node_tools[*]}" >"$folder/.installed"
 }
 
 build_project() {
@@ -70,7 +71,7 @@ build_project() {
   fi
   echo "== building"
   cmake --build "$build" -j "$(nproc)" -- --quiet
-  install_gltf_validator
+  install_node_tools
 }
 
 command="${1:-}"

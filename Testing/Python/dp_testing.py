@@ -10,7 +10,7 @@ from vtkmodules.vtkCommonCore import vtkCommand
 
 BIN_DIR = os.environ.get("DP_BIN_DIR", "")
 PLUGIN = os.environ.get("DP_PLUGIN", "")
-GLTF_VALIDATOR = os.environ.get("DP_GLTF_VALIDATOR", "")
+NODE_TOOLS = os.environ.get("DP_NODE_TOOLS", "")
 UTILITIES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Utilities")
 
 
@@ -31,18 +31,29 @@ def run_tool(name, *args, check=True):
     return result
 
 
-def validate_gltf(path):
-    """The Khronos glTF validator's report on a file (dict: errors, warnings, messages, info)."""
-    module = os.path.join(GLTF_VALIDATOR, "node_modules")
-    if not os.path.isdir(os.path.join(module, "gltf-validator")):
-        raise AssertionError(f"gltf-validator not found in {GLTF_VALIDATOR!r}: "
-                             "Utilities/dp.sh build installs it (npm)")
-    result = subprocess.run(["node", os.path.join(UTILITIES, "gltf", "validate_gltf.js"), path],
+def run_node_tool(package, script, *args):
+    """Runs Utilities/gltf/SCRIPT with node, the npm PACKAGE found in DP_NODE_TOOLS."""
+    module = os.path.join(NODE_TOOLS, "node_modules")
+    if not os.path.isdir(os.path.join(module, package)):
+        raise AssertionError(f"npm package {package} not found in {NODE_TOOLS!r}: "
+                             "Utilities/dp.sh build installs it")
+    result = subprocess.run(["node", os.path.join(UTILITIES, "gltf", script), *args],
                             capture_output=True, text=True, timeout=120,
                             env=dict(os.environ, NODE_PATH=module))
     if result.returncode != 0:
-        raise AssertionError(f"the validator did not run on {path}:\n{result.stderr}")
+        raise AssertionError(f"{script} {args} failed:\n{result.stderr}")
     return json.loads(result.stdout)
+
+
+def validate_gltf(path):
+    """The Khronos glTF validator's report on a file (dict: errors, warnings, messages, info)."""
+    return run_node_tool("gltf-validator", "validate_gltf.js", path)
+
+
+def decode_meshopt(path, output):
+    """Decodes a meshopt .glb's buffer views with meshoptimizer's decoder into OUTPUT (the
+    fallback buffer's bytes); returns {"views": n, "bytes": size}."""
+    return run_node_tool("meshoptimizer", "decode_meshopt.js", path, output)
 
 
 def blender_report(path, frames=()):

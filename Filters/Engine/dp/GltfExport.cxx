@@ -1,13 +1,17 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/GltfExport.h"
 
+#include <meshoptimizer.h>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <fstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 
 namespace dp
@@ -53,9 +57,77 @@ int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int ty
   return static_cast<int>(model.accessors.size()) - 1;
 }
 
+// Compresses every buffer view of `model` (all in buffer 0) with meshoptimizer and returns the
+// EXT_meshopt_compression object of each view; buffer 0 then holds the compressed bytes. The
+// views keep their offsets into the original bytes, which become the fallback buffer 1.
+std::vector<nlohmann::json> compressViews(tinygltf::Model& model, std::size_t vertices,
+                                          std::size_t& fallbackBytes)
+{
+  const std::vector<unsigned char> raw = model.buffers[0].data;
+  fallbackBytes = raw.size();
+  std::vector<unsigned char>& packed = model.buffers[0].data;
+  packed.clear();
+  std::vector<nlohmann::json> extensions(model.bufferViews.size());
+  for (const tinygltf::Accessor& a : model.accessors)
+  {
+    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(a.bufferView)];
+    const unsigned char* source = raw.data() + view.byteOffset;
+    const bool indices = view.target == TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+    const std::size_t stride = indices ? 4 : 4 * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1);
+    std::vector<unsigned char> out;
+    if (indices)
+    {
+      out.resize(meshopt_encodeIndexBufferBound(a.count, vertices));
+      out.resize(meshopt_encodeIndexBuffer(out.data(), out.size(),
+                                           reinterpret_cast<const unsigned int*>(source), a.count));
+    }
+    else
+    {
+      out.resize(meshopt_encodeVertexBufferBound(a.count, stride));
+      out.resize(meshopt_encodeVertexBuffer(out.data(), out.size(), source, a.count, stride));
+    }
+    if (out.empty())
+      throw std::runtime_error("meshoptimizer could not encode a buffer view");
+    packed.resize((packed.size() + 3) & ~std::size_t{3});
+    extensions[static_cast<std::size_t>(a.bufferView)] = {
+        {"buffer", 0},
+        {"byteOffset", packed.size()},
+        {"byteLength", out.size()},
+        {"byteStride", stride},
+        {"count", a.count},
+        {"mode", indices ? "TRIANGLES" : "ATTRIBUTES"}};
+    packed.insert(packed.end(), out.begin(), out.end());
+  }
+  packed.resize((packed.size() + 3) & ~std::size_t{3});
+  return extensions;
+}
+
+// A GLB file's bytes with its JSON chunk replaced.
+std::string withJson(const std::string& glb, const nlohmann::json& json)
+{
+  std::string text = json.dump();
+  text.resize((text.size() + 3) & ~std::size_t{3}, ' ');
+  std::uint32_t jsonLength = 0;
+  std::memcpy(&jsonLength, glb.data() + 12, 4);
+  const std::string rest = glb.substr(20 + jsonLength); // the BIN chunk
+  std::string out(12, '\0');
+  const std::uint32_t chunkLength = static_cast<std::uint32_t>(text.size());
+  out.append(reinterpret_cast<const char*>(&chunkLength), 4);
+  out.append("JSON", 4);
+  out += text;
+  out += rest;
+  const std::uint32_t magic = 0x46546C67, version = 2,
+                      total = static_cast<std::uint32_t>(out.size());
+  std::memcpy(out.data(), &magic, 4);
+  std::memcpy(out.data() + 4, &version, 4);
+  std::memcpy(out.data() + 8, &total, 4);
+  return out;
+}
+
 } // namespace
 
-void writeGlb(const std::string& path, const CompressedSequence& sequence)
+void writeGlb(const std::string& path, const CompressedSequence& sequence,
+              const GlbOptions& options)
 {
   const PcaModel& m = sequence.pca.model;
   if (m.layout != PcaLayout::Shapes)
@@ -168,10 +240,44 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence)
 
   const std::string partial = path + ".partial";
   tinygltf::TinyGLTF writer;
-  if (!writer.WriteGltfSceneToFile(&model, partial, true, true, false, true))
+  if (!options.meshopt)
   {
-    std::remove(partial.c_str());
-    throw std::runtime_error(path + ": cannot write the glTF file");
+    if (!writer.WriteGltfSceneToFile(&model, partial, true, true, false, true))
+    {
+      std::remove(partial.c_str());
+      throw std::runtime_error(path + ": cannot write the glTF file");
+    }
+  }
+  else
+  {
+    // tinygltf writes buffer 0 (now the compressed bytes) as the BIN chunk; the views'
+    // extensions and the fallback buffer are added to its JSON.
+    std::size_t fallbackBytes = 0;
+    const std::vector<nlohmann::json> views = compressViews(model, nv, fallbackBytes);
+    std::ostringstream stream;
+    if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+      throw std::runtime_error(path + ": cannot write the glTF file");
+    const std::string glb = stream.str();
+    std::uint32_t jsonLength = 0;
+    std::memcpy(&jsonLength, glb.data() + 12, 4);
+    nlohmann::json json = nlohmann::json::parse(glb.substr(20, jsonLength));
+    for (std::size_t v = 0; v < views.size(); ++v)
+    {
+      json["bufferViews"][v]["buffer"] = 1;
+      json["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = views[v];
+    }
+    json["buffers"][1] = {{"byteLength", fallbackBytes},
+                          {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}};
+    json["extensionsUsed"] = {"EXT_meshopt_compression"};
+    json["extensionsRequired"] = {"EXT_meshopt_compression"};
+    const std::string bytes = withJson(glb, json);
+    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    if (!out)
+    {
+      std::remove(partial.c_str());
+      throw std::runtime_error(path + ": cannot write the glTF file");
+    }
   }
   if (std::rename(partial.c_str(), path.c_str()) != 0)
     throw std::runtime_error(path + ": cannot rename " + partial + " into place");

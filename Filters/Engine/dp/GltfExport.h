@@ -10,8 +10,14 @@
  * the base; base + sum_j w'_j target_j is the same shape, so the error does not change (only
  * float32 rounding is added). Weights, positions and times are float32, as glTF stores them.
  *
+ * With `meshopt`, every buffer view is stored compressed by meshoptimizer (glTF extension
+ * EXT_meshopt_compression: vertex codec for positions, targets, times and weights, index codec
+ * for the triangles), for web viewers (three.js, Babylon.js, gltfpack's tools). The extension
+ * is then required: viewers without it (Blender 3.4, VTK 9.2) cannot read that variant, so the
+ * uncompressed one is the default. Decoding gives back the same bytes (lossless).
+ *
  * Limits: only the shape layout maps onto morph targets (the trajectory layout is refused);
- * no normals (viewers compute them); no meshopt compression.
+ * no normals (viewers compute them).
  */
 #pragma once
 
@@ -22,8 +28,14 @@
 namespace dp
 {
 
+struct GlbOptions
+{
+  bool meshopt = false; // EXT_meshopt_compression on every buffer view
+};
+
 /** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout
  *  or a sequence without triangles, std::runtime_error when the file cannot be written. */
-void writeGlb(const std::string& path, const CompressedSequence& sequence);
+void writeGlb(const std::string& path, const CompressedSequence& sequence,
+              const GlbOptions& options = {});
 
 } // namespace dp
