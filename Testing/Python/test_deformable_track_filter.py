@@ -71,6 +71,17 @@ class TestDeformableTrackFilter(TempDirTestCase):
         f.UpdateTimeStep(2)
         self.assertEqual(f.GetNumberOfCachedFrames(), 3)
 
+    def test_pieces_other_than_zero_are_empty_and_quiet(self):
+        # What each process but the first asks under MPI: it gets nothing, computes nothing.
+        f = self.tracker()
+        rec = MessageRecorder(f)
+        f.UpdatePiece(1, 2, 0)
+        self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 0)
+        self.assertEqual(rec.errors, [])
+        f.UpdatePiece(0, 2, 0)  # process 0 has the whole frame
+        self.assertGreater(f.GetOutput().GetNumberOfPoints(), 0)
+
     def test_frame_zero_polygons_are_the_template_when_no_input_one(self):
         # Track the truth meshes themselves (their vertices as the points): frame 0's polygons
         # are the template. The sheet's wave stretches it, which the cloth energy resists, so

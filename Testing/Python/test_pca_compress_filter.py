@@ -99,6 +99,14 @@ class TestPCACompressFilter(TempDirTestCase):
             self.assertEqual(reader.GetOutput().GetNumberOfPolys(),
                              f.GetOutput().GetNumberOfPolys())
 
+    def test_pieces_other_than_zero_are_empty_and_write_nothing(self):
+        f = self.compressor(FileName=self.path("piece1.dpz"))
+        rec = MessageRecorder(f)
+        f.UpdatePiece(1, 2, 0)
+        self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
+        self.assertEqual(rec.errors, [])
+        self.assertFalse(os.path.exists(self.path("piece1.dpz")))
+
     def test_the_writer_writes_what_the_filter_writes(self):
         self.compressor(FileName=self.path("filter.dpz"), GLBFileName=self.path("filter.glb"),
                         ErrorTarget=0.5).Update()
