@@ -9,6 +9,8 @@
 #include "dp/TriangleMesh.h"
 
 #include <gtest/gtest.h>
+#include <memory>
+#include <tbb/global_control.h>
 
 #include <cmath>
 #include <map>
@@ -455,6 +457,29 @@ TEST(Tracker, TracksTheSameInAnyUnits)
   }
   for (std::size_t f = 0; f < s.frames.size(); ++f)
     EXPECT_LT(vertexRms(results[0][f], results[1][f]), 1e-6 * s.diagonal) << "frame " << f;
+}
+
+TEST(Tracker, OneThreadGivesTheSameBitsAsAll)
+{
+  // The per-vertex sampling runs in parallel; each vertex writes only its own entries and sums
+  // are taken in vertex order, so the thread count must not show in the result.
+  const Sequence s = makeSequence(4, 0.001, 0, 4000);
+  std::vector<std::vector<double>> results[2];
+  for (int run = 0; run < 2; ++run)
+  {
+    std::unique_ptr<tbb::global_control> oneThread;
+    if (run == 1)
+      oneThread =
+          std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, 1);
+    dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                        s.animation.positions(0), dp::TrackerOptions{});
+    for (const dp::PointCloud& frame : s.frames)
+      results[run].push_back(
+          tracker.track(frame.points.data(), frame.numberOfPoints(), frame.normals.data())
+              .positions);
+  }
+  for (std::size_t f = 0; f < s.frames.size(); ++f)
+    EXPECT_EQ(results[0][f], results[1][f]) << "frame " << f;
 }
 
 TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)

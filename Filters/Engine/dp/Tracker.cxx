@@ -5,6 +5,8 @@
 #include "dp/detail/BlockSparseMatrix.h"
 
 #include <lbfgs.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -22,6 +24,21 @@
 
 namespace dp
 {
+
+namespace
+{
+// body(v) for every vertex, on all threads in blocks; body must touch only vertex v's data.
+template <typename Body>
+void forEachVertex(std::size_t count, const Body& body)
+{
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 128),
+                    [&](const tbb::blocked_range<std::size_t>& range)
+                    {
+                      for (std::size_t v = range.begin(); v != range.end(); ++v)
+                        body(v);
+                    });
+}
+} // namespace
 namespace
 {
 constexpr double Pi = 3.14159265358979323846;
@@ -158,25 +175,34 @@ double Tracker::distanceEnergy(const double* x, const DistanceField* field,
 {
   if (!field)
     return 0;
-  double e = 0;
   const auto& mass = Cloth.vertexMass();
   const double scale = Options.distanceWeight / Cloth.lengthScale();
-  for (std::size_t v = 0; v < mass.size(); ++v)
+  // Vertices in parallel (sampling the field is most of the tracker's time), each writing only
+  // its own entries; the sum is taken afterwards in vertex order, so any thread count gives the
+  // same bits.
+  std::vector<double> values(mass.size(), 0.0);
+  forEachVertex(mass.size(),
+                [&](std::size_t v)
+                {
+                  if (weights[v] == 0)
+                    return;
+                  const DistanceSample s = sampleData(*field, x + 3 * v, v);
+                  const double w = scale * mass[v] * weights[v];
+                  // Squared: D^2 / (2 voxel), smooth at the data; else the paper's D.
+                  const double value =
+                      Options.squaredDistance ? 0.5 * s.distance * s.distance / Voxel : s.distance;
+                  const double slope = Options.squaredDistance ? s.distance / Voxel : 1.0;
+                  values[v] = w * value;
+                  if (gradient)
+                    for (int k = 0; k < 3; ++k)
+                      gradient[3 * v + k] += w * slope * s.gradient[k];
+                });
+  double e = 0;
+  for (std::size_t v = 0; v < values.size(); ++v)
   {
-    if (weights[v] == 0)
-      continue;
-    const DistanceSample s = sampleData(*field, x + 3 * v, v);
-    const double w = scale * mass[v] * weights[v];
-    // Squared: D^2 / (2 voxel), smooth at the data; else the paper's D.
-    const double value =
-        Options.squaredDistance ? 0.5 * s.distance * s.distance / Voxel : s.distance;
-    const double slope = Options.squaredDistance ? s.distance / Voxel : 1.0;
-    e += w * value;
-    if (perVertex)
-      perVertex[v] = w * value;
-    if (gradient)
-      for (int k = 0; k < 3; ++k)
-        gradient[3 * v + k] += w * slope * s.gradient[k];
+    e += values[v];
+    if (perVertex && weights[v] != 0)
+      perVertex[v] = values[v];
   }
   return e;
 }
@@ -285,12 +311,11 @@ int Tracker::solveGaussNewton(
   std::vector<double> c(nv);
   auto linearise = [&]()
   {
-    for (std::size_t v = 0; v < nv; ++v)
-    {
+    forEachVertex(nv, [&](std::size_t v) { // each vertex writes only its own entries
       c[v] = 0;
       quadric[v] = PlaneQuadric();
       if (!field || weights[v] == 0)
-        continue;
+        return;
       DistanceSample s;
       if (planes)
       {
@@ -304,7 +329,7 @@ int Tracker::solveGaussNewton(
       }
       c[v] = scale * mass[v] * weights[v] /
              (Options.squaredDistance ? Voxel : std::max(s.distance, Voxel));
-    }
+    });
   };
 
   std::vector<double> trial(x.size()), dataAtTrial(nv, 0.0), vertexDamping(nv, 0.0);
