@@ -35,6 +35,7 @@
 #include <iostream>
 #include <sstream>
 #include <unistd.h>
+#include <utility>
 
 namespace
 {
@@ -228,170 +229,189 @@ Settings parse(int argc, char** argv, bool& help)
   return s;
 }
 
-int run(int argc, char** argv)
+// The main job, stage by stage; each stage reports its own errors and leaves what it finished.
+class MainJob
 {
-  bool help = false;
-  const Settings settings = parse(argc, argv, help);
-  if (help)
+public:
+  explicit MainJob(Settings settings)
+      : S(std::move(settings)), Output(S.output), Pvd(Output / "tracked.pvd"),
+        Dpz(Output / "tracked.dpz"), Glb(Output / "tracked.glb"), Bar(!S.quiet)
   {
-    std::cout << Usage;
-    return 0;
+    Printer->ProgressShown = Bar.enabled();
   }
-  std::signal(SIGINT, onInterrupt);
-  std::signal(SIGTERM, onInterrupt);
-  const auto started = std::chrono::steady_clock::now();
 
-  vtkNew<MessagePrinter> printer;
-  // The executives only repeat "returned failure" after the algorithm has said why: quiet.
-  vtkNew<vtkCallbackCommand> quiet;
-  auto watch = [&](vtkAlgorithm* a)
+  int run()
   {
-    a->AddObserver(vtkCommand::ErrorEvent, printer);
-    a->AddObserver(vtkCommand::WarningEvent, printer);
-    a->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, quiet);
-  };
-  ProgressBar bar(!settings.quiet);
-  printer->ProgressShown = bar.enabled();
+    if (!openSequence() || !prepareTracker())
+      return 1;
+    track();
+    if (!Failed && !Interrupted)
+      compress();
+    writeReport();
+    return Interrupted ? 130 : Failed ? 1 : 0;
+  }
 
-  // --- The input sequence ---------------------------------------------------------------------
-  vtkNew<vtkPointSequenceSource> source;
-  watch(source);
-  const fs::path output = settings.output;
-  std::string inputName = settings.input;
-  if (settings.input.empty())
+private:
+  // VTK messages of `a` go to the printer; its executive's "returned failure" (which only
+  // repeats what the algorithm said) is dropped.
+  void watch(vtkAlgorithm* a)
   {
-    const std::string folder = (output / "input").string();
-    std::cout << "No input given: generating the built-in sample sequence in " << folder << "\n";
-    dp::SamplerOptions sampling;
-    sampling.pointsPerFrame = 20000;
-    sampling.seed = 1;
-    inputName = dp::writeSampledSequence(dp::BendingTube(), sampling, folder);
-    source->SetFileName(inputName.c_str());
+    a->AddObserver(vtkCommand::ErrorEvent, Printer);
+    a->AddObserver(vtkCommand::WarningEvent, Printer);
+    a->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, Quiet);
   }
-  else if (fs::is_directory(settings.input))
-  {
-    source->SetDirectoryName(settings.input.c_str());
-    source->SetFilePattern(settings.pattern.c_str());
-  }
-  else
-    source->SetFileName(settings.input.c_str());
-  int frames = source->GetNumberOfFrames();
-  if (frames < 0)
-    return 1; // the printer has said why
-  if (settings.frames > 0 && settings.frames < frames)
-  {
-    // Only the first N frames: a .series file listing them with their times, which the
-    // source then reads (and the user can see what was tracked).
-    nlohmann::json files = nlohmann::json::array();
-    for (int f = 0; f < settings.frames; ++f)
-      files.push_back({{"name", fs::absolute(source->GetFramePath(f)).string()},
-                       {"time", source->GetFrameTime(f)}});
-    fs::create_directories(output);
-    const fs::path series = output / "first-frames.series";
-    writeAtomically(series,
-                    nlohmann::json{{"file-series-version", "1.0"}, {"files", files}}.dump(1));
-    source->SetDirectoryName(nullptr);
-    source->SetFileName(series.string().c_str());
-    frames = source->GetNumberOfFrames();
-    if (frames < 0)
-      return 1;
-  }
-  std::cout << "Sequence: " << frames << " frame(s) from " << inputName << "\n";
 
-  // --- Tracking ----------------------------------------------------------------------------
-  vtkNew<vtkDeformableTrackFilter> tracker;
-  watch(tracker);
-  tracker->SetInputConnection(source->GetOutputPort());
-  tracker->SetTemplateVertices(settings.vertices);
-  vtkNew<vtkPointSequenceSource> templateReader;
-  if (!settings.templateFile.empty())
+  bool openSequence()
   {
-    watch(templateReader);
-    templateReader->SetFileName(settings.templateFile.c_str());
-    if (templateReader->GetNumberOfFrames() < 0)
-      return 1;
-    templateReader->Update();
-    if (printer->Errors)
-      return 1;
-    if (templateReader->GetOutput()->GetNumberOfPolys() == 0)
+    watch(Source);
+    InputName = S.input;
+    if (S.input.empty())
     {
-      std::cerr << "error: " << settings.templateFile
-                << ": has no polygons, so it cannot be the template mesh\n";
-      return 1;
+      const std::string folder = (Output / "input").string();
+      std::cout << "No input given: generating the built-in sample sequence in " << folder << "\n";
+      dp::SamplerOptions sampling;
+      sampling.pointsPerFrame = 20000;
+      sampling.seed = 1;
+      InputName = dp::writeSampledSequence(dp::BendingTube(), sampling, folder);
+      Source->SetFileName(InputName.c_str());
     }
-    tracker->SetTemplateConnection(templateReader->GetOutputPort());
-  }
-  vtkNew<ProgressWatcher> trackProgress;
-  trackProgress->Bar = &bar;
-  tracker->AddObserver(vtkCommand::ProgressEvent, trackProgress);
-
-  const fs::path trackedFolder = output / "tracked";
-  fs::create_directories(trackedFolder);
-  for (const auto& entry : fs::directory_iterator(trackedFolder)) // a previous run's frames
-    if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
-      fs::remove(entry.path());
-  const fs::path pvd = output / "tracked.pvd";
-  std::vector<std::pair<double, std::string>> written;
-  std::vector<FrameRecord> records;
-  vtkNew<vtkXMLPolyDataWriter> writer;
-  // Inline data: appended data trips ParaView 5.11's XML readers here (README, platform notes).
-  writer->SetDataModeToBinary();
-  writer->SetCompressorTypeToZLib();
-  watch(writer);
-  double diagonal = 0;
-  long long templateVertices = 0, templateTriangles = 0;
-  if (!settings.quiet)
-    std::printf("%6s %10s %9s %6s %12s %12s %9s\n", "frame", "time", "points", "iter", "rms dist",
-                "max dist", "ms");
-  bool failed = false;
-  for (int f = 0; f < frames && !Interrupted; ++f)
-  {
-    const double time = source->GetFrameTime(f);
-    const int errorsBefore = printer->Errors;
-    trackProgress->What = "tracking frame " + std::to_string(f + 1) + "/" + std::to_string(frames);
-    tracker->UpdateTimeStep(time);
-    if (Interrupted)
-      break;
-    vtkPolyData* mesh = tracker->GetOutput();
-    if (printer->Errors > errorsBefore || mesh->GetNumberOfPoints() == 0 ||
-        tracker->GetNumberOfCachedFrames() != f + 1)
+    else if (fs::is_directory(S.input))
     {
-      bar.clear();
-      std::cerr << "error: tracking stopped at frame " << f << " (" << source->GetFramePath(f)
-                << "); ";
+      Source->SetDirectoryName(S.input.c_str());
+      Source->SetFilePattern(S.pattern.c_str());
+    }
+    else
+      Source->SetFileName(S.input.c_str());
+    Frames = Source->GetNumberOfFrames();
+    if (Frames < 0)
+      return false; // the printer has said why
+    if (S.frames > 0 && S.frames < Frames)
+    {
+      // Only the first N frames: a .series file listing them with their times, which the
+      // source then reads (and the user can see what was tracked).
+      nlohmann::json files = nlohmann::json::array();
+      for (int f = 0; f < S.frames; ++f)
+        files.push_back({{"name", fs::absolute(Source->GetFramePath(f)).string()},
+                         {"time", Source->GetFrameTime(f)}});
+      fs::create_directories(Output);
+      const fs::path series = Output / "first-frames.series";
+      writeAtomically(series,
+                      nlohmann::json{{"file-series-version", "1.0"}, {"files", files}}.dump(1));
+      Source->SetDirectoryName(nullptr);
+      Source->SetFileName(series.string().c_str());
+      Frames = Source->GetNumberOfFrames();
+      if (Frames < 0)
+        return false;
+    }
+    std::cout << "Sequence: " << Frames << " frame(s) from " << InputName << "\n";
+    return true;
+  }
+
+  bool prepareTracker()
+  {
+    watch(Tracker);
+    Tracker->SetInputConnection(Source->GetOutputPort());
+    Tracker->SetTemplateVertices(S.vertices);
+    if (!S.templateFile.empty())
+    {
+      watch(TemplateReader);
+      TemplateReader->SetFileName(S.templateFile.c_str());
+      if (TemplateReader->GetNumberOfFrames() < 0)
+        return false;
+      TemplateReader->Update();
+      if (Printer->Errors)
+        return false;
+      if (TemplateReader->GetOutput()->GetNumberOfPolys() == 0)
+      {
+        std::cerr << "error: " << S.templateFile
+                  << ": has no polygons, so it cannot be the template mesh\n";
+        return false;
+      }
+      Tracker->SetTemplateConnection(TemplateReader->GetOutputPort());
+    }
+    TrackProgress->Bar = &Bar;
+    Tracker->AddObserver(vtkCommand::ProgressEvent, TrackProgress);
+    return true;
+  }
+
+  // Tracks frame after frame; each finished frame is written and listed in the .pvd at once.
+  void track()
+  {
+    const fs::path folder = Output / "tracked";
+    fs::create_directories(folder);
+    for (const auto& entry : fs::directory_iterator(folder)) // a previous run's frames
+      if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
+        fs::remove(entry.path());
+    vtkNew<vtkXMLPolyDataWriter> writer;
+    // Inline data: appended data trips ParaView 5.11's XML readers here (README, platform notes).
+    writer->SetDataModeToBinary();
+    writer->SetCompressorTypeToZLib();
+    watch(writer);
+    if (!S.quiet)
+      std::printf("%6s %10s %9s %6s %12s %12s %9s\n", "frame", "time", "points", "iter", "rms dist",
+                  "max dist", "ms");
+    for (int f = 0; f < Frames && !Interrupted; ++f)
+    {
+      const double time = Source->GetFrameTime(f);
+      const int errorsBefore = Printer->Errors;
+      TrackProgress->What =
+          "tracking frame " + std::to_string(f + 1) + "/" + std::to_string(Frames);
+      Tracker->UpdateTimeStep(time);
+      if (Interrupted)
+        break;
+      vtkPolyData* mesh = Tracker->GetOutput();
+      if (Printer->Errors > errorsBefore || mesh->GetNumberOfPoints() == 0 ||
+          Tracker->GetNumberOfCachedFrames() != f + 1)
+      {
+        Bar.clear();
+        std::cerr << "error: tracking stopped at frame " << f << " (" << Source->GetFramePath(f)
+                  << "); ";
+        if (f == 0)
+          std::cerr << "no frame was tracked\n";
+        else
+          std::cerr << "frames 0-" << f - 1 << " are in " << Pvd.string() << "\n";
+        Failed = true;
+        break;
+      }
       if (f == 0)
-        std::cerr << "no frame was tracked\n";
-      else
-        std::cerr << "frames 0-" << f - 1 << " are in " << pvd.string() << "\n";
-      failed = true;
-      break;
+      {
+        double b[6];
+        mesh->GetBounds(b);
+        Diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+                             (b[5] - b[4]) * (b[5] - b[4]));
+        MeshVertices = mesh->GetNumberOfPoints();
+        MeshTriangles = mesh->GetNumberOfPolys();
+      }
+      char name[32];
+      std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
+      const fs::path file = folder / name;
+      const std::string partial = file.string() + ".partial";
+      writer->SetInputData(mesh);
+      writer->SetFileName(partial.c_str());
+      if (!writer->Write())
+      {
+        Bar.clear();
+        std::cerr << "error: " << file.string() << ": cannot write\n";
+        Failed = true;
+        break;
+      }
+      fs::rename(partial, file);
+      Written.emplace_back(time, (fs::path("tracked") / name).string());
+      writeAtomically(Pvd, pvdText(Written));
+      record(f, time, mesh);
     }
-    if (f == 0)
-    {
-      double b[6];
-      mesh->GetBounds(b);
-      diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
-                           (b[5] - b[4]) * (b[5] - b[4]));
-      templateVertices = mesh->GetNumberOfPoints();
-      templateTriangles = mesh->GetNumberOfPolys();
-    }
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
-    const fs::path file = trackedFolder / name;
-    const std::string partial = file.string() + ".partial";
-    writer->SetInputData(mesh);
-    writer->SetFileName(partial.c_str());
-    if (!writer->Write())
-    {
-      bar.clear();
-      std::cerr << "error: " << file.string() << ": cannot write\n";
-      failed = true;
-      break;
-    }
-    fs::rename(partial, file);
-    written.emplace_back(time, (fs::path("tracked") / name).string());
-    writeAtomically(pvd, pvdText(written));
+    Bar.clear();
+    if (Interrupted)
+      std::cerr << "interrupted: " << Written.size() << " of " << Frames << " frame(s) tracked, in "
+                << Pvd.string() << "; nothing compressed\n";
+    else
+      std::cout << Written.size() << " of " << Frames << " frame(s) tracked: " << Pvd.string()
+                << " (" << MeshVertices << " vertices, " << MeshTriangles << " triangles)\n";
+  }
 
+  // The frame's line of the table and of the report.
+  void record(int f, double time, vtkPolyData* mesh)
+  {
     vtkDataArray* residual = mesh->GetPointData()->GetArray("Residual");
     double sum = 0, largest = 0;
     for (vtkIdType i = 0; residual && i < residual->GetNumberOfTuples(); ++i)
@@ -401,127 +421,152 @@ int run(int argc, char** argv)
       largest = std::max(largest, r);
     }
     const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
-    const FrameRecord record{f,
-                             time,
-                             std::sqrt(sum / n),
-                             largest,
-                             1000 * fieldValue(mesh, "Seconds"),
-                             static_cast<long long>(source->GetOutput()->GetNumberOfPoints()),
-                             static_cast<long long>(fieldValue(mesh, "Iterations"))};
-    records.push_back(record);
-    if (!settings.quiet)
+    const FrameRecord r{f,
+                        time,
+                        std::sqrt(sum / n),
+                        largest,
+                        1000 * fieldValue(mesh, "Seconds"),
+                        static_cast<long long>(Source->GetOutput()->GetNumberOfPoints()),
+                        static_cast<long long>(fieldValue(mesh, "Iterations"))};
+    Records.push_back(r);
+    if (!S.quiet)
     {
-      bar.clear();
-      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f\n", f, time, record.points,
-                  record.iterations, record.rmsResidual, record.maxResidual, record.milliseconds);
+      Bar.clear();
+      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f\n", f, time, r.points, r.iterations,
+                  r.rmsResidual, r.maxResidual, r.milliseconds);
       std::fflush(stdout);
     }
   }
-  bar.clear();
-  if (Interrupted)
-    std::cerr << "interrupted: " << written.size() << " of " << frames << " frame(s) tracked, in "
-              << pvd.string() << "; nothing compressed\n";
-  else
-    std::cout << written.size() << " of " << frames << " frame(s) tracked: " << pvd.string() << " ("
-              << templateVertices << " vertices, " << templateTriangles << " triangles)\n";
 
-  // --- Compression -------------------------------------------------------------------------
-  nlohmann::json compression;
-  const fs::path dpz = output / "tracked.dpz", glb = output / "tracked.glb";
-  if (!failed && !Interrupted)
+  void compress()
   {
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
-    compressor->SetInputConnection(tracker->GetOutputPort());
+    compressor->SetInputConnection(Tracker->GetOutputPort());
     compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
-    compressor->SetErrorTarget(settings.errorTarget);
-    compressor->SetFileName(dpz.string().c_str());
-    compressor->SetGLBFileName(glb.string().c_str());
-    vtkNew<ProgressWatcher> compressProgress;
-    compressProgress->Bar = &bar;
-    compressProgress->What = "compressing";
-    compressor->AddObserver(vtkCommand::ProgressEvent, compressProgress);
-    const int errorsBefore = printer->Errors;
+    compressor->SetErrorTarget(S.errorTarget);
+    compressor->SetFileName(Dpz.string().c_str());
+    compressor->SetGLBFileName(Glb.string().c_str());
+    vtkNew<ProgressWatcher> progress;
+    progress->Bar = &Bar;
+    progress->What = "compressing";
+    compressor->AddObserver(vtkCommand::ProgressEvent, progress);
+    const int errorsBefore = Printer->Errors;
     compressor->Update();
-    bar.clear();
+    Bar.clear();
     if (Interrupted)
-      std::cerr << "interrupted while compressing: the tracked frames are in " << pvd.string()
+    {
+      std::cerr << "interrupted while compressing: the tracked frames are in " << Pvd.string()
                 << "\n";
-    else if (printer->Errors > errorsBefore)
-    {
-      std::cerr << "error: compression failed; the tracked frames are in " << pvd.string() << "\n";
-      failed = true;
+      return;
     }
-    else
+    if (Printer->Errors > errorsBefore)
     {
-      vtkPolyData* result = compressor->GetOutput();
-      for (const char* name :
-           {"Components", "KGError", "MaxError", "MaxErrorRelative", "BitsPerVertexFrame",
-            "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1", "PaperRatio"})
-        compression[name] = fieldValue(result, name);
-      compression["ErrorTargetKG"] = settings.errorTarget;
-      compression["Bytes"] = fs::file_size(dpz);
-      std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame (%.1fx "
-                  "smaller than float32), KG error %.3g%%\n",
-                  dpz.string().c_str(), fieldValue(result, "Components"),
-                  fieldValue(result, "BitsPerVertexFrame"),
-                  96.0 / fieldValue(result, "BitsPerVertexFrame"), fieldValue(result, "KGError"));
-      std::printf("glTF: %s\n", glb.string().c_str());
+      std::cerr << "error: compression failed; the tracked frames are in " << Pvd.string() << "\n";
+      Failed = true;
+      return;
     }
+    vtkPolyData* result = compressor->GetOutput();
+    for (const char* name :
+         {"Components", "KGError", "MaxError", "MaxErrorRelative", "BitsPerVertexFrame",
+          "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1", "PaperRatio"})
+      Compression[name] = fieldValue(result, name);
+    Compression["ErrorTargetKG"] = S.errorTarget;
+    Compression["Bytes"] = fs::file_size(Dpz);
+    std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame (%.1fx "
+                "smaller than float32), KG error %.3g%%\n",
+                Dpz.string().c_str(), fieldValue(result, "Components"),
+                fieldValue(result, "BitsPerVertexFrame"),
+                96.0 / fieldValue(result, "BitsPerVertexFrame"), fieldValue(result, "KGError"));
+    std::printf("glTF: %s\n", Glb.string().c_str());
   }
 
-  // --- Report ------------------------------------------------------------------------------
-  nlohmann::json report;
-  report["input"] = inputName;
-  report["frames"] = frames;
-  report["framesTracked"] = written.size();
-  report["interrupted"] = Interrupted != 0;
-  report["template"] = {{"source", settings.templateFile.empty() ? "reconstructed from frame 0"
-                                                                 : settings.templateFile},
-                        {"vertices", templateVertices},
-                        {"triangles", templateTriangles}};
-  report["boundingBoxDiagonal"] = diagonal;
-  nlohmann::json perFrame = nlohmann::json::array();
-  std::vector<double> rms, largest, ms;
-  for (const FrameRecord& r : records)
+  void writeReport() const
   {
-    perFrame.push_back({{"frame", r.frame},
-                        {"time", r.time},
-                        {"points", r.points},
-                        {"iterations", r.iterations},
-                        {"rmsResidual", r.rmsResidual},
-                        {"maxResidual", r.maxResidual},
-                        {"milliseconds", r.milliseconds}});
-    rms.push_back(diagonal > 0 ? 100 * r.rmsResidual / diagonal : r.rmsResidual);
-    largest.push_back(diagonal > 0 ? 100 * r.maxResidual / diagonal : r.maxResidual);
-    ms.push_back(r.milliseconds);
+    nlohmann::json report;
+    report["input"] = InputName;
+    report["frames"] = Frames;
+    report["framesTracked"] = Written.size();
+    report["interrupted"] = Interrupted != 0;
+    report["template"] = {
+        {"source", S.templateFile.empty() ? "reconstructed from frame 0" : S.templateFile},
+        {"vertices", MeshVertices},
+        {"triangles", MeshTriangles}};
+    report["boundingBoxDiagonal"] = Diagonal;
+    nlohmann::json perFrame = nlohmann::json::array();
+    std::vector<double> rms, largest, ms;
+    for (const FrameRecord& r : Records)
+    {
+      perFrame.push_back({{"frame", r.frame},
+                          {"time", r.time},
+                          {"points", r.points},
+                          {"iterations", r.iterations},
+                          {"rmsResidual", r.rmsResidual},
+                          {"maxResidual", r.maxResidual},
+                          {"milliseconds", r.milliseconds}});
+      rms.push_back(Diagonal > 0 ? 100 * r.rmsResidual / Diagonal : r.rmsResidual);
+      largest.push_back(Diagonal > 0 ? 100 * r.maxResidual / Diagonal : r.maxResidual);
+      ms.push_back(r.milliseconds);
+    }
+    report["perFrame"] = perFrame;
+    std::vector<double> sorted = ms;
+    std::sort(sorted.begin(), sorted.end());
+    report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    const fs::path plot = Output / "report.png";
+    nlohmann::json outputs = {{"tracked", Pvd.string()}, {"plot", plot.string()}};
+    if (!Compression.empty())
+    {
+      report["compression"] = Compression;
+      outputs["compressed"] = Dpz.string();
+      outputs["gltf"] = Glb.string();
+    }
+    report["outputs"] = outputs;
+    report["wallSeconds"] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - Started).count();
+    writeAtomically(Output / "report.json", report.dump(1) + "\n");
+    const dp::cli::PlotPanel residualPanel{
+        "distance to the points, % of diagonal",
+        {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}}};
+    const dp::cli::PlotPanel timePanel{"tracking time, ms", {{"per frame", ms, {44, 160, 44}}}};
+    dp::cli::writeFramePlot(plot.string(),
+                            "DynamicPoints: " + fs::path(InputName).filename().string(),
+                            {residualPanel, timePanel});
+    std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
   }
-  report["perFrame"] = perFrame;
-  std::vector<double> sorted = ms;
-  std::sort(sorted.begin(), sorted.end());
-  report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
-  if (!compression.empty())
-    report["compression"] = compression;
-  nlohmann::json outputs = {{"tracked", pvd.string()}, {"plot", (output / "report.png").string()}};
-  if (!compression.empty())
+
+  const Settings S;
+  const fs::path Output, Pvd, Dpz, Glb;
+  const std::chrono::steady_clock::time_point Started = std::chrono::steady_clock::now();
+  vtkNew<MessagePrinter> Printer;
+  vtkNew<vtkCallbackCommand> Quiet;
+  ProgressBar Bar;
+  vtkNew<vtkPointSequenceSource> Source;
+  vtkNew<vtkPointSequenceSource> TemplateReader;
+  vtkNew<vtkDeformableTrackFilter> Tracker;
+  vtkNew<ProgressWatcher> TrackProgress;
+
+  std::string InputName;
+  int Frames = 0;
+  bool Failed = false;
+  std::vector<std::pair<double, std::string>> Written; // (time, file) of each frame written
+  std::vector<FrameRecord> Records;
+  double Diagonal = 0;
+  long long MeshVertices = 0, MeshTriangles = 0;
+  nlohmann::json Compression;
+};
+
+int run(int argc, char** argv)
+{
+  bool help = false;
+  Settings settings = parse(argc, argv, help);
+  if (help)
   {
-    outputs["compressed"] = dpz.string();
-    outputs["gltf"] = glb.string();
+    std::cout << Usage;
+    return 0;
   }
-  report["outputs"] = outputs;
-  report["wallSeconds"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
-  writeAtomically(output / "report.json", report.dump(1) + "\n");
-  dp::cli::PlotPanel residualPanel{
-      "distance to the points, % of diagonal",
-      {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}}};
-  dp::cli::PlotPanel timePanel{"tracking time, ms", {{"per frame", ms, {44, 160, 44}}}};
-  dp::cli::writeFramePlot((output / "report.png").string(),
-                          "DynamicPoints: " + fs::path(inputName).filename().string(),
-                          {residualPanel, timePanel});
-  std::cout << "Report: " << (output / "report.json").string() << ", "
-            << (output / "report.png").string() << "\n";
-  return Interrupted ? 130 : failed ? 1 : 0;
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
+  return MainJob(std::move(settings)).run();
 }
 
 } // namespace
