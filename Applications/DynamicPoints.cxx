@@ -68,6 +68,9 @@ Options:
                       with their times in OUTPUT/first-frames.series)
   --error-target KG   compression error target, Karni-Gotsman error in percent
                       (default: 0.2)
+  --meshopt           store tracked.glb's buffers compressed by meshoptimizer
+                      (EXT_meshopt_compression: smaller, for web viewers such as
+                      three.js; Blender 3.4 and ParaView cannot open it)
   --output DIR        where results go (default: dynamicpoints-output)
   --quiet             no per-frame table and no progress bar
   -h, --help          show this help
@@ -194,6 +197,7 @@ struct Settings
   long long frames = 0; // 0: all
   double errorTarget = 0.2;
   bool quiet = false;
+  bool meshopt = false;
 };
 
 Settings parse(int argc, char** argv, bool& help)
@@ -219,6 +223,8 @@ Settings parse(int argc, char** argv, bool& help)
       s.errorTarget = parseDouble(arg, optionValue(argc, argv, i), 1e-4, 50);
     else if (arg == "--quiet")
       s.quiet = true;
+    else if (arg == "--meshopt")
+      s.meshopt = true;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
     else if (s.input.empty())
@@ -447,6 +453,7 @@ private:
     compressor->SetErrorTarget(S.errorTarget);
     compressor->SetFileName(Dpz.string().c_str());
     compressor->SetGLBFileName(Glb.string().c_str());
+    compressor->SetGLBMeshoptCompression(S.meshopt);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";

@@ -281,6 +281,17 @@ class TestBadInput(TempDirTestCase):
         self.assertEqual([t for t, _ in pvd_files(self.path("out", "tracked.pvd"))],
                          [0.0, 0.25, 0.5])
 
+    def test_meshopt_gives_a_smaller_glb_that_requires_the_extension(self):
+        series = self.small_sequence(3)
+        self.assertEqual(self.run_main(series, "--vertices", 300).returncode, 0)
+        plain = os.path.getsize(self.path("out", "tracked.glb"))
+        result = self.run_main(series, "--vertices", 300, "--meshopt")
+        self.assertEqual(result.returncode, 0, result.stderr)
+        report = validate_gltf(self.path("out", "tracked.glb"))
+        self.assertEqual(report["errors"], 0)
+        self.assertEqual(report["info"]["extensionsRequired"], ["EXT_meshopt_compression"])
+        self.assertLess(os.path.getsize(self.path("out", "tracked.glb")), plain)
+
     def test_a_given_template_is_the_mesh_tracked(self):
         run_tool("dynamicpoints-sample", "--frames", 3, "--points", 3000, "--truth",
                  self.path("seq"))
