@@ -38,13 +38,6 @@ struct vtkDeformableTrackFilter::Internals
 
   std::size_t frameCount() const { return TimeSteps.empty() ? 1 : TimeSteps.size(); }
   double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
-  std::size_t frameAt(vtkInformation* outInfo) const
-  {
-    if (TimeSteps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
-      return 0;
-    return vtkDP::frameAtTime(TimeSteps,
-                              outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
-  }
   void clear()
   {
     Tracker.reset();
@@ -101,7 +94,8 @@ int vtkDeformableTrackFilter::RequestUpdateExtent(vtkInformation*,
 {
   Internals& in = *this->Internal;
   vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  const std::size_t target = in.frameAt(outputVector->GetInformationObject(0));
+  const std::size_t target =
+      vtkDP::requestedFrame(in.TimeSteps, outputVector->GetInformationObject(0));
   if (in.TimeSteps.empty() || vtkDP::isSecondaryPiece(outputVector->GetInformationObject(0)))
     return 1;
   // Computing: ask for the next frame. Answering from the cache: ask for what upstream already
@@ -184,7 +178,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
     output->Initialize();
     return 1;
   }
-  const std::size_t target = in.frameAt(outInfo);
+  const std::size_t target = vtkDP::requestedFrame(in.TimeSteps, outInfo);
   const double requestedTime =
       outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
           ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())

@@ -42,13 +42,6 @@ struct vtkPCACompressFilter::Internals
     return Vertices <= 0 ? 0 : Positions.size() / (3 * static_cast<std::size_t>(Vertices));
   }
   double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
-  std::size_t frameAt(vtkInformation* outInfo) const
-  {
-    if (TimeSteps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
-      return 0;
-    return vtkDP::frameAtTime(TimeSteps,
-                              outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
-  }
   void clear()
   {
     Positions.clear();
@@ -219,7 +212,8 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
     }
   }
 
-  const std::size_t frame = std::min(in.frameAt(outInfo), in.frameCount() - 1);
+  const std::size_t frame =
+      std::min(vtkDP::requestedFrame(in.TimeSteps, outInfo), in.frameCount() - 1);
   const dp::CompressedSequence& result = *in.Result;
   const auto n = in.Vertices;
   vtkNew<vtkDoubleArray> coordinates;

@@ -116,6 +116,13 @@ std::size_t frameAtTime(const std::vector<double>& steps, double t)
       std::upper_bound(steps.begin(), steps.end(), t + 1e-9 * std::max(1.0, std::abs(t)));
   return it == steps.begin() ? 0 : static_cast<std::size_t>(it - steps.begin()) - 1;
 }
+std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* outInfo)
+{
+  if (steps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+    return 0;
+  return frameAtTime(steps, outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+}
+
 bool isSecondaryPiece(vtkInformation* outInfo)
 {
   return outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_PIECE_NUMBER()) &&

@@ -37,6 +37,10 @@ std::vector<double> forwardTimeSteps(vtkInformation* inInfo, vtkInformation* out
  *  0 when t is before the first. */
 std::size_t frameAtTime(const std::vector<double>& steps, double t);
 
+/** The frame an output request asks for: frameAtTime of its UPDATE_TIME_STEP; 0 for a static
+ *  input (no steps) or a request without a time. */
+std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* outInfo);
+
 /** True when the output request is for a piece other than 0. The sources hand the whole frame
  *  to piece 0 (they do not split), so under MPI the tracker and the compressor run on process 0
  *  and give the other processes an empty output, without errors or files. */
