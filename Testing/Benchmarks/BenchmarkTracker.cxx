@@ -1,39 +1,37 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Benchmark: the paper's experiments on ground-truth animated meshes. Per frame, random surface
-// samples (20k by default) are the data; the template is frame 0 at full resolution, or one of
-// about a given vertex count: reconstructed from frame 0's samples (the default, what the filter
-// does without a template) or frame 0 simplified (vtkQuadricDecimation). The ground truth of a
-// template vertex is the barycentric position of its closest point on the frame-0 mesh,
-// carried through the frames. Prints vertex
-// RMS against the ground truth (the paper's measure) and RMS distance to the true surface,
-// both also in % of the bounding-box diagonal, ms per frame and peak memory; optionally the
-// paper's Table 2 ablation (none / MP / PD / both) for a solver.
+// Benchmark: the tracker on ground-truth animated meshes, the way users meet it. Every sequence is
+// brought to a height of 1.70 m (its largest extent; --height), and each frame's data are random
+// surface samples (20 000 by default) without normals, clean or with noise and holes that move
+// every frame. Templates of about --vertices vertices are decimated from the true frame 0 or
+// reconstructed from frame 0's samples (what the filter does without a template), or frame 0
+// itself (--vertices 0). The ground truth of a template vertex is the barycentric position of its
+// closest point on the frame-0 mesh, carried through the frames.
+//
+// Printed per sequence, template and data condition, over all frames: vertex RMS and largest
+// vertex error against the true trajectories (mm and % of the diagonal), RMS distance of the
+// tracked vertices to the true surface, the share of the true surface farther than 3 cm from the
+// tracked surface (lost parts: mean and worst frame), jitter (RMS acceleration of the tracked
+// vertices over the true vertices'), ms per frame. Also: the paper's Table 2 ablation, the
+// scaling with the vertex count (the paper's Fig. 4), oracle starts for diagnosis.
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
+#include "TrackingTruth.h"
 
 #include "dp/AnimatedMesh.h"
-#include "dp/FrameSequence.h"
-#include "dp/SurfaceReconstruction.h"
+#include "dp/PointCloudIO.h"
 #include "dp/SurfaceSampler.h"
 #include "dp/Tracker.h"
 
-#include "vtkCellArray.h"
-#include "vtkCellArrayIterator.h"
-#include "vtkCellLocator.h"
-#include "vtkGenericCell.h"
-#include "vtkNew.h"
-#include "vtkPoints.h"
-#include "vtkPolyData.h"
-#include "vtkQuadricDecimation.h"
-#include "vtkSmartPointer.h"
-#include "vtkTriangle.h"
+#include <Eigen/Dense>
 
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <memory>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -42,214 +40,197 @@ namespace
 {
 using namespace dp::bench;
 
-bool Verbose = false;          // --verbose: one line per frame
-std::uint64_t SamplerSeed = 1; // --seed: which random samples the frames get
-double NoiseFraction = 0;      // --noise: Gaussian noise on the samples, as a share of the diagonal
-std::size_t Holes = 0;         // --holes: holes cut in every frame (radius 5% of the diagonal)
-// --oracle: diagnostics that start each frame from the ground truth: "previous" (one-step error
-// from the true previous frame), "same" (how far the energy's minimum lies from the truth).
-std::string Oracle;
-
-vtkSmartPointer<vtkPolyData> toPolyData(const std::vector<double>& positions,
-                                        const std::vector<std::int64_t>& triangles)
+struct Settings
 {
-  auto pd = vtkSmartPointer<vtkPolyData>::New();
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  for (std::size_t i = 0; i < positions.size(); i += 3)
-    points->InsertNextPoint(&positions[i]);
-  vtkNew<vtkCellArray> polys;
-  for (std::size_t t = 0; t < triangles.size(); t += 3)
-  {
-    const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
-    polys->InsertNextCell(3, ids);
-  }
-  pd->SetPoints(points);
-  pd->SetPolys(polys);
-  return pd;
-}
+  std::size_t points = 20000;
+  std::uint64_t seed = 1;    // which random samples (and holes) the frames get
+  double noise = 0.001;      // "noisy" condition: Gaussian noise per coordinate (m)
+  std::size_t holes = 2;     // "noisy" condition: holes per frame, new places every frame
+  double holeRadius = 0.05;  // m
+  bool givenNormals = false; // pass the true normals to the tracker (else it estimates them)
+  double uncoveredLimit = 0.03;
+  std::size_t truthSamples = 20000; // samples of the true surface for the uncovered share
+  bool verbose = false;
+  std::string
+      oracle; // "previous": start each frame at the true previous frame; "same": at the truth
+  std::string dumpFolder; // write the tracked frames (PLY) here
+  std::string csvFile;    // per-frame figures
+};
+Settings S;
 
-// A template and, for each of its vertices, where it sits on the full-resolution mesh.
-struct Template
+struct Condition
 {
-  std::vector<std::int64_t> triangles;
-  std::vector<double> positions;
-  std::vector<std::int64_t> onTriangle; // index into the full mesh's triangles
-  std::vector<double> barycentric;      // 3 per vertex
+  std::string name;
+  bool noisy = false;
 };
 
-// How the template is made: frame 0 simplified (vtkQuadricDecimation), or a surface
-// reconstructed from frame 0's random samples (dp::reconstructSurface, the path for data
-// without a template).
-bool Reconstruct = true; // --template reconstructed|simplified
-
-Template makeTemplate(const dp::AnimatedMesh& mesh, std::size_t targetVertices)
+dp::SamplerOptions samplingFor(const Condition& c, std::size_t points)
 {
-  Template t;
-  const std::vector<double> frame0 = mesh.positions(0);
-  const auto& full = mesh.triangles();
-  auto input = toPolyData(frame0, full);
-  vtkSmartPointer<vtkPolyData> coarse;
-  if (targetVertices == 0 || (!Reconstruct && targetVertices >= mesh.numberOfVertices()))
+  dp::SamplerOptions o;
+  o.pointsPerFrame = points;
+  o.seed = S.seed;
+  o.normals = S.givenNormals;
+  if (c.noisy)
   {
-    t.triangles = full;
-    t.positions = frame0;
-    return t; // full resolution: the vertices are the ground truth's own
+    o.noiseStdDev = S.noise;
+    o.holes = S.holes;
+    o.holeRadius = S.holeRadius;
+    o.holesMove = true;
   }
-  if (Reconstruct)
-  {
-    dp::SamplerOptions sampling;
-    sampling.seed = SamplerSeed;
-    const dp::PointCloud cloud = dp::sampleSurface(frame0, full, sampling, 0);
-    dp::ReconstructionOptions o;
-    o.targetVertices = targetVertices;
-    const dp::ReconstructedMesh r = dp::reconstructSurface(
-        cloud.points.data(), cloud.normals.data(), cloud.numberOfPoints(), o);
-    coarse = toPolyData(r.positions, r.triangles);
-  }
-  else
-  {
-    vtkNew<vtkQuadricDecimation> decimate;
-    decimate->SetInputData(input);
-    decimate->SetTargetReduction(1.0 - static_cast<double>(targetVertices) /
-                                           static_cast<double>(mesh.numberOfVertices()));
-    decimate->VolumePreservationOn();
-    // Flat regions make the quadrics singular; VTK then warns once per vertex and falls back
-    // to the edge's midpoint, which is fine here.
-    const int warnings = vtkObject::GetGlobalWarningDisplay();
-    vtkObject::GlobalWarningDisplayOff();
-    decimate->Update();
-    vtkObject::SetGlobalWarningDisplay(warnings);
-    coarse = decimate->GetOutput();
-  }
-  // Each template vertex sits at the closest point of the frame-0 mesh: its barycentric
-  // position there, carried through the frames, is its ground truth.
-  vtkNew<vtkCellLocator> locator;
-  locator->SetDataSet(input);
-  locator->BuildLocator();
-  vtkNew<vtkGenericCell> cell;
-  for (vtkIdType i = 0; i < coarse->GetNumberOfPoints(); ++i)
-  {
-    double p[3], closest[3], d2 = 0;
-    coarse->GetPoint(i, p);
-    vtkIdType cellId = -1;
-    int subId = 0;
-    locator->FindClosestPoint(p, closest, cell, cellId, subId, d2);
-    const std::int64_t* v = &full[3 * cellId];
-    double a[3], b[3], c[3], w[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      a[k] = frame0[3 * v[0] + k];
-      b[k] = frame0[3 * v[1] + k];
-      c[k] = frame0[3 * v[2] + k];
-    }
-    vtkTriangle::BarycentricCoords(closest, a, b, c, w);
-    // A simplified vertex sits on the surface; a reconstructed one up to half a voxel off it,
-    // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is
-    // then that offset.
-    const double* at = Reconstruct ? p : closest;
-    t.positions.insert(t.positions.end(), at, at + 3);
-    t.onTriangle.push_back(cellId);
-    t.barycentric.insert(t.barycentric.end(), w, w + 3);
-  }
-  const vtkIdType* ids = nullptr;
-  vtkIdType count = 0;
-  auto polys = vtk::TakeSmartPointer(coarse->GetPolys()->NewIterator());
-  for (polys->GoToFirstCell(); !polys->IsDoneWithTraversal(); polys->GoToNextCell())
-  {
-    polys->GetCurrentCell(count, ids);
-    if (count == 3)
-      t.triangles.insert(t.triangles.end(), {ids[0], ids[1], ids[2]});
-  }
-  return t;
-}
-
-std::vector<double> groundTruth(const Template& t, const std::vector<double>& frame,
-                                const std::vector<std::int64_t>& full)
-{
-  if (t.onTriangle.empty())
-    return frame;
-  std::vector<double> out(t.positions.size());
-  for (std::size_t i = 0; i < t.onTriangle.size(); ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      double value = 0;
-      for (int c = 0; c < 3; ++c)
-        value += t.barycentric[3 * i + c] * frame[3 * full[3 * t.onTriangle[i] + c] + k];
-      out[3 * i + k] = value;
-    }
-  return out;
+  return o;
 }
 
 struct Run
 {
-  double vertexRms = 0, surfaceRms = 0, msPerFrame = 0;
-  std::size_t frames = 0;
+  dp::FrameTimings time; // summed over the frames
+  std::size_t retried = 0, flagged = 0;
+  double vertexRms = 0, largestVertexError = 0, surfaceRms = 0;
+  double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
+  std::size_t worstFrame = 0, frames = 0;
 };
 
-Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
-          std::size_t frames, std::size_t points)
+void dumpFrame(const std::string& folder, std::size_t frame, const std::vector<double>& positions,
+               const std::vector<double>& truth, const std::vector<std::int64_t>& triangles,
+               const dp::PointCloud& data)
 {
-  dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.positions.size() / 3), t.positions, options);
-  dp::SamplerOptions sampling;
-  sampling.pointsPerFrame = points;
-  sampling.seed = SamplerSeed;
-  const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
-  sampling.noiseStdDev = NoiseFraction * diagonal;
-  sampling.holes = Holes;
-  sampling.holeRadius = 0.05 * diagonal;
+  std::filesystem::create_directories(folder);
+  dp::PointCloud mesh;
+  mesh.points = positions;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+    mesh.addFace(&triangles[t], 3);
+  // Each vertex's error against the truth, for colouring.
+  dp::PointAttribute error{"error", 1, {}};
+  for (std::size_t i = 0; i < positions.size(); i += 3)
+    error.values.push_back(static_cast<float>(
+        std::sqrt((positions[i] - truth[i]) * (positions[i] - truth[i]) +
+                  (positions[i + 1] - truth[i + 1]) * (positions[i + 1] - truth[i + 1]) +
+                  (positions[i + 2] - truth[i + 2]) * (positions[i + 2] - truth[i + 2]))));
+  mesh.attributes.push_back(error);
+  // ... and as colours: grey at 0, red at 5 cm and beyond.
+  mesh.colorComponents = 3;
+  for (float e : error.values)
+  {
+    const double u = std::min(1.0, e / 0.05);
+    const auto c = [&](double from, double to)
+    { return static_cast<std::uint8_t>(from + u * (to - from)); };
+    mesh.colors.insert(mesh.colors.end(), {c(200, 230), c(200, 20), c(200, 20)});
+  }
+  char name[64];
+  std::snprintf(name, sizeof name, "/tracked_%04zu.ply", frame);
+  dp::writePLY(folder + name, mesh);
+  mesh.points = truth;
+  std::snprintf(name, sizeof name, "/truth_%04zu.ply", frame);
+  dp::writePLY(folder + name, mesh);
+  std::snprintf(name, sizeof name, "/points_%04zu.ply", frame);
+  dp::PointCloud points;
+  points.points = data.points;
+  dp::writePLY(folder + name, points);
+}
+
+Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
+          const Condition& condition, std::size_t frames, std::ostream* csv,
+          const std::string& label)
+{
+  dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, options);
+  const dp::SamplerOptions sampling = samplingFor(condition, S.points);
+  dp::SamplerOptions truthSampling;
+  truthSampling.pointsPerFrame = S.truthSamples;
+  truthSampling.seed = S.seed + 1000003; // other points than the data's
+  truthSampling.normals = false;
   Run run;
-  double vertexSum = 0, surfaceSum = 0, seconds = 0;
-  std::size_t vertexCount = 0;
+  Jitter jitter;
+  double vertexSum = 0, surfaceSum = 0, uncoveredSum = 0, seconds = 0;
   for (std::size_t f = 0; f < frames; ++f)
   {
     const std::vector<double> truthMesh = mesh.positions(f);
     const dp::PointCloud cloud = dp::sampleSurface(truthMesh, mesh.triangles(), sampling, f);
-    if (Oracle == "previous" && f > 0)
+    if (S.oracle == "previous" && f > 0)
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
-    else if (Oracle == "same")
+    else if (S.oracle == "same")
       tracker.restartFrom(groundTruth(t, truthMesh, mesh.triangles()));
-    const dp::FrameResult r =
-        tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
+    const dp::FrameResult r = tracker.track(cloud.points.data(), cloud.numberOfPoints(),
+                                            cloud.hasNormals() ? cloud.normals.data() : nullptr);
     seconds += r.seconds;
+    run.time.data += r.timings.data;
+    run.time.prediction += r.timings.prediction;
+    run.time.coarse += r.timings.coarse;
+    run.time.fine += r.timings.fine;
+    run.time.quality += r.timings.quality;
+    run.retried += r.retries > 0;
+    run.flagged += r.failed;
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
-    double frameSum = 0;
-    for (std::size_t i = 0; i < truth.size(); ++i)
-      frameSum += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
-    vertexSum += frameSum;
-    vertexCount += truth.size() / 3;
-    double frameSurface = 0;
-    // Distance from each tracked vertex to the true surface of the frame.
-    auto surface = toPolyData(truthMesh, mesh.triangles());
-    vtkNew<vtkCellLocator> locator;
-    locator->SetDataSet(surface);
-    locator->BuildLocator();
-    vtkNew<vtkGenericCell> cell;
-    for (std::size_t i = 0; i < r.positions.size(); i += 3)
+    const dp::PointCloud truthCloud =
+        dp::sampleSurface(truthMesh, mesh.triangles(), truthSampling, f);
+    const FrameFigures figures =
+        compareFrame(r.positions, t.triangles, truth, truthMesh, mesh.triangles(),
+                     truthCloud.points, S.uncoveredLimit);
+    jitter.add(r.positions, truth);
+    vertexSum += figures.vertexSquaredSum;
+    surfaceSum += figures.surfaceSquaredSum;
+    uncoveredSum += figures.uncovered;
+    run.largestVertexError = std::max(run.largestVertexError, figures.largestVertexError);
+    if (figures.uncovered > run.uncoveredWorst || f == 0)
     {
-      double closest[3], d2 = 0;
-      vtkIdType cellId = -1;
-      int subId = 0;
-      double x[3] = {r.positions[i], r.positions[i + 1], r.positions[i + 2]};
-      locator->FindClosestPoint(x, closest, cell, cellId, subId, d2);
-      frameSurface += d2;
+      run.uncoveredWorst = figures.uncovered;
+      run.worstFrame = f;
     }
-    surfaceSum += frameSurface;
-    if (Verbose)
+    const double nv = static_cast<double>(t.vertices());
+    const double frameRms = std::sqrt(figures.vertexSquaredSum / nv);
+    auto rmsOf = [&](const std::vector<double>& y)
     {
-      int rejected = 0;
-      for (auto flag : r.rejected)
-        rejected += flag;
-      std::printf("  frame %3zu: vertex RMS %.5f, surface RMS %.5f, %d iterations, %d rejected, "
-                  "%.1f ms, E %.6g\n",
-                  f, std::sqrt(frameSum / static_cast<double>(truth.size() / 3)),
-                  std::sqrt(frameSurface / static_cast<double>(truth.size() / 3)), r.iterations,
-                  rejected, 1e3 * r.seconds, r.internalEnergy + r.distanceEnergy);
-    }
+      double e = 0;
+      for (std::size_t i = 0; i < y.size(); ++i)
+        e += (y[i] - truth[i]) * (y[i] - truth[i]);
+      return y.empty() ? -1.0 : 1e3 * std::sqrt(e / nv);
+    };
+    // The error left once the best rigid motion is taken out (Kabsch): local, not global, error.
+    auto rigidRms = [&](const std::vector<double>& y)
+    {
+      const std::size_t n = y.size() / 3;
+      Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+      for (std::size_t v = 0; v < n; ++v)
+      {
+        a += Eigen::Vector3d(&y[3 * v]);
+        b += Eigen::Vector3d(&truth[3 * v]);
+      }
+      a /= static_cast<double>(n);
+      b /= static_cast<double>(n);
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      for (std::size_t v = 0; v < n; ++v)
+        C += (Eigen::Vector3d(&truth[3 * v]) - b) * (Eigen::Vector3d(&y[3 * v]) - a).transpose();
+      Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+      Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+      D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+      const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
+      double e = 0;
+      for (std::size_t v = 0; v < n; ++v)
+        e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v]))
+                 .squaredNorm();
+      return 1e3 * std::sqrt(e / static_cast<double>(n));
+    };
+    if (S.verbose)
+      std::printf(
+          "  frame %3zu: rigid-free %5.1f vertex RMS %6.1f mm (start %6.1f coarse %6.1f), largest "
+          "%6.1f mm, surface RMS %5.1f mm, "
+          "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f%s\n",
+          f, rigidRms(r.positions), 1e3 * frameRms, rmsOf(r.startPositions),
+          rmsOf(r.coarsePositions), 1e3 * figures.largestVertexError,
+          1e3 * std::sqrt(figures.surfaceSquaredSum / nv), 100 * figures.uncovered,
+          r.coarseIterations, r.iterations, 1e3 * r.seconds, r.unexplained, r.unsupported,
+          r.failed ? " FAILED" : "");
+    if (csv)
+      *csv << label << ',' << f << ',' << 1e3 * frameRms << ',' << 1e3 * figures.largestVertexError
+           << ',' << 1e3 * std::sqrt(figures.surfaceSquaredSum / nv) << ','
+           << 100 * figures.uncovered << ',' << r.iterations << ',' << 1e3 * r.seconds << '\n';
+    if (!S.dumpFolder.empty())
+      dumpFrame(S.dumpFolder + "/" + label, f, r.positions, truth, t.triangles, cloud);
   }
+  const double samples = static_cast<double>(frames * t.vertices());
   run.frames = frames;
-  run.vertexRms = std::sqrt(vertexSum / static_cast<double>(vertexCount));
-  run.surfaceRms = std::sqrt(surfaceSum / static_cast<double>(vertexCount));
+  run.vertexRms = std::sqrt(vertexSum / samples);
+  run.surfaceRms = std::sqrt(surfaceSum / samples);
+  run.uncoveredMean = uncoveredSum / static_cast<double>(frames);
+  run.jitter = jitter.ratio();
   run.msPerFrame = 1e3 * seconds / static_cast<double>(frames);
   return run;
 }
@@ -258,10 +239,10 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
 // at resolutions from 500 to 50k vertices (same shape, same 20k points per frame).
 std::vector<std::size_t> ScalingSizes = {500, 1000, 2000, 5000, 10000, 20000, 50000};
 
-void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::size_t points)
+void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
 {
   std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
-              frames, points);
+              frames, S.points);
   std::printf("%10s %12s %14s %12s %14s\n", "vertices", "ms/frame", "ms/1k vertices", "iterations",
               "vertex RMS %");
   for (std::size_t target : ScalingSizes)
@@ -273,7 +254,8 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::si
     dp::Tracker tracker(dp::TriangleMesh(tube.triangles(), tube.numberOfVertices()),
                         tube.positions(0), options);
     dp::SamplerOptions sampling;
-    sampling.pointsPerFrame = points;
+    sampling.pointsPerFrame = S.points;
+    sampling.normals = S.givenNormals;
     std::vector<double> ms;
     double iterations = 0, sum = 0;
     const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
@@ -281,8 +263,8 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames, std::si
     {
       const dp::PointCloud cloud =
           dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
-      const dp::FrameResult r =
-          tracker.track(cloud.points.data(), cloud.numberOfPoints(), cloud.normals.data());
+      const dp::FrameResult r = tracker.track(cloud.points.data(), cloud.numberOfPoints(),
+                                              cloud.hasNormals() ? cloud.normals.data() : nullptr);
       if (f == 0)
         continue; // the first frame starts at the data
       ms.push_back(1e3 * r.seconds);
@@ -312,6 +294,16 @@ bool oneOf(const std::string& option, const std::string& value, const char* firs
   return value == second;
 }
 
+std::vector<std::string> splitList(const std::string& list)
+{
+  std::vector<std::string> out;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty())
+      out.push_back(item);
+  return out;
+}
+
 const char* solverName(dp::TrackerSolver s)
 {
   return s == dp::TrackerSolver::GaussNewton ? "Gauss-Newton"
@@ -319,15 +311,33 @@ const char* solverName(dp::TrackerSolver s)
                                              : "steepest descent";
 }
 
+const char* Usage =
+    "Usage: BenchmarkTracker [--data DIR] [--sequence NAME[,NAME...]|tube] [--frames N]\n"
+    "  data:      [--height M (0: as stored)] [--points N] [--seed S] [--condition clean,noisy]\n"
+    "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
+    "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
+    "  tracker:   [--solver gn|lbfgs|sd] [--distance-weight W] [--normal-test DEGREES]\n"
+    "             [--stiffness ST,SH,BE] [--tolerance T] [--max-iterations N]\n"
+    "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
+    "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
+    "             [--rigidity R] [--rigidity-scale VOXELS] [--coverage-weight W] "
+    "[--coverage-points N] [--temporal-weight W] [--no-recovery]\n"
+    "             [--fail-margin SHARE]\n"
+    "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
+    "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
+
 } // namespace
 
 int main(int argc, char** argv)
 {
   using namespace dp::cli;
   std::string data = "../shared/data";
-  std::vector<std::string> sequences = {"horse-collapse", "horse-gallop"};
-  std::vector<std::size_t> sizes = {450, 1000, 0};
-  std::size_t frames = 0, points = 20000;
+  std::vector<std::string> sequences = {"jumping", "horse-gallop", "horse-collapse"};
+  std::vector<std::size_t> sizes = {1000};
+  std::vector<TemplateKind> kinds = {TemplateKind::Decimated, TemplateKind::Reconstructed};
+  std::vector<Condition> conditions = {{"clean", false}, {"noisy", true}};
+  std::size_t frames = 0;
+  double height = 1.70;
   bool ablation = false, scaling = false;
   dp::TrackerOptions options;
   try
@@ -338,13 +348,44 @@ int main(int argc, char** argv)
       if (arg == "--data")
         data = optionValue(argc, argv, i);
       else if (arg == "--sequence")
-        sequences = {optionValue(argc, argv, i)};
+        sequences = splitList(optionValue(argc, argv, i));
       else if (arg == "--vertices")
-        sizes = {parseCount(arg, optionValue(argc, argv, i), 0, 10000000)};
+      {
+        sizes.clear();
+        for (const std::string& n : splitList(optionValue(argc, argv, i)))
+          sizes.push_back(parseCount(arg, n, 0, 10000000));
+      }
+      else if (arg == "--template")
+      {
+        kinds.clear();
+        for (const std::string& k : splitList(optionValue(argc, argv, i)))
+          kinds.push_back(
+              oneOf(arg, k == "simplified" ? "decimated" : k, "decimated", "reconstructed")
+                  ? TemplateKind::Reconstructed
+                  : TemplateKind::Decimated);
+      }
+      else if (arg == "--condition")
+      {
+        conditions.clear();
+        for (const std::string& c : splitList(optionValue(argc, argv, i)))
+          conditions.push_back({c, oneOf(arg, c, "clean", "noisy")});
+      }
       else if (arg == "--frames")
         frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+      else if (arg == "--height")
+        height = parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
       else if (arg == "--points")
-        points = parseCount(arg, optionValue(argc, argv, i), 1, 10000000);
+        S.points = parseCount(arg, optionValue(argc, argv, i), 1, 10000000);
+      else if (arg == "--noise")
+        S.noise = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+      else if (arg == "--holes")
+        S.holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
+      else if (arg == "--hole-radius")
+        S.holeRadius = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+      else if (arg == "--given-normals")
+        S.givenNormals = true;
+      else if (arg == "--seed")
+        S.seed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
       else if (arg == "--solver")
       {
         const std::string s = optionValue(argc, argv, i);
@@ -352,29 +393,15 @@ int main(int argc, char** argv)
                          : s == "sd"  ? dp::TrackerSolver::SteepestDescent
                                       : dp::TrackerSolver::GaussNewton;
       }
-      else if (arg == "--noise")
-        NoiseFraction = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--holes")
-        Holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
-      else if (arg == "--seed")
-        SamplerSeed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
-      else if (arg == "--template")
-        Reconstruct = oneOf(arg, optionValue(argc, argv, i), "simplified", "reconstructed");
       else if (arg == "--ablation")
         ablation = true;
       else if (arg == "--scaling")
         scaling = true;
       else if (arg == "--scaling-sizes")
       {
-        // comma-separated vertex counts
         ScalingSizes.clear();
-        std::string list = optionValue(argc, argv, i);
-        for (std::size_t start = 0; start <= list.size();)
-        {
-          const std::size_t comma = std::min(list.find(',', start), list.size());
-          ScalingSizes.push_back(parseCount(arg, list.substr(start, comma - start), 3, 10000000));
-          start = comma + 1;
-        }
+        for (const std::string& n : splitList(optionValue(argc, argv, i)))
+          ScalingSizes.push_back(parseCount(arg, n, 3, 10000000));
       }
       else if (arg == "--rest-update")
         options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
@@ -386,12 +413,37 @@ int main(int argc, char** argv)
         options.motionPrediction = false;
       else if (arg == "--no-rigid")
         options.rigidAlignment = false;
+      else if (arg == "--no-graph")
+        options.graph.enabled = false;
+      else if (arg == "--graph-nodes")
+        options.graph.nodes = parseCount(arg, optionValue(argc, argv, i), 1, 1000000);
+      else if (arg == "--graph-iterations")
+        options.graph.iterations =
+            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
+      else if (arg == "--rigidity")
+        options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--rigidity-scale")
+        options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--coverage-points")
+        options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+      else if (arg == "--coverage-weight")
+        options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--temporal-weight")
+        options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--no-recovery")
+        options.recovery.enabled = false;
+      else if (arg == "--fail-margin")
+        options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--penalty")
         options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
       else if (arg == "--oracle")
-        Oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
+        S.oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
       else if (arg == "--verbose")
-        Verbose = true;
+        S.verbose = true;
+      else if (arg == "--csv")
+        S.csvFile = optionValue(argc, argv, i);
+      else if (arg == "--dump")
+        S.dumpFolder = optionValue(argc, argv, i);
       else if (arg == "--distance-weight")
         options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--tolerance")
@@ -403,7 +455,6 @@ int main(int argc, char** argv)
         options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
       else if (arg == "--stiffness")
       {
-        // stretch,shear,bend
         const std::string v = optionValue(argc, argv, i);
         if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
                         &options.cloth.bend) != 3)
@@ -411,16 +462,7 @@ int main(int argc, char** argv)
       }
       else
       {
-        std::cout
-            << "Usage: BenchmarkTracker [--data DIR] [--sequence NAME|tube] [--vertices N "
-               "(0: full)] [--frames N] [--points N] [--seed S] [--noise FRACTION] [--holes N] "
-               "[--solver gn|lbfgs|sd] [--ablation] "
-               "[--verbose]\n"
-               "       [--distance-weight W] [--normal-test DEGREES] [--stiffness ST,SH,BE] "
-               "[--tolerance T] [--max-iterations N]\n"
-               "       [--measure planes|points] [--penalty squared|linear] [--rest-update B] "
-               "[--no-mp] [--no-rigid] [--oracle previous|same] [--scaling] [--scaling-sizes "
-               "N,N,...]\n";
+        std::cout << Usage;
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -430,56 +472,82 @@ int main(int argc, char** argv)
     std::cerr << e.what() << "\n";
     return 2;
   }
-  std::printf("machine: %s, %u hardware threads; Release build; %zu samples per frame\n",
-              cpuModel().c_str(), std::thread::hardware_concurrency(), points);
+  std::printf("machine: %s, %u hardware threads; %zu samples per frame, %s normals; figures at "
+              "%s\n",
+              cpuModel().c_str(), std::thread::hardware_concurrency(), S.points,
+              S.givenNormals ? "true" : "estimated",
+              height > 0 ? (std::to_string(height) + " m height").c_str() : "stored units");
   if (scaling)
   {
-    scalingTable(options, frames ? frames : 4, points);
+    scalingTable(options, frames ? frames : 4);
     return 0;
+  }
+  std::unique_ptr<std::ofstream> csv;
+  if (!S.csvFile.empty())
+  {
+    csv = std::make_unique<std::ofstream>(S.csvFile);
+    *csv << "run,frame,vertex_rms_mm,largest_mm,surface_rms_mm,uncovered_percent,iterations,ms\n";
   }
   for (const std::string& name : sequences)
   {
-    const std::unique_ptr<dp::AnimatedMesh> mesh = loadAnimation(data, name);
-    if (!mesh)
+    std::unique_ptr<dp::AnimatedMesh> stored = loadAnimation(data, name);
+    if (!stored)
       continue;
-    const std::size_t n =
-        frames ? std::min(frames, mesh->numberOfFrames()) : mesh->numberOfFrames();
-    const double diagonal = dp::boundingBoxDiagonal(mesh->positions(0));
-    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f, solver %s, "
-                "%s templates\n",
-                name.c_str(), n, mesh->numberOfFrames(), mesh->numberOfVertices(), diagonal,
-                solverName(options.solver), Reconstruct ? "reconstructed" : "simplified");
-    std::printf("%10s %14s %16s %12s %12s\n", "template", "vertex RMS", "surface RMS", "ms/frame",
-                "peak MiB");
+    const double factor = height > 0 ? height / largestExtent(stored->positions(0)) : 1.0;
+    const ScaledAnimation mesh(std::move(stored), factor);
+    const std::size_t n = frames ? std::min(frames, mesh.numberOfFrames()) : mesh.numberOfFrames();
+    const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
+    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f m, solver %s\n",
+                name.c_str(), n, mesh.numberOfFrames(), mesh.numberOfVertices(), diagonal,
+                solverName(options.solver));
+    std::printf("%-14s %6s %-6s %17s %9s %8s %17s %7s %9s %8s\n", "template", "verts", "data",
+                "vertex RMS mm (%)", "largest", "surface", "uncovered% mean", "worst", "jitter",
+                "ms/frame");
     for (std::size_t size : sizes)
-    {
-      const Template t = makeTemplate(*mesh, size);
-      if (Verbose)
-        std::printf("  template: %zu vertices, %.1f%% of its triangles poorly shaped\n",
-                    t.positions.size() / 3,
-                    100 * dp::TriangleMesh(t.triangles, t.positions.size() / 3)
-                              .poorlyShapedShare(t.positions.data()));
-      const Run r = track(*mesh, t, options, n, points);
-      std::printf("%10zu %8.5f %5.2f%% %10.5f %5.2f%% %12.1f %12.1f\n", t.positions.size() / 3,
-                  r.vertexRms, 100 * r.vertexRms / diagonal, r.surfaceRms,
-                  100 * r.surfaceRms / diagonal, r.msPerFrame, peakMiB());
-    }
-    if (ablation)
-    {
-      const Template t = makeTemplate(*mesh, sizes.front());
-      std::printf("ablation (%zu-vertex template): %8s %8s %14s %12s\n", t.positions.size() / 3,
-                  "MP", "PD", "vertex RMS %", "ms/frame");
-      for (int mode = 0; mode < 4; ++mode)
-      {
-        dp::TrackerOptions o = options;
-        o.motionPrediction = mode & 1;
-        o.provisionalDetermination = mode & 2;
-        const Run r = track(*mesh, t, o, n, points);
-        std::printf("%31s %8s %8s %13.3f%% %12.1f\n", "", o.motionPrediction ? "on" : "off",
-                    o.provisionalDetermination ? "on" : "off", 100 * r.vertexRms / diagonal,
-                    r.msPerFrame);
-      }
-    }
+      for (TemplateKind kind : kinds)
+        for (const Condition& condition : conditions)
+        {
+          const TemplateKind k = size == 0 ? TemplateKind::Full : kind;
+          const dp::PointCloud frame0 = dp::sampleSurface(mesh.positions(0), mesh.triangles(),
+                                                          samplingFor(condition, S.points), 0);
+          const Template t = makeTemplate(mesh, k, size, frame0);
+          const std::string label = name + "-" + templateName(k) + "-" +
+                                    std::to_string(t.vertices()) + "-" + condition.name;
+          if (S.verbose)
+            std::printf("  %s: template %zu vertices, %.1f%% of its triangles poorly shaped\n",
+                        label.c_str(), t.vertices(),
+                        100 * dp::TriangleMesh(t.triangles, t.vertices())
+                                  .poorlyShapedShare(t.positions.data()));
+          const Run r = track(mesh, t, options, condition, n, csv.get(), label);
+          std::printf("%-14s %6zu %-6s %8.1f (%5.2f%%) %9.1f %8.1f %9.2f %7.2f (%3zu) %8.2fx "
+                      "%8.1f\n",
+                      templateName(k), t.vertices(), condition.name.c_str(), 1e3 * r.vertexRms,
+                      100 * r.vertexRms / diagonal, 1e3 * r.largestVertexError, 1e3 * r.surfaceRms,
+                      100 * r.uncoveredMean, 100 * r.uncoveredWorst, r.worstFrame, r.jitter,
+                      r.msPerFrame);
+          const double perFrame = 1e3 / static_cast<double>(r.frames);
+          std::printf("%14s ms/frame: data %.1f, prediction %.1f, coarse %.1f, fine %.1f, quality "
+                      "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
+                      "", perFrame * r.time.data, perFrame * r.time.prediction,
+                      perFrame * r.time.coarse, perFrame * r.time.fine, perFrame * r.time.quality,
+                      r.retried, r.flagged);
+          std::fflush(stdout);
+          if (ablation)
+          {
+            std::printf("ablation (%zu-vertex template): %8s %8s %14s %12s\n", t.vertices(), "MP",
+                        "PD", "vertex RMS mm", "ms/frame");
+            for (int mode = 0; mode < 4; ++mode)
+            {
+              dp::TrackerOptions o = options;
+              o.motionPrediction = mode & 1;
+              o.provisionalDetermination = mode & 2;
+              const Run a = track(mesh, t, o, condition, n, nullptr, label);
+              std::printf("%31s %8s %8s %14.1f %12.1f\n", "", o.motionPrediction ? "on" : "off",
+                          o.provisionalDetermination ? "on" : "off", 1e3 * a.vertexRms,
+                          a.msPerFrame);
+            }
+          }
+        }
   }
   return 0;
 }

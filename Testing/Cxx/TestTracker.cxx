@@ -266,22 +266,6 @@ double vertexRms(const std::vector<double>& a, const std::vector<double>& b)
   return std::sqrt(sum / static_cast<double>(a.size() / 3));
 }
 
-TEST(Tracker, DistanceTermGradientMatchesFiniteDifferences)
-{
-  Sequence s = makeSequence(2, 0, 0, 3000);
-  dp::TriangleMesh mesh(s.animation.triangles(), s.animation.numberOfVertices());
-  dp::Tracker tracker(mesh, s.animation.positions(0), dp::TrackerOptions{});
-  dp::DistanceField field;
-  dp::DistanceFieldOptions fo;
-  fo.voxelSize = tracker.voxelSize();
-  fo.bandWidth = 8 * fo.voxelSize;
-  field.build(s.frames[1].points.data(), s.frames[1].numberOfPoints(), fo);
-  const std::vector<double> weights(mesh.numberOfVertices(), 1.0);
-  const std::vector<double> x = jiggle(s.animation.positions(0), 0.01, 9);
-  expectGradientMatches(
-      [&](const double* p, double* g) { return tracker.energy(p, &field, weights, g); }, x, 1e-4);
-}
-
 TEST(Tracker, RefusesOptionsOutOfRange)
 {
   const MeshData m = tube();

@@ -296,6 +296,14 @@ std::int64_t DistanceField::nearestPoint(const double x[3], double* squaredDista
   return P->Tree->nearest(x, squaredDistance);
 }
 
+std::size_t DistanceField::nearestPoints(const double x[3], std::size_t k, std::uint32_t* indices,
+                                         double* squaredDistances) const
+{
+  if (empty())
+    throw std::logic_error("DistanceField::nearestPoints before build()");
+  return P->Tree->nearest(x, k, indices, squaredDistances);
+}
+
 std::int64_t DistanceField::voxelNearest(int i, int j, int k) const
 {
   if (empty())

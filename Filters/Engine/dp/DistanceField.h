@@ -136,6 +136,10 @@ public:
 
   /** The exact nearest point to x by kd-tree search, and its squared distance. Thread-safe. */
   std::int64_t nearestPoint(const double x[3], double* squaredDistance = nullptr) const;
+  /** The k nearest points to x, nearest first, with their squared distances; returns how many
+   *  (fewer than k when there are fewer points). Thread-safe. */
+  std::size_t nearestPoints(const double x[3], std::size_t k, std::uint32_t* indices,
+                            double* squaredDistances) const;
 
   /** The point index stored in voxel (i,j,k) (centre at (i,j,k)*voxelSize); -1 outside the band. */
   std::int64_t voxelNearest(int i, int j, int k) const;

@@ -1,0 +1,115 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file TrackerOptions.h
+ * @brief The settings of the tracker (dp::Tracker) and of its parts: the paper's energy and
+ *        solvers, and what goes beyond it (the points -> mesh term, the deformation graph's
+ *        coarse level, the temporal term, failure detection and recovery). Plain values; every
+ *        default is the product's default (the filter and the plugin take theirs from here).
+ */
+#pragma once
+
+#include "dp/ClothEnergy.h"
+
+#include <cstddef>
+
+namespace dp
+{
+
+/** What D_i of the distance energy measures. */
+enum class DistanceMeasure
+{
+  Points, // the distance to the nearest data point (the paper)
+  Planes  // the distance to the tangent planes of the nearest data points: no pull toward
+          // individual samples, so the mesh can slide along the data
+};
+
+enum class TrackerSolver
+{
+  GaussNewton,
+  LBFGS,
+  SteepestDescent
+};
+
+/** The mesh -> points term (the paper's E_dis; DistanceTerm). */
+struct DistanceTermOptions
+{
+  double weight = 50.0; // k_dis
+  DistanceMeasure measure = DistanceMeasure::Planes;
+  bool squared = true;             // P(D) = D^2 / (2 voxel); false: the paper's D
+  double normalTestDegrees = 90.0; // >= 180: no normal test
+  double outlierDistance = 0.0;    // world units; 0: no cut-off
+  double robustScale = 0.0;        // Geman-McClure scale (world units); 0: plain least squares
+};
+
+/** The points -> mesh term (CoverageTerm). */
+struct CoverageOptions
+{
+  double weight = 50.0;            // k_cov; 0 switches the term off
+  double pointToPoint = 0.1;       // mu: share of the point-to-point distance
+  double normalTestDegrees = 60.0; // >= 180: no normal test
+  double robustScale = 0.0;        // Geman-McClure scale (world units); 0: plain least squares
+  double maxDistance = 0.0;        // world units; 0: no cut-off
+  std::size_t points = 0;          // size of the well-spread subsample; 0: 4 per vertex
+};
+
+/** The coarse level: an embedded deformation graph (DeformationGraph, GraphRegistration). */
+struct GraphOptions
+{
+  bool enabled = true;
+  std::size_t nodes = 0;      // 0: one per 5 template vertices, at least 30, at most 600
+  std::size_t influences = 4; // nodes blended per vertex
+  double rigidity = 1.0;      // multiplies the schedule's regularisation weights k_reg
+  // Scale of the regulariser's robust (Huber) penalty, in voxels: edges bending more than this
+  // cost in proportion to their bending (an L1 penalty: joints bend, the rest stays rigid).
+  double robustScale = 0.5;
+  int iterations = 10; // Levenberg-Marquardt steps per stage of the schedule (at most)
+};
+
+/** Failure detection and recovery (FrameQuality): a frame fails when the share of its data
+ *  farther than `reach` voxels from the mesh (unexplained), or of the mesh farther than that from
+ *  the data (unsupported), exceeds what is usual in the take (the median of the last frames
+ *  kept) by more than `margin`; it is then tried again from other starts and the best attempt
+ *  is kept. Relative, so data the template lacks or holes in every frame do not count as
+ *  failures, while a lost limb (a few % of the surface) does. */
+struct RecoveryOptions
+{
+  bool enabled = true;
+  double reach = 3.0;
+  double margin = 0.003;
+};
+
+struct TrackerOptions
+{
+  ClothParameters cloth;
+  double distanceWeight = 50.0;    // k_dis
+  double normalTestDegrees = 90.0; // >= 180 switches the normal test off
+  double outlierDistance = 0.0;    // world units; 0: no cut-off
+  DistanceMeasure distanceMeasure = DistanceMeasure::Planes;
+  // true: each vertex's term is D_i^2 / (2 voxel) (smooth at the data, so vertices do not stick
+  // where they first touch it); false: the paper's D_i.
+  bool squaredDistance = true;
+  double voxelSize = 0.0; // world units; 0: template diagonal / 200
+  double bandWidth = 0.0; // world units; 0: 4 voxels
+  TrackerSolver solver = TrackerSolver::GaussNewton;
+  // Rest state of E_int for frame t: (1 - restUpdate) * template + restUpdate * frame t-1.
+  // 0 is the paper (the template); a share of the last frame lets the rest state follow shapes
+  // that stray far from the template (a collapse), so that E_int stops pulling them back.
+  double restUpdate = 0.3;
+  bool motionPrediction = true;
+  // Before the deformable solve, move the predicted mesh rigidly onto the data (point-to-plane
+  // ICP weighted by vertex mass): the cloth energy holds a rigid motion only weakly along the
+  // surface, so without it a turning shape slips tangentially a little more each frame.
+  bool rigidAlignment = true;
+  bool provisionalDetermination = true; // steepest descent only
+  int maxIterations = 300;
+  double tolerance = 1e-3; // relative energy decrease that ends a solve
+
+  CoverageOptions coverage;
+  GraphOptions graph;
+  // k_acc of the temporal term (TemporalTerm): pulls each vertex toward the constant-velocity
+  // extrapolation of its last two positions; 0 switches it off.
+  double temporalWeight = 0.0;
+  RecoveryOptions recovery;
+};
+
+} // namespace dp

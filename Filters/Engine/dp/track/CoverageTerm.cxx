@@ -1,0 +1,182 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/CoverageTerm.h"
+
+#include "dp/track/Parallel.h"
+
+#include <cmath>
+
+namespace dp
+{
+namespace
+{
+constexpr double Pi = 3.14159265358979323846;
+}
+
+CoverageTerm::CoverageTerm(const FrameData& frame, const TriangleMesh& mesh, double lengthScale,
+                           const CoverageOptions& options)
+    : Frame(frame), Mesh(mesh), Options(options)
+{
+  const std::size_t n = frame.spread().size();
+  Matches.resize(n);
+  Hints.assign(n, -1);
+  for (std::size_t i = 0; i < n; ++i)
+    Matches[i].point = frame.spread()[i];
+  if (n > 0)
+    Scale = options.weight / (static_cast<double>(n) * lengthScale * frame.voxelSize());
+}
+
+void CoverageTerm::linearise(const double* x)
+{
+  if (Matches.empty())
+    return;
+  // Correspondences change only when the mesh moves: skip the search while no vertex has moved
+  // a fifth of a voxel since the last one (late, short steps of a solve).
+  const std::size_t nv = Mesh.numberOfVertices();
+  if (LinearisedAt.size() == 3 * nv)
+  {
+    const double still = 0.2 * Frame.voxelSize();
+    double largest = 0;
+    for (std::size_t i = 0; i < 3 * nv; ++i)
+      largest = std::max(largest, std::abs(x[i] - LinearisedAt[i]));
+    if (largest < still && LinearisedScale == Options.robustScale &&
+        LinearisedReach == Options.maxDistance)
+      return;
+  }
+  LinearisedAt.assign(x, x + 3 * nv);
+  LinearisedScale = Options.robustScale;
+  LinearisedReach = Options.maxDistance;
+  if (!Built)
+    Locator = SurfaceLocator(Mesh, x);
+  else
+    Locator.refit(x);
+  Built = true;
+  std::vector<double> normals(3 * nv);
+  Mesh.vertexNormals(x, normals.data());
+  const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
+  const auto& tri = Mesh.triangles();
+  forEachIndex(
+      Matches.size(),
+      [&](std::size_t i)
+      {
+        Match& m = Matches[i];
+        m.triangle = -1;
+        m.weight = 0;
+        const double* p = Frame.point(m.point);
+        const SurfaceLocator::Hit hit =
+            Locator.closest(p, Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL, Hints[i]);
+        Hints[i] = hit.triangle >= 0 ? hit.triangle : Hints[i];
+        if (hit.triangle < 0)
+          return;
+        // The mesh's normal at the closest point: its vertices' normals interpolated.
+        double n[3] = {0, 0, 0};
+        for (int c = 0; c < 3; ++c)
+          for (int k = 0; k < 3; ++k)
+            n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        const float* np = Frame.normal(m.point);
+        if (Options.normalTestDegrees < 180 &&
+            !(length > 0 && (n[0] * np[0] + n[1] * np[1] + n[2] * np[2]) >= cosLimit * length))
+          return;
+        m.triangle = hit.triangle;
+        std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
+        m.weight = 1;
+        if (Options.robustScale > 0)
+        {
+          const double u2 = hit.squaredDistance / (Options.robustScale * Options.robustScale);
+          m.weight = 1.0 / ((1 + u2) * (1 + u2));
+        }
+      });
+}
+
+void CoverageTerm::residual(const double* x, const Match& m, double r[3]) const
+{
+  const auto& tri = Mesh.triangles();
+  const double* p = Frame.point(m.point);
+  for (int k = 0; k < 3; ++k)
+  {
+    r[k] = -p[k];
+    for (int c = 0; c < 3; ++c)
+      r[k] += m.barycentric[c] * x[3 * tri[3 * m.triangle + c] + k];
+  }
+}
+
+double CoverageTerm::evaluate(const double* x, double* gradient) const
+{
+  const auto& tri = Mesh.triangles();
+  const double mu = Options.pointToPoint;
+  double e = 0;
+  for (const Match& m : Matches)
+  {
+    if (m.triangle < 0)
+      continue;
+    double r[3];
+    residual(x, m, r);
+    const float* n = Frame.normal(m.point);
+    const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    const double c = Scale * m.weight;
+    e += 0.5 * c * (along * along + mu * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]));
+    if (!gradient)
+      continue;
+    // d/ds = c (n (n.r) + mu r), spread over the triangle's vertices by the barycentric weights.
+    double g[3];
+    for (int k = 0; k < 3; ++k)
+      g[k] = c * (n[k] * along + mu * r[k]);
+    for (int v = 0; v < 3; ++v)
+      for (int k = 0; k < 3; ++k)
+        gradient[3 * tri[3 * m.triangle + v] + k] += m.barycentric[v] * g[k];
+  }
+  return e;
+}
+
+double CoverageTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
+                              double* gradient) const
+{
+  const auto& tri = Mesh.triangles();
+  const double mu = Options.pointToPoint;
+  double e = 0;
+  for (const Match& m : Matches)
+  {
+    if (m.triangle < 0)
+      continue;
+    double r[3];
+    residual(x, m, r);
+    const float* nf = Frame.normal(m.point);
+    const double n[3] = {nf[0], nf[1], nf[2]};
+    const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+    const double c = Scale * m.weight;
+    e += 0.5 * c * (along * along + mu * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]));
+    // Block (a, b) of the matrix: c b_a b_b (n n^T + mu I). The diagonal model keeps only
+    // c b_a (n n^T + mu I) on each vertex's block: since the b_a are convex weights,
+    // |sum_a b_a y_a|^2 <= sum_a b_a |y_a|^2, so it bounds the term from above (a majorizer):
+    // a step that lowers it lowers the term, and vertices are not coupled.
+    const std::int64_t* t = &tri[3 * m.triangle];
+    for (int a = 0; a < 3; ++a)
+    {
+      for (int k = 0; k < 3; ++k)
+        gradient[3 * t[a] + k] += m.barycentric[a] * c * (n[k] * along + mu * r[k]);
+      for (int b = a; b < 3; ++b)
+      {
+        if (DiagonalModel && b != a)
+          continue;
+        const double w = c * m.barycentric[a] * (DiagonalModel ? 1.0 : m.barycentric[b]);
+        if (w == 0)
+          continue;
+        double block[9];
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 3; ++j)
+            block[3 * i + j] = w * (n[i] * n[j] + (i == j ? mu : 0.0));
+        // One add covers (a, b) and (b, a): the matrix is stored symmetric.
+        hessian.addBlock(hessian.slotOf(t[a], t[b]), block);
+      }
+    }
+  }
+  return e;
+}
+
+void CoverageTerm::couplings(std::vector<std::array<std::int64_t, 2>>& pairs) const
+{
+  if (!DiagonalModel)
+    pairs.insert(pairs.end(), Mesh.edges().begin(), Mesh.edges().end());
+}
+
+} // namespace dp

@@ -1,0 +1,243 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/DeformationGraph.h"
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+#include <utility>
+
+namespace dp
+{
+namespace
+{
+using Queue = std::priority_queue<std::pair<double, std::int64_t>,
+                                  std::vector<std::pair<double, std::int64_t>>,
+                                  std::greater<std::pair<double, std::int64_t>>>;
+
+double edgeLength(const double* x, std::int64_t a, std::int64_t b)
+{
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k)
+    d2 += (x[3 * a + k] - x[3 * b + k]) * (x[3 * a + k] - x[3 * b + k]);
+  return std::sqrt(d2);
+}
+} // namespace
+
+DeformationGraph::DeformationGraph(const TriangleMesh& mesh, const double* rest,
+                                   std::size_t nodeCount, std::size_t influences)
+    : Mesh(mesh), Rest(rest)
+{
+  if (nodeCount < 1 || influences < 1)
+    throw std::invalid_argument("deformation graph: at least one node and one influence needed");
+  sampleNodes(std::min(nodeCount, mesh.numberOfVertices()));
+  blend(influences);
+}
+
+void DeformationGraph::sampleNodes(std::size_t nodeCount)
+{
+  // Farthest-point sampling in geodesic distance: each new node is the vertex farthest from the
+  // nodes so far; one Dijkstra from it lowers the distances it can (and stops where it cannot).
+  const std::size_t nv = Mesh.numberOfVertices();
+  std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
+  std::int64_t next = 0;
+  while (NodeVertex.size() < nodeCount)
+  {
+    NodeVertex.push_back(next);
+    Queue queue;
+    distance[next] = 0;
+    queue.push({0.0, next});
+    while (!queue.empty())
+    {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > distance[v])
+        continue;
+      for (std::int64_t u : Mesh.neighbours(static_cast<std::size_t>(v)))
+      {
+        const double du = d + edgeLength(Rest, v, u);
+        if (du < distance[u])
+        {
+          distance[u] = du;
+          queue.push({du, u});
+        }
+      }
+    }
+    // The farthest vertex (unreached parts first); ties to the lower index.
+    next = static_cast<std::int64_t>(std::max_element(distance.begin(), distance.end()) -
+                                     distance.begin());
+    if (distance[next] == 0)
+      break; // every vertex is a node
+  }
+  Spacing = *std::max_element(distance.begin(), distance.end());
+}
+
+void DeformationGraph::blend(std::size_t influences)
+{
+  // Every node's geodesic neighbourhood up to a radius that reaches past `influences` nodes for
+  // every vertex (each vertex has a node within Spacing, so 2.5 Spacing holds several).
+  const std::size_t nv = Mesh.numberOfVertices();
+  const double radius = 2.5 * std::max(Spacing, 1e-300);
+  std::vector<std::vector<std::pair<double, std::int32_t>>> found(nv);
+  std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
+  std::vector<std::int64_t> touched;
+  for (std::size_t j = 0; j < NodeVertex.size(); ++j)
+  {
+    Queue queue;
+    distance[NodeVertex[j]] = 0;
+    touched.push_back(NodeVertex[j]);
+    queue.push({0.0, NodeVertex[j]});
+    while (!queue.empty())
+    {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > distance[v])
+        continue;
+      found[v].push_back({d, static_cast<std::int32_t>(j)});
+      for (std::int64_t u : Mesh.neighbours(static_cast<std::size_t>(v)))
+      {
+        const double du = d + edgeLength(Rest, v, u);
+        if (du < distance[u] && du <= radius)
+        {
+          if (distance[u] == std::numeric_limits<double>::infinity())
+            touched.push_back(u);
+          distance[u] = du;
+          queue.push({du, u});
+        }
+      }
+    }
+    for (std::int64_t v : touched)
+      distance[v] = std::numeric_limits<double>::infinity();
+    touched.clear();
+  }
+  Offsets.assign(nv + 1, 0);
+  std::vector<std::array<std::int64_t, 2>> pairs;
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    auto& nodes = found[v];
+    std::sort(nodes.begin(), nodes.end());
+    const std::size_t kept = std::min(influences, nodes.size());
+    // d_max: the next nearest node's distance, or the search radius when there is none.
+    const double dMax = nodes.size() > kept ? nodes[kept].first : radius;
+    double total = 0;
+    const std::size_t first = Influences.size();
+    for (std::size_t i = 0; i < kept; ++i)
+    {
+      const double u = 1 - nodes[i].first / std::max(dMax, 1e-300);
+      const double w = std::max(u, 0.0) * std::max(u, 0.0);
+      if (w <= 0)
+        continue;
+      Influences.push_back({nodes[i].second, w});
+      total += w;
+    }
+    if (total <= 0 && !nodes.empty()) // all at d_max: the nearest alone
+    {
+      Influences.push_back({nodes[0].second, 1.0});
+      total = 1;
+    }
+    for (std::size_t i = first; i < Influences.size(); ++i)
+    {
+      Influences[i].weight /= total;
+      for (std::size_t k = first; k < i; ++k)
+        pairs.push_back({std::min(Influences[i].node, Influences[k].node),
+                         std::max(Influences[i].node, Influences[k].node)});
+    }
+    Offsets[v + 1] = Influences.size();
+  }
+  std::sort(pairs.begin(), pairs.end());
+  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+  Edges = std::move(pairs);
+}
+
+DeformationGraph::State DeformationGraph::identity() const
+{
+  State s;
+  s.rotation.assign(numberOfNodes(), Eigen::Matrix3d::Identity());
+  s.translation.assign(numberOfNodes(), Eigen::Vector3d::Zero());
+  return s;
+}
+
+void DeformationGraph::deform(const State& state, double* x) const
+{
+  const std::size_t nv = Mesh.numberOfVertices();
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    const Eigen::Vector3d rest(&Rest[3 * v]);
+    Eigen::Vector3d y = Eigen::Vector3d::Zero();
+    for (const Influence* i = influencesBegin(v); i != influencesEnd(v); ++i)
+    {
+      const Eigen::Vector3d g(nodePosition(static_cast<std::size_t>(i->node)));
+      y += i->weight * (state.rotation[i->node] * (rest - g) + g + state.translation[i->node]);
+    }
+    std::copy(y.data(), y.data() + 3, &x[3 * v]);
+  }
+}
+
+DeformationGraph::State DeformationGraph::fit(const double* x) const
+{
+  // Gather, per node, the vertices it blends with their weights.
+  const std::size_t nn = numberOfNodes(), nv = Mesh.numberOfVertices();
+  std::vector<double> total(nn, 0.0);
+  std::vector<Eigen::Vector3d> restMean(nn, Eigen::Vector3d::Zero()),
+      mean(nn, Eigen::Vector3d::Zero());
+  for (std::size_t v = 0; v < nv; ++v)
+    for (const Influence* i = influencesBegin(v); i != influencesEnd(v); ++i)
+    {
+      total[i->node] += i->weight;
+      restMean[i->node] += i->weight * Eigen::Vector3d(&Rest[3 * v]);
+      mean[i->node] += i->weight * Eigen::Vector3d(&x[3 * v]);
+    }
+  std::vector<Eigen::Matrix3d> covariance(nn, Eigen::Matrix3d::Zero());
+  for (std::size_t j = 0; j < nn; ++j)
+    if (total[j] > 0)
+    {
+      restMean[j] /= total[j];
+      mean[j] /= total[j];
+    }
+  for (std::size_t v = 0; v < nv; ++v)
+    for (const Influence* i = influencesBegin(v); i != influencesEnd(v); ++i)
+      covariance[i->node] += i->weight * (Eigen::Vector3d(&x[3 * v]) - mean[i->node]) *
+                             (Eigen::Vector3d(&Rest[3 * v]) - restMean[i->node]).transpose();
+  State s = identity();
+  for (std::size_t j = 0; j < nn; ++j)
+  {
+    if (total[j] <= 0)
+      continue;
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(covariance[j],
+                                                Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+    D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+    // A patch too flat or too small to fix a rotation keeps the identity's remainder: the SVD of
+    // a rank-deficient covariance still gives a rotation, which the translation then matches.
+    s.rotation[j] = svd.matrixU() * D * svd.matrixV().transpose();
+    const Eigen::Vector3d g(nodePosition(j));
+    s.translation[j] = mean[j] - g - s.rotation[j] * (restMean[j] - g);
+  }
+  return s;
+}
+
+DeformationGraph::State extrapolate(const DeformationGraph::State& before,
+                                    const DeformationGraph::State& last,
+                                    const DeformationGraph& graph, double share)
+{
+  // Each node's frame (rotation, and the position its point g_j moves to) continues its motion:
+  // the relative rotation R_last R_before^T applied once more (as an angle-axis scaled by
+  // `share`), the node's position moving on by the same displacement.
+  DeformationGraph::State next = last;
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+  {
+    const Eigen::AngleAxisd step(last.rotation[j] * before.rotation[j].transpose());
+    next.rotation[j] =
+        Eigen::AngleAxisd(share * step.angle(), step.axis()).toRotationMatrix() * last.rotation[j];
+    next.translation[j] =
+        last.translation[j] + share * (last.translation[j] - before.translation[j]);
+  }
+  return next;
+}
+
+} // namespace dp

@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/FrameData.h"
+
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+namespace dp
+{
+namespace
+{
+// One point per grid cell, the one nearest the cell's centre; cells of size `cell`.
+std::vector<std::uint32_t> spreadSubsample(const double* points, std::size_t count, double cell)
+{
+  struct Best
+  {
+    std::uint32_t index;
+    double d2;
+  };
+  std::unordered_map<std::uint64_t, Best> cells;
+  cells.reserve(count);
+  for (std::size_t i = 0; i < count; ++i)
+  {
+    std::int64_t c[3];
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      const double u = points[3 * i + k] / cell;
+      c[k] = static_cast<std::int64_t>(std::floor(u));
+      const double offset = u - (static_cast<double>(c[k]) + 0.5);
+      d2 += offset * offset;
+    }
+    const std::uint64_t key = (static_cast<std::uint64_t>(c[0] & 0x1FFFFF) << 42) |
+                              (static_cast<std::uint64_t>(c[1] & 0x1FFFFF) << 21) |
+                              static_cast<std::uint64_t>(c[2] & 0x1FFFFF);
+    const auto [it, added] = cells.try_emplace(key, Best{static_cast<std::uint32_t>(i), d2});
+    // Ties go to the lower index, so the choice does not depend on the map's order.
+    if (!added && (d2 < it->second.d2 || (d2 == it->second.d2 && i < it->second.index)))
+      it->second = {static_cast<std::uint32_t>(i), d2};
+  }
+  std::vector<std::uint32_t> out;
+  out.reserve(cells.size());
+  for (const auto& entry : cells)
+    out.push_back(entry.second.index);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+} // namespace
+
+FrameData::FrameData(const double* points, std::size_t count, const float* normals,
+                     const FrameDataOptions& options)
+    : Count(count), Voxel(options.voxelSize)
+{
+  if (count == 0)
+    return;
+  DistanceFieldOptions field;
+  field.voxelSize = options.voxelSize;
+  field.bandWidth = options.bandWidth > 0 ? options.bandWidth : 4 * options.voxelSize;
+  field.lazy = true; // only the voxels around the mesh are ever needed
+  Field.build(points, count, field);
+  Normals =
+      normals ? std::vector<float>(normals, normals + 3 * count) : estimateNormals(points, count);
+  if (options.spreadCount > 0 && options.surfaceArea > 0)
+  {
+    // A surface of area A meets about A / cell^2 cells of a grid (fewer where it is flat along an
+    // axis, more where it is not): start there and shrink the cell until enough are kept.
+    double cell = std::sqrt(options.surfaceArea / static_cast<double>(options.spreadCount));
+    for (int attempt = 0; attempt < 4; ++attempt)
+    {
+      Spread = spreadSubsample(points, count, cell);
+      if (Spread.size() >= options.spreadCount * 3 / 4 || Spread.size() == count)
+        break;
+      cell *=
+          std::sqrt(static_cast<double>(Spread.size()) / static_cast<double>(options.spreadCount));
+    }
+  }
+}
+
+} // namespace dp

@@ -1,0 +1,80 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file FrameData.h
+ * @brief One frame of the tracking problem: the frame's points, their unit normals (given or
+ *        estimated), the distance field D of the paper's distance energy (eq. 1, E_dis) with its
+ *        nearest-point search, and a well-spread subsample of the points for the points -> mesh
+ *        term. The energy terms and solvers read it; nothing in it changes while a frame is
+ *        solved, so it can be shared by threads.
+ *
+ * The subsample keeps, in each cell of a grid whose cell size makes about `spreadCount` cells
+ * meet the surface, the point nearest the cell's centre: evenly spread over the data whatever
+ * the scanner's density, deterministic (no random choice).
+ *
+ * Limits: normals are estimated by PCA over 16 neighbours and oriented along a spanning tree
+ * (estimateNormals) when not given; orientation can flip on parts thinner than the point
+ * spacing. An empty frame has no field: the data terms then contribute nothing.
+ */
+#pragma once
+
+#include "dp/DistanceField.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace dp
+{
+
+struct FrameDataOptions
+{
+  double voxelSize = 0;        // of the distance field (world units, > 0)
+  double bandWidth = 0;        // of the distance field (world units; 0: 4 voxels)
+  double surfaceArea = 0;      // the tracked surface's area (sets the subsample's cell size)
+  std::size_t spreadCount = 0; // points wanted in the subsample (0: none)
+};
+
+class FrameData
+{
+public:
+  /** `normals` (nx ny nz per point) may be null: they are then estimated. */
+  FrameData(const double* points, std::size_t count, const float* normals,
+            const FrameDataOptions& options);
+
+  bool empty() const { return Count == 0; }
+  std::size_t size() const { return Count; }
+  const double* points() const { return Field.points(); }
+  const double* point(std::size_t i) const { return Field.points() + 3 * i; }
+  /** Unit normals, 3 per point. */
+  const float* normals() const { return Normals.data(); }
+  const float* normal(std::size_t i) const { return Normals.data() + 3 * i; }
+  const DistanceField& field() const { return Field; }
+  double voxelSize() const { return Voxel; }
+
+  /** The nearest point to x, its squared distance in *d2. */
+  std::int64_t nearest(const double x[3], double* d2 = nullptr) const
+  {
+    return Field.nearestPoint(x, d2);
+  }
+  /** The k nearest points to x, nearest first (fewer when the frame has fewer). */
+  std::size_t nearest(const double x[3], std::size_t k, std::uint32_t* indices, double* d2) const
+  {
+    return Field.nearestPoints(x, k, indices, d2);
+  }
+  /** Turns every normal around (they were oriented consistently, but inward). */
+  void flipNormals()
+  {
+    for (float& n : Normals)
+      n = -n;
+  }
+  /** Indices of the well-spread subsample, in increasing order. */
+  const std::vector<std::uint32_t>& spread() const { return Spread; }
+
+private:
+  std::size_t Count = 0;
+  double Voxel = 0;
+  DistanceField Field;
+  std::vector<float> Normals;
+  std::vector<std::uint32_t> Spread;
+};
+
+} // namespace dp

@@ -1,0 +1,314 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/GraphRegistration.h"
+
+#include "dp/track/CoverageTerm.h"
+#include "dp/track/DistanceTerm.h"
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+
+namespace dp
+{
+namespace
+{
+using Matrix36 = Eigen::Matrix<double, 3, 6>;
+using Matrix66 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+
+// [v]x, the cross-product matrix: [v]x u = v x u.
+Eigen::Matrix3d crossMatrix(const Eigen::Vector3d& v)
+{
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+// The coarse schedule: regularisation weight (times the caller's rigidity) and the reach of the
+// data terms in voxels (robust scale = reach / 3, points farther than the reach do not pull).
+struct Stage
+{
+  double rigidity;
+  double reach;
+};
+constexpr Stage Schedule[] = {{10.0, 24.0}, {3.0, 12.0}, {3.0, 6.0}};
+// A solve ends when a step gains less than this share of the energy.
+constexpr double Tolerance = 1e-6;
+} // namespace
+
+GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengthScale,
+                                     double voxel)
+    : Graph(graph), Scale(1.0 / (lengthScale * voxel)), Voxel(voxel)
+{
+  // The data terms' models are block diagonal here (the points -> mesh term gives its diagonal
+  // upper bound), so a vertex couples only the nodes it blends: the graph's own edges.
+  const TriangleMesh& mesh = graph.mesh();
+  VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
+  NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
+  // The node block each (vertex block, node of a, node of b) adds to, found once.
+  VertexModel.forEachBlock(
+      [&](std::int64_t a, std::int64_t b, const double*, int)
+      {
+        for (auto i = graph.influencesBegin(static_cast<std::size_t>(a));
+             i != graph.influencesEnd(static_cast<std::size_t>(a)); ++i)
+          for (auto k = graph.influencesBegin(static_cast<std::size_t>(b));
+               k != graph.influencesEnd(static_cast<std::size_t>(b)); ++k)
+            ProjectionSlots.push_back(NodeModel.slotOf(i->node, k->node));
+      });
+}
+
+double GraphRegistration::regularisation(const DeformationGraph::State& state, double rigidity,
+                                         detail::BlockSparseMatrixOf<6>* hessian,
+                                         Eigen::VectorXd* gradient) const
+{
+  const auto& edges = Graph.edges();
+  if (edges.empty() || rigidity <= 0)
+    return 0;
+  const double scale = rigidity * Scale / static_cast<double>(edges.size());
+  double e = 0;
+  for (std::size_t index = 0; index < edges.size(); ++index)
+    for (int direction = 0; direction < 2; ++direction)
+    {
+      const auto& edge = edges[index];
+      const std::int64_t j = edge[direction], k = edge[1 - direction];
+      const double c = scale * (EdgeWeight.empty() ? 1.0 : EdgeWeight[2 * index + direction]);
+      const Eigen::Vector3d r = edgeResidual(state, j, k);
+      const Eigen::Vector3d arm = state.rotation[j] * (Eigen::Vector3d(Graph.nodePosition(k)) -
+                                                       Eigen::Vector3d(Graph.nodePosition(j)));
+      e += 0.5 * c * r.squaredNorm();
+      if (!hessian)
+        continue;
+      // de/d(w_j, t_j) = [-[arm]x, I]; de/d(w_k, t_k) = [0, -I].
+      Matrix36 Jj, Jk;
+      Jj << -crossMatrix(arm), Eigen::Matrix3d::Identity();
+      Jk << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity();
+      const Matrix66 jj = c * Jj.transpose() * Jj, kk = c * Jk.transpose() * Jk,
+                     jk = c * Jj.transpose() * Jk;
+      hessian->addBlock(hessian->slotOf(j, j), jj.data());
+      hessian->addBlock(hessian->slotOf(k, k), kk.data());
+      hessian->addBlock(hessian->slotOf(j, k), jk.data());
+      gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
+      gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
+    }
+  return e;
+}
+
+void GraphRegistration::project(const DeformationGraph::State& state,
+                                const Eigen::VectorXd& vertexGradient,
+                                Eigen::VectorXd& nodeGradient)
+{
+  // B_aj = w_aj [-[R_j (v_a - g_j)]x, I]: how vertex a moves with node j's rotation and
+  // translation. H_nodes += B_a^T H_ab B_b over the vertex model's blocks, g_nodes += B_a^T g_a.
+  const std::size_t nv = Graph.mesh().numberOfVertices();
+  std::vector<std::size_t> first(nv + 1, 0);
+  for (std::size_t v = 0; v < nv; ++v)
+    first[v + 1] =
+        first[v] + static_cast<std::size_t>(Graph.influencesEnd(v) - Graph.influencesBegin(v));
+  std::vector<Matrix36> B(first[nv]);
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    const Eigen::Vector3d rest(Graph.rest() + 3 * v);
+    std::size_t slot = first[v];
+    for (auto i = Graph.influencesBegin(v); i != Graph.influencesEnd(v); ++i, ++slot)
+    {
+      const Eigen::Vector3d g(Graph.nodePosition(static_cast<std::size_t>(i->node)));
+      B[slot] << -i->weight * crossMatrix(state.rotation[i->node] * (rest - g)),
+          i->weight * Eigen::Matrix3d::Identity();
+      nodeGradient.segment<6>(6 * i->node) +=
+          B[slot].transpose() * vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
+    }
+  }
+  std::size_t next = 0; // into ProjectionSlots, in the order forEachBlock visits the blocks
+  VertexModel.forEachBlock(
+      [&](std::int64_t a, std::int64_t b, const double* block, int stride)
+      {
+        const std::size_t na = first[a + 1] - first[a], nb = first[b + 1] - first[b];
+        const std::size_t slots = next;
+        next += na * nb;
+        Eigen::Matrix3d M;
+        for (int c = 0; c < 3; ++c)
+          for (int r = 0; r < 3; ++r)
+            M(r, c) = block[c * stride + r];
+        if (M.isZero(0.0))
+          return;
+        const auto ia = Graph.influencesBegin(static_cast<std::size_t>(a));
+        const auto ib = Graph.influencesBegin(static_cast<std::size_t>(b));
+        for (std::size_t p = 0; p < na; ++p)
+        {
+          const Eigen::Matrix<double, 6, 3> left = B[first[a] + p].transpose() * M;
+          for (std::size_t q = 0; q < nb; ++q)
+          {
+            const std::int64_t j = ia[p].node, k = ib[q].node;
+            if (a == b && j > k)
+              continue; // a diagonal vertex block visits (j, k) and (k, j) alike: add each once
+            Matrix66 m = left * B[first[b] + q];
+            // Off the diagonal the vertex block stands for (a, b) and (b, a): m goes to (j, k)
+            // and m^T to (k, j); for j == k both land on one diagonal block.
+            if (a != b && j == k)
+              m += m.transpose().eval();
+            NodeModel.addBlock(ProjectionSlots[slots + p * nb + q], m.data());
+          }
+        }
+      });
+}
+
+Eigen::Vector3d GraphRegistration::edgeResidual(const DeformationGraph::State& state,
+                                                std::int64_t j, std::int64_t k) const
+{
+  const Eigen::Vector3d gj(Graph.nodePosition(static_cast<std::size_t>(j)));
+  const Eigen::Vector3d gk(Graph.nodePosition(static_cast<std::size_t>(k)));
+  return state.rotation[j] * (gk - gj) + gj + state.translation[j] - gk - state.translation[k];
+}
+
+void GraphRegistration::reweightEdges(const DeformationGraph::State& state, double robustScale)
+{
+  // Huber weights of each directed edge's bending at the current state (iteratively reweighted
+  // least squares): beyond the scale an edge costs in proportion to |e| (L1), not |e|^2, so the
+  // regulariser prefers a few edges bending much (joints) to many bending a little: the graph
+  // moves as near-rigid pieces. A redescending weight (Geman-McClure) frees the joints entirely
+  // and lets symmetric parts (a limb about its axis) drift; least squares spreads bending
+  // everywhere and pulls tracked shapes away from the truth (BenchmarkTracker, README).
+  const auto& edges = Graph.edges();
+  EdgeWeight.assign(2 * edges.size(), 1.0);
+  if (!(robustScale > 0))
+    return;
+  for (std::size_t index = 0; index < edges.size(); ++index)
+    for (int direction = 0; direction < 2; ++direction)
+    {
+      const double u2 =
+          edgeResidual(state, edges[index][direction], edges[index][1 - direction]).squaredNorm() /
+          (robustScale * robustScale);
+      EdgeWeight[2 * index + direction] = std::min(1.0, 1.0 / std::sqrt(u2));
+    }
+}
+
+DeformationGraph::State GraphRegistration::retract(const DeformationGraph::State& state,
+                                                   const Eigen::VectorXd& step)
+{
+  DeformationGraph::State next = state;
+  for (std::size_t j = 0; j < state.rotation.size(); ++j)
+  {
+    const Eigen::Vector3d w = step.segment<3>(static_cast<Eigen::Index>(6 * j));
+    const double angle = w.norm();
+    if (angle > 0)
+      next.rotation[j] = Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * state.rotation[j];
+    next.translation[j] += step.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
+  }
+  return next;
+}
+
+double GraphRegistration::model(const DeformationGraph::State& state,
+                                const std::vector<EnergyTerm*>& terms, double rigidity,
+                                Eigen::VectorXd& gradient)
+{
+  const std::size_t nv = Graph.mesh().numberOfVertices();
+  std::vector<double> x(3 * nv);
+  Graph.deform(state, x.data());
+  Eigen::VectorXd vertexGradient = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(3 * nv));
+  VertexModel.setZero();
+  double energy = 0;
+  for (const EnergyTerm* t : terms)
+    energy += t->addModel(x.data(), VertexModel, vertexGradient.data());
+  NodeModel.setZero();
+  gradient = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * Graph.numberOfNodes()));
+  project(state, vertexGradient, gradient);
+  return energy + regularisation(state, rigidity, &NodeModel, &gradient);
+}
+
+int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
+                             double rigidity, int iterations)
+{
+  const std::size_t nv = Graph.mesh().numberOfVertices();
+  std::vector<double> x(3 * nv), trial(3 * nv);
+  double damping = 1e-4;
+  int step = 0;
+  for (; step < iterations; ++step)
+  {
+    Graph.deform(state, x.data());
+    for (EnergyTerm* t : terms)
+      t->linearise(x.data());
+    reweightEdges(state, RobustScale);
+    const double energy = model(state, terms, rigidity, NodeGradient);
+    if (!Analysed)
+    {
+      Solver.analyzePattern(NodeModel.matrix());
+      Analysed = true;
+    }
+    const Eigen::VectorXd diagonal = NodeModel.diagonal();
+    const double floor = 1e-12 * std::max(diagonal.maxCoeff(), 1e-300);
+    bool accepted = false;
+    double decrease = 0;
+    for (int attempt = 0; attempt < 8 && !accepted; ++attempt)
+    {
+      const Eigen::VectorXd shift = damping * diagonal.array() + floor;
+      NodeModel.addToDiagonal(shift);
+      Solver.factorize(NodeModel.matrix());
+      const bool solved = Solver.info() == Eigen::Success;
+      Eigen::VectorXd delta;
+      if (solved)
+        delta = Solver.solve(-NodeGradient);
+      NodeModel.addToDiagonal(-shift);
+      if (!solved || !delta.allFinite())
+      {
+        damping *= 10;
+        continue;
+      }
+      const double predicted =
+          -(NodeGradient.dot(delta) +
+            0.5 * delta.dot(NodeModel.matrix().selfadjointView<Eigen::Lower>() * delta));
+      const DeformationGraph::State candidate = retract(state, delta);
+      Graph.deform(candidate, trial.data());
+      const double after =
+          evaluateAll(terms, trial.data(), nullptr) + regularisation(candidate, rigidity);
+      decrease = energy - after;
+      if (predicted > 0 && decrease > 0.1 * predicted)
+      {
+        accepted = true;
+        state = candidate;
+        if (decrease > 0.75 * predicted)
+          damping = std::max(damping * 0.3, 1e-9);
+      }
+      else
+        damping *= 10;
+    }
+    if (!accepted || decrease <= Tolerance * std::abs(energy))
+    {
+      step += accepted;
+      break;
+    }
+  }
+  return step;
+}
+
+int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTerm& distance,
+                                     CoverageTerm* coverage, double rigidity, double robustScale,
+                                     int iterationsPerStage)
+{
+  std::vector<EnergyTerm*> terms{&distance};
+  if (coverage)
+  {
+    coverage->setDiagonalModel(true);
+    terms.push_back(coverage);
+  }
+  std::vector<double> x(3 * Graph.mesh().numberOfVertices());
+  RobustScale = robustScale;
+  int steps = 0;
+  for (const Stage& stage : Schedule)
+  {
+    const double reach = stage.reach * Voxel;
+    distance.setRobustScale(reach / 3);
+    if (coverage)
+    {
+      coverage->setRobustScale(reach / 3);
+      coverage->setMaxDistance(reach);
+    }
+    Graph.deform(state, x.data());
+    distance.decide(x.data());
+    steps += solve(state, terms, rigidity * stage.rigidity, iterationsPerStage);
+  }
+  if (coverage)
+    coverage->setDiagonalModel(false);
+  return steps;
+}
+
+} // namespace dp

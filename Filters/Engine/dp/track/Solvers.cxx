@@ -1,0 +1,375 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/Solvers.h"
+
+#include "dp/track/DistanceTerm.h"
+
+#include <lbfgs.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace dp
+{
+namespace
+{
+// Relative residual at which conjugate gradients stop (an inexact Newton step: tighter solves
+// cost more than the extra iterations they save).
+constexpr double StepTolerance = 0.3;
+
+// Preconditioned conjugate gradients on the lower-stored symmetric positive definite A, from
+// x = 0, until the residual falls below tolerance * |b| or after `limit` iterations. Every
+// iterate is a descent direction of the quadratic model, so an early stop still gives a usable
+// (inexact Newton) step.
+template <typename Preconditioner>
+Eigen::VectorXd conjugateGradients(const detail::BlockSparseMatrix::Matrix& A,
+                                   const Eigen::VectorXd& b, const Preconditioner& precondition,
+                                   double tolerance, int limit)
+{
+  const auto S = A.selfadjointView<Eigen::Lower>();
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(b.size());
+  Eigen::VectorXd r = b;
+  Eigen::VectorXd z = precondition(r);
+  Eigen::VectorXd p = z;
+  double rz = r.dot(z);
+  const double target = tolerance * b.norm();
+  for (int iteration = 0; iteration < limit && r.norm() > target; ++iteration)
+  {
+    const Eigen::VectorXd q = S * p;
+    const double curvature = p.dot(q);
+    if (!(curvature > 0))
+      break;
+    const double alpha = rz / curvature;
+    x += alpha * p;
+    r -= alpha * q;
+    z = precondition(r);
+    const double next = r.dot(z);
+    p = z + (next / rz) * p;
+    rz = next;
+  }
+  return x;
+}
+
+std::size_t decideAll(const std::vector<EnergyTerm*>& terms, const double* x)
+{
+  std::size_t changed = 0;
+  for (EnergyTerm* t : terms)
+    changed += t->decide(x);
+  return changed;
+}
+} // namespace
+
+GaussNewtonSolver::GaussNewtonSolver(std::size_t vertexCount,
+                                     const std::vector<std::array<std::int64_t, 2>>& pairs)
+    : Hessian(vertexCount, pairs)
+{
+}
+
+Eigen::VectorXd GaussNewtonSolver::precondition(const Eigen::VectorXd& r) const
+{
+  const Eigen::Index n = r.size() / 3;
+  using Columns = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
+  const Columns z = Preconditioner.solve(Eigen::Map<const Columns>(r.data(), n, 3));
+  return Eigen::Map<const Eigen::VectorXd>(z.data(), 3 * n);
+}
+
+int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
+                             const DistanceTerm* distance, const SolveSettings& settings)
+{
+  const std::size_t nv = Hessian.blockCount();
+  const auto n = static_cast<Eigen::Index>(3 * nv);
+  std::vector<double> trial(x.size()), dataAtTrial(nv, 0.0), vertexDamping(nv, 0.0);
+  Eigen::VectorXd gradient(n);
+  int decisions = 0;
+  double damping = 1e-4; // Levenberg damping, relative to the mean diagonal
+  int iteration = 0;
+  for (; iteration < settings.maxIterations; ++iteration)
+  {
+    for (EnergyTerm* t : terms)
+      t->linearise(x.data());
+    Hessian.setZero();
+    gradient.setZero();
+    double energyAtX = 0;
+    for (const EnergyTerm* t : terms)
+      energyAtX += t->addModel(x.data(), Hessian, gradient.data());
+    const double meanDiagonal = std::max(Hessian.diagonal().mean(), 1e-300);
+
+    // One preconditioner per iteration, at the damping of its first attempt; later attempts
+    // (more damping) reuse it. Damping is global (Levenberg) plus per vertex: where a vertex's
+    // distance term keeps breaking the model's promise (it sits on a ridge of the field, between
+    // two parts of the data), that vertex alone is damped, so it does not stall the others.
+    bool accepted = false, converged = false;
+    for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
+    {
+      Eigen::VectorXd shift(n);
+      for (std::size_t v = 0; v < nv; ++v)
+        shift.segment<3>(static_cast<Eigen::Index>(3 * v))
+            .setConstant(damping * meanDiagonal + vertexDamping[v]);
+      Hessian.addToDiagonal(shift);
+      if (attempt == 0)
+      {
+        const auto P = Hessian.traceMatrix();
+        if (!Analysed)
+        {
+          Preconditioner.analyzePattern(P);
+          Analysed = true;
+        }
+        Preconditioner.factorize(P);
+      }
+      const Eigen::VectorXd step =
+          Preconditioner.info() == Eigen::Success
+              ? conjugateGradients(
+                    Hessian.matrix(), -gradient,
+                    [&](const Eigen::VectorXd& r) { return precondition(r); }, StepTolerance, 200)
+              : Eigen::VectorXd(-gradient.cwiseQuotient(shift));
+      Hessian.addToDiagonal(-shift);
+      for (std::size_t i = 0; i < x.size(); ++i)
+        trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
+      // The decrease the quadratic model promises: -(gradient.step + step.H.step / 2).
+      const double predicted =
+          -(gradient.dot(step) +
+            0.5 * step.dot(Hessian.matrix().selfadjointView<Eigen::Lower>() * step));
+      double energyAtTrial = 0;
+      for (const EnergyTerm* t : terms)
+      {
+        if (t != distance)
+        {
+          energyAtTrial += t->evaluate(trial.data(), nullptr);
+          continue;
+        }
+        distance->vertexValues(trial.data(), dataAtTrial.data());
+        for (double value : dataAtTrial)
+          energyAtTrial += value;
+      }
+      const double actual = energyAtX - energyAtTrial;
+      if (predicted > 0 && actual > 0.1 * predicted)
+      {
+        accepted = true;
+        x.swap(trial);
+        if (actual > 0.75 * predicted)
+          damping = std::max(damping * 0.3, 1e-9);
+        for (double& d : vertexDamping)
+          d *= 0.3;
+        converged = actual <= settings.tolerance * std::abs(energyAtX) ||
+                    step.cwiseAbs().maxCoeff() <= settings.settledStep;
+        continue;
+      }
+      // Which vertices broke the promise: their distance term at the trial against the model's.
+      const double shortfall = predicted - actual;
+      bool blamed = false;
+      for (std::size_t v = 0; distance && v < nv && shortfall > 0; ++v)
+      {
+        const double c = distance->stiffness(v);
+        if (c == 0)
+          continue;
+        if (dataAtTrial[v] - distance->promised(v, &step[static_cast<Eigen::Index>(3 * v)]) >
+            0.2 * shortfall)
+        {
+          vertexDamping[v] = 10 * std::max(vertexDamping[v], c);
+          blamed = true;
+        }
+      }
+      if (!blamed)
+        damping *= 10;
+    }
+    // Settled: decide the terms' choices again at the new shape (at most `decisions` times); go
+    // on only if that changed something.
+    if (accepted && converged && decisions < settings.decisions && decideAll(terms, x.data()) > 0)
+    {
+      ++decisions;
+      continue;
+    }
+    if (!accepted || converged)
+      break; // no step decreases E any more, or the last one barely moved: a (local) minimum
+  }
+  return iteration + 1;
+}
+
+namespace
+{
+struct LbfgsObjective
+{
+  const std::vector<EnergyTerm*>* terms;
+  std::size_t size;
+  int evaluations = 0;
+};
+
+lbfgsfloatval_t evaluateForLbfgs(void* instance, const lbfgsfloatval_t* x, lbfgsfloatval_t* g,
+                                 const int, const lbfgsfloatval_t)
+{
+  auto* objective = static_cast<LbfgsObjective*>(instance);
+  ++objective->evaluations;
+  std::fill(g, g + objective->size, 0.0);
+  return evaluateAll(*objective->terms, x, g);
+}
+
+// Largest eigenvalue of the Hessian of the terms at x, by power iteration on finite differences
+// of the gradient.
+double largestCurvature(const std::vector<EnergyTerm*>& terms, const std::vector<double>& x,
+                        double lengthScale)
+{
+  const std::size_t n = x.size();
+  std::vector<double> v(n), gp(n), gm(n), xp(n), xm(n);
+  for (std::size_t i = 0; i < n; ++i)
+    v[i] = std::sin(12.9898 * static_cast<double>(i) + 1.0); // fixed, generic start
+  double lambda = 0;
+  const double h = 1e-6 * lengthScale;
+  for (int iteration = 0; iteration < 30; ++iteration)
+  {
+    double length = 0;
+    for (double value : v)
+      length += value * value;
+    length = std::sqrt(length);
+    if (length == 0)
+      break;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      v[i] /= length;
+      xp[i] = x[i] + h * v[i];
+      xm[i] = x[i] - h * v[i];
+    }
+    std::fill(gp.begin(), gp.end(), 0.0);
+    std::fill(gm.begin(), gm.end(), 0.0);
+    evaluateAll(terms, xp.data(), gp.data());
+    evaluateAll(terms, xm.data(), gm.data());
+    double rayleigh = 0;
+    for (std::size_t i = 0; i < n; ++i)
+    {
+      const double hv = (gp[i] - gm[i]) / (2 * h);
+      rayleigh += v[i] * hv;
+      v[i] = hv;
+    }
+    if (iteration > 3 && std::abs(rayleigh - lambda) < 1e-3 * std::abs(rayleigh))
+    {
+      lambda = rayleigh;
+      break;
+    }
+    lambda = rayleigh;
+  }
+  return std::abs(lambda);
+}
+} // namespace
+
+int solveLbfgs(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
+               const SolveSettings& settings)
+{
+  lbfgs_parameter_t parameters;
+  lbfgs_parameter_init(&parameters);
+  parameters.m = 8;
+  parameters.max_iterations = settings.maxIterations;
+  parameters.epsilon = 1e-8;
+  parameters.past = 5;
+  parameters.delta = 0.1 * settings.tolerance;
+  parameters.linesearch = LBFGS_LINESEARCH_MORETHUENTE;
+  LbfgsObjective objective{&terms, x.size()};
+  // Two passes: after the first, the terms' choices are decided again at the new shape.
+  for (int pass = 0; pass < 2; ++pass)
+  {
+    for (EnergyTerm* t : terms)
+      t->linearise(x.data());
+    lbfgsfloatval_t fx = 0;
+    // Any stop (converged, iteration limit, line-search failure) leaves x at the best point
+    // found, which is what the frame gets.
+    lbfgs(static_cast<int>(x.size()), x.data(), &fx, evaluateForLbfgs, nullptr, &objective,
+          &parameters);
+    if (pass == 0)
+      decideAll(terms, x.data());
+  }
+  return objective.evaluations;
+}
+
+int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
+                         const TriangleMesh& mesh, double lengthScale,
+                         const SolveSettings& settings, std::vector<std::uint8_t>* frozen)
+{
+  const std::size_t nv = mesh.numberOfVertices();
+  for (EnergyTerm* t : terms)
+    t->linearise(x.data());
+  const double kMax = largestCurvature(terms, x, lengthScale);
+  double h = kMax > 0 ? 1.9 / kMax : lengthScale;
+  std::vector<double> gradient(x.size()), before;
+  // PD: a vertex that barely moves is frozen. The distance term's gradient has the same size
+  // everywhere, so a settled vertex keeps stepping but goes nowhere: over a window of
+  // iterations, it freezes when its net motion is under a quarter of the path it stepped, and
+  // wakes when a neighbour moves steadily (net motion over half its path).
+  constexpr int window = 5;
+  std::vector<double> anchor = x, path(nv, 0.0);
+  std::vector<std::uint8_t> steady(nv, 0), still(nv, 0);
+  std::vector<double> recent; // energies of the last iterations
+  double previous = std::numeric_limits<double>::infinity();
+  int iteration = 0;
+  for (; iteration < settings.maxIterations; ++iteration)
+  {
+    std::fill(gradient.begin(), gradient.end(), 0.0);
+    double e = evaluateAll(terms, x.data(), gradient.data());
+    // h < 2 / k_max holds for the curvature where it was estimated; where the energy rises
+    // anyway, take the step back and halve h.
+    int halvings = 0;
+    while (e > previous && halvings < 20 && !before.empty())
+    {
+      h *= 0.5;
+      x = before;
+      std::fill(gradient.begin(), gradient.end(), 0.0);
+      e = evaluateAll(terms, x.data(), gradient.data());
+      ++halvings;
+    }
+    previous = e;
+    before = x;
+    recent.push_back(e);
+    if (recent.size() > 10)
+    {
+      const double gained = recent[recent.size() - 11] - e;
+      // Steepest descent's steps are short (h < 2 / k_max), so its gains are small long before it
+      // settles: it stops at a tenth of the relative gain the other solvers stop at.
+      if (gained <= 0.1 * settings.tolerance * std::abs(e))
+        break;
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      if (frozen && still[v])
+        continue;
+      double step2 = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        const double d = h * gradient[3 * v + k];
+        x[3 * v + k] -= d;
+        step2 += d * d;
+      }
+      path[v] += std::sqrt(step2);
+    }
+    if (frozen && iteration % window == window - 1)
+    {
+      for (std::size_t v = 0; v < nv; ++v)
+      {
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k)
+          d2 += (x[3 * v + k] - anchor[3 * v + k]) * (x[3 * v + k] - anchor[3 * v + k]);
+        const double net = std::sqrt(d2);
+        steady[v] = path[v] > 0 && net > 0.5 * path[v];
+        if (!still[v] && path[v] > 0 && net < 0.25 * path[v])
+          still[v] = 1;
+      }
+      for (std::size_t v = 0; v < nv; ++v)
+        if (still[v])
+          for (std::int64_t u : mesh.neighbours(v))
+            if (steady[u])
+            {
+              still[v] = 0; // a neighbour moves: wake up
+              break;
+            }
+      anchor = x;
+      std::fill(path.begin(), path.end(), 0.0);
+    }
+    if (iteration % 25 == 24)
+    {
+      decideAll(terms, x.data());
+      for (EnergyTerm* t : terms)
+        t->linearise(x.data());
+    }
+  }
+  if (frozen)
+    *frozen = still;
+  return iteration + 1;
+}
+
+} // namespace dp

@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/SurfaceLocator.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace dp
+{
+namespace
+{
+constexpr std::int32_t LeafSize = 4;
+
+inline double dot3(const double* a, const double* b)
+{
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+} // namespace
+
+double closestPointOnTriangle(const double p[3], const double a[3], const double b[3],
+                              const double c[3], double w[3], double closest[3])
+{
+  // Ericson, Real-Time Collision Detection, 5.1.5: which Voronoi region of the triangle p is in.
+  double ab[3], ac[3], ap[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    ab[k] = b[k] - a[k];
+    ac[k] = c[k] - a[k];
+    ap[k] = p[k] - a[k];
+  }
+  auto finish = [&](double u, double v, double s)
+  {
+    w[0] = u;
+    w[1] = v;
+    w[2] = s;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      closest[k] = u * a[k] + v * b[k] + s * c[k];
+      d2 += (p[k] - closest[k]) * (p[k] - closest[k]);
+    }
+    return d2;
+  };
+  const double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
+  if (d1 <= 0 && d2 <= 0)
+    return finish(1, 0, 0);
+  double bp[3];
+  for (int k = 0; k < 3; ++k)
+    bp[k] = p[k] - b[k];
+  const double d3 = dot3(ab, bp), d4 = dot3(ac, bp);
+  if (d3 >= 0 && d4 <= d3)
+    return finish(0, 1, 0);
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0)
+  {
+    const double v = d1 - d3 > 0 ? d1 / (d1 - d3) : 0.0;
+    return finish(1 - v, v, 0);
+  }
+  double cp[3];
+  for (int k = 0; k < 3; ++k)
+    cp[k] = p[k] - c[k];
+  const double d5 = dot3(ab, cp), d6 = dot3(ac, cp);
+  if (d6 >= 0 && d5 <= d6)
+    return finish(0, 0, 1);
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0)
+  {
+    const double s = d2 - d6 > 0 ? d2 / (d2 - d6) : 0.0;
+    return finish(1 - s, 0, s);
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+  {
+    const double s = (d4 - d3) + (d5 - d6) > 0 ? (d4 - d3) / ((d4 - d3) + (d5 - d6)) : 0.0;
+    return finish(0, 1 - s, s);
+  }
+  const double sum = va + vb + vc;
+  if (!(sum > 0)) // degenerate triangle whose regions all failed: its first vertex
+    return finish(1, 0, 0);
+  const double v = vb / sum, s = vc / sum;
+  return finish(1 - v - s, v, s);
+}
+
+SurfaceLocator::SurfaceLocator(const TriangleMesh& mesh, const double* positions) : Mesh(&mesh)
+{
+  build(positions);
+}
+
+void SurfaceLocator::build(const double* positions)
+{
+  const std::size_t nt = Mesh->numberOfTriangles();
+  const std::size_t nv = Mesh->numberOfVertices();
+  Copy.assign(positions, positions + 3 * nv);
+  Positions = Copy.data();
+  const auto& tri = Mesh->triangles();
+  std::vector<double> centres(3 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k)
+      centres[3 * t + k] = (Positions[3 * tri[3 * t] + k] + Positions[3 * tri[3 * t + 1] + k] +
+                            Positions[3 * tri[3 * t + 2] + k]) /
+                           3.0;
+  Order.resize(nt);
+  std::iota(Order.begin(), Order.end(), 0);
+  Nodes.clear();
+  Nodes.reserve(2 * nt / LeafSize + 2);
+  if (nt == 0)
+    return;
+  Nodes.emplace_back();
+  split(0, 0, static_cast<std::int32_t>(nt), centres);
+  refit(Positions);
+}
+
+// Makes node `self` cover Order[begin, end): a leaf, or two children (allocated together, so
+// right = left + 1, and after their parent, so a reverse sweep meets children first).
+void SurfaceLocator::split(std::int32_t self, std::int32_t begin, std::int32_t end,
+                           const std::vector<double>& centres)
+{
+  if (end - begin <= LeafSize)
+  {
+    Nodes[self].first = begin;
+    Nodes[self].count = end - begin;
+    return;
+  }
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::int32_t i = begin; i < end; ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], centres[3 * Order[i] + k]);
+      hi[k] = std::max(hi[k], centres[3 * Order[i] + k]);
+    }
+  int axis = 0;
+  for (int k = 1; k < 3; ++k)
+    if (hi[k] - lo[k] > hi[axis] - lo[axis])
+      axis = k;
+  const std::int32_t middle = begin + (end - begin) / 2;
+  // Ties broken by index, so the tree is the same on every platform.
+  std::nth_element(Order.begin() + begin, Order.begin() + middle, Order.begin() + end,
+                   [&](std::int32_t a, std::int32_t b)
+                   {
+                     const double ca = centres[3 * a + axis], cb = centres[3 * b + axis];
+                     return ca < cb || (ca == cb && a < b);
+                   });
+  const auto left = static_cast<std::int32_t>(Nodes.size());
+  Nodes.emplace_back();
+  Nodes.emplace_back();
+  Nodes[self].first = left;
+  Nodes[self].count = 0;
+  split(left, begin, middle, centres);
+  split(left + 1, middle, end, centres);
+}
+
+void SurfaceLocator::refit(const double* positions)
+{
+  if (positions != Copy.data())
+    Copy.assign(positions, positions + 3 * Mesh->numberOfVertices());
+  Positions = Copy.data();
+  // Children are stored after their parents: a reverse sweep sees children first.
+  for (auto n = static_cast<std::int32_t>(Nodes.size()) - 1; n >= 0; --n)
+    boxOf(n);
+}
+
+void SurfaceLocator::boxOf(std::int32_t n)
+{
+  Node& node = Nodes[n];
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  if (node.count > 0)
+  {
+    const auto& tri = Mesh->triangles();
+    for (std::int32_t i = node.first; i < node.first + node.count; ++i)
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k)
+        {
+          const double v = Positions[3 * tri[3 * Order[i] + c] + k];
+          lo[k] = std::min(lo[k], v);
+          hi[k] = std::max(hi[k], v);
+        }
+  }
+  else
+    for (int child = 0; child < 2; ++child)
+      for (int k = 0; k < 3; ++k)
+      {
+        lo[k] = std::min(lo[k], static_cast<double>(Nodes[node.first + child].lo[k]));
+        hi[k] = std::max(hi[k], static_cast<double>(Nodes[node.first + child].hi[k]));
+      }
+  // Rounded outward to float, so the boxes still contain their triangles.
+  for (int k = 0; k < 3; ++k)
+  {
+    node.lo[k] = std::nextafter(static_cast<float>(lo[k]), -HUGE_VALF);
+    node.hi[k] = std::nextafter(static_cast<float>(hi[k]), HUGE_VALF);
+  }
+}
+
+double SurfaceLocator::boxDistance2(const Node& n, const double p[3]) const
+{
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k)
+  {
+    const double d =
+        std::max({static_cast<double>(n.lo[k]) - p[k], 0.0, p[k] - static_cast<double>(n.hi[k])});
+    d2 += d * d;
+  }
+  return d2;
+}
+
+SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistance,
+                                            std::int64_t hint) const
+{
+  Hit best;
+  if (Nodes.empty())
+    return best;
+  double bound = maxDistance * maxDistance;
+  const auto& tri = Mesh->triangles();
+  if (hint >= 0 && static_cast<std::size_t>(hint) < Mesh->numberOfTriangles())
+  {
+    double w[3], c[3];
+    const double d2 =
+        closestPointOnTriangle(p, &Positions[3 * tri[3 * hint]], &Positions[3 * tri[3 * hint + 1]],
+                               &Positions[3 * tri[3 * hint + 2]], w, c);
+    if (d2 < bound)
+    {
+      // Strictly inside the bound, so the search may still find an equally close triangle of
+      // lower tree order: the answer does not depend on the hint.
+      bound = std::nextafter(d2, HUGE_VAL);
+    }
+  }
+  std::int32_t stack[128];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0)
+  {
+    const Node& node = Nodes[stack[--top]];
+    if (boxDistance2(node, p) >= bound)
+      continue;
+    if (node.count > 0)
+    {
+      for (std::int32_t i = node.first; i < node.first + node.count; ++i)
+      {
+        const std::int64_t t = Order[i];
+        double w[3], c[3];
+        const double d2 =
+            closestPointOnTriangle(p, &Positions[3 * tri[3 * t]], &Positions[3 * tri[3 * t + 1]],
+                                   &Positions[3 * tri[3 * t + 2]], w, c);
+        if (d2 < bound)
+        {
+          bound = d2;
+          best.triangle = t;
+          best.squaredDistance = d2;
+          std::copy(w, w + 3, best.barycentric);
+          std::copy(c, c + 3, best.point);
+        }
+      }
+      continue;
+    }
+    // Nearer child last, so it is searched first.
+    const std::int32_t left = node.first, right = node.first + 1;
+    const double dl = boxDistance2(Nodes[left], p), dr = boxDistance2(Nodes[right], p);
+    if (top + 2 > 128)
+      continue; // cannot happen for trees of fewer than 2^60 triangles
+    if (dl < dr)
+    {
+      stack[top++] = right;
+      stack[top++] = left;
+    }
+    else
+    {
+      stack[top++] = left;
+      stack[top++] = right;
+    }
+  }
+  return best;
+}
+
+} // namespace dp

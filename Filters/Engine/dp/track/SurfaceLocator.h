@@ -1,0 +1,79 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file SurfaceLocator.h
+ * @brief Exact closest points on a triangle mesh whose vertices move (fixed connectivity): the
+ *        "closest point of the mesh surface" of the points -> mesh data term (CoverageTerm) and
+ *        of the frame quality measures.
+ *
+ * An axis-aligned bounding-box tree over the triangles, built for one set of positions (median
+ * splits along the longest axis, four triangles per leaf) and refitted to new positions in
+ * linear time (the boxes grow, the tree stays valid). Queries descend the nearer child first
+ * and prune boxes farther than the best hit, so they are exact; they are const and thread-safe.
+ *
+ * Limits: after large deformations a refitted tree prunes less well (rebuild it then: build()
+ * costs O(n log n)); degenerate (zero-area) triangles are handled (their closest point is on an
+ * edge or a vertex).
+ */
+#pragma once
+
+#include "dp/TriangleMesh.h"
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace dp
+{
+
+/** Closest point of one triangle to p: barycentric weights (summing to 1) and the point. */
+double closestPointOnTriangle(const double p[3], const double a[3], const double b[3],
+                              const double c[3], double barycentric[3], double closest[3]);
+
+class SurfaceLocator
+{
+public:
+  struct Hit
+  {
+    std::int64_t triangle = -1; // -1: nothing within the distance asked
+    double barycentric[3] = {0, 0, 0};
+    double point[3] = {0, 0, 0};
+    double squaredDistance = std::numeric_limits<double>::infinity();
+  };
+
+  SurfaceLocator() = default;
+  /** The tree over `mesh`'s triangles at `positions` (3 per vertex). The mesh must outlive it. */
+  SurfaceLocator(const TriangleMesh& mesh, const double* positions);
+
+  /** Rebuilds the tree for new positions (O(n log n)). */
+  void build(const double* positions);
+  /** Keeps the tree, recomputes its boxes for new positions (O(n)). */
+  void refit(const double* positions);
+
+  /** The closest point of the surface to p within `maxDistance` (else triangle = -1). `hint`, a
+   *  triangle likely near p (the last answer for a point that moved little), is measured first:
+   *  its distance bounds the search, which then visits few boxes. */
+  Hit closest(const double p[3], double maxDistance = std::numeric_limits<double>::infinity(),
+              std::int64_t hint = -1) const;
+
+  const TriangleMesh* mesh() const { return Mesh; }
+
+private:
+  struct Node
+  {
+    float lo[3], hi[3];
+    std::int32_t first = 0; // leaf: first entry in Order; inner: left child (right = first + 1)
+    std::int32_t count = 0; // leaf: number of triangles; inner: 0
+  };
+  void split(std::int32_t node, std::int32_t begin, std::int32_t end,
+             const std::vector<double>& centres);
+  void boxOf(std::int32_t node);
+  double boxDistance2(const Node& n, const double p[3]) const;
+
+  const TriangleMesh* Mesh = nullptr;
+  const double* Positions = nullptr; // the positions of the last build/refit (caller's memory)
+  std::vector<double> Copy;          // ... copied, so the caller's array may change
+  std::vector<Node> Nodes;
+  std::vector<std::int32_t> Order; // triangle indices, leaves' ranges
+};
+
+} // namespace dp

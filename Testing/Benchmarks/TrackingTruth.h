@@ -1,0 +1,327 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// What the tracker benchmark measures against: templates that know where each of their vertices
+// sits on the true surface, the true trajectories of those vertices, and the figures a user sees
+// (vertex error, surface error, the share of the true surface the tracked mesh leaves uncovered,
+// jitter). VTK's cell locators do the exact point-to-surface distances.
+#pragma once
+
+#include "dp/AnimatedMesh.h"
+#include "dp/DistanceField.h"
+#include "dp/SurfaceReconstruction.h"
+#include "dp/SurfaceSampler.h"
+
+#include "vtkCellArray.h"
+#include "vtkCellArrayIterator.h"
+#include "vtkGenericCell.h"
+#include "vtkNew.h"
+#include "vtkPoints.h"
+#include "vtkPolyData.h"
+#include "vtkQuadricDecimation.h"
+#include "vtkSmartPointer.h"
+#include "vtkStaticCellLocator.h"
+#include "vtkTriangle.h"
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace dp::bench
+{
+
+/** An animation with every position multiplied by one factor (e.g. a figure brought to 1.70 m). */
+class ScaledAnimation : public dp::AnimatedMesh
+{
+public:
+  ScaledAnimation(std::unique_ptr<dp::AnimatedMesh> mesh, double factor)
+      : Mesh(std::move(mesh)), Factor(factor)
+  {
+  }
+  std::size_t numberOfFrames() const override { return Mesh->numberOfFrames(); }
+  std::size_t numberOfVertices() const override { return Mesh->numberOfVertices(); }
+  const std::vector<std::int64_t>& triangles() const override { return Mesh->triangles(); }
+  std::vector<double> positions(std::size_t frame) const override
+  {
+    std::vector<double> x = Mesh->positions(frame);
+    for (double& v : x)
+      v *= Factor;
+    return x;
+  }
+
+private:
+  std::unique_ptr<dp::AnimatedMesh> Mesh;
+  double Factor;
+};
+
+/** The largest extent of the bounding box of x y z triples. */
+inline double largestExtent(const std::vector<double>& x)
+{
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    lo[i % 3] = std::min(lo[i % 3], x[i]);
+    hi[i % 3] = std::max(hi[i % 3], x[i]);
+  }
+  return std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+}
+
+inline vtkSmartPointer<vtkPolyData> toPolyData(const std::vector<double>& positions,
+                                               const std::vector<std::int64_t>& triangles)
+{
+  auto pd = vtkSmartPointer<vtkPolyData>::New();
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(positions.size() / 3));
+  for (std::size_t i = 0; i < positions.size(); i += 3)
+    points->SetPoint(static_cast<vtkIdType>(i / 3), &positions[i]);
+  vtkNew<vtkCellArray> polys;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
+    polys->InsertNextCell(3, ids);
+  }
+  pd->SetPoints(points);
+  pd->SetPolys(polys);
+  return pd;
+}
+
+/** Exact closest-point queries on one triangle mesh. */
+class SurfaceDistance
+{
+public:
+  SurfaceDistance(const std::vector<double>& positions, const std::vector<std::int64_t>& triangles)
+      : Surface(toPolyData(positions, triangles))
+  {
+    Locator->SetDataSet(Surface);
+    Locator->BuildLocator();
+  }
+  /** Squared distance from x to the surface; the closest point's triangle and position. */
+  double squared(const double x[3], vtkIdType* triangle = nullptr, double* closest = nullptr)
+  {
+    double c[3], d2 = 0;
+    vtkIdType cellId = -1;
+    int subId = 0;
+    double p[3] = {x[0], x[1], x[2]};
+    Locator->FindClosestPoint(p, closest ? closest : c, Cell, cellId, subId, d2);
+    if (triangle)
+      *triangle = cellId;
+    return d2;
+  }
+
+private:
+  vtkSmartPointer<vtkPolyData> Surface;
+  vtkNew<vtkStaticCellLocator> Locator;
+  vtkNew<vtkGenericCell> Cell;
+};
+
+/** A template and, for each of its vertices, where it sits on the full-resolution mesh. */
+struct Template
+{
+  std::vector<std::int64_t> triangles;
+  std::vector<double> positions;
+  std::vector<std::int64_t> onTriangle; // index into the full mesh's triangles; empty: full mesh
+  std::vector<double> barycentric;      // 3 per vertex
+  std::size_t vertices() const { return positions.size() / 3; }
+};
+
+enum class TemplateKind
+{
+  Decimated,     // frame 0 simplified (vtkQuadricDecimation), vertices on the true surface
+  Reconstructed, // a surface reconstructed from frame 0's samples (what the filter does)
+  Full           // frame 0 itself
+};
+
+inline const char* templateName(TemplateKind kind)
+{
+  return kind == TemplateKind::Decimated       ? "decimated"
+         : kind == TemplateKind::Reconstructed ? "reconstructed"
+                                               : "full";
+}
+
+/** Frame 0 decimated to about `vertices` (quadric decimation, volume kept). */
+inline vtkSmartPointer<vtkPolyData> decimated(vtkPolyData* input, std::size_t vertices)
+{
+  vtkNew<vtkQuadricDecimation> decimate;
+  decimate->SetInputData(input);
+  decimate->SetTargetReduction(1.0 - static_cast<double>(vertices) /
+                                         static_cast<double>(input->GetNumberOfPoints()));
+  decimate->VolumePreservationOn();
+  // Flat regions make the quadrics singular; VTK then warns once per vertex and falls back to the
+  // edge's midpoint, which is fine here.
+  const int warnings = vtkObject::GetGlobalWarningDisplay();
+  vtkObject::GlobalWarningDisplayOff();
+  decimate->Update();
+  vtkObject::SetGlobalWarningDisplay(warnings);
+  return decimate->GetOutput();
+}
+
+/**
+ * A template of about `vertices` vertices of the kind asked for; `frame0Samples` are the points
+ * a reconstruction starts from (the data of frame 0, with its noise and holes; their normals
+ * are estimated, as the filter does without normals). The ground truth of a template vertex is
+ * the barycentric position of its closest point on the frame-0 mesh, carried through the frames.
+ */
+inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, std::size_t vertices,
+                             const dp::PointCloud& frame0Samples)
+{
+  Template t;
+  const std::vector<double> frame0 = mesh.positions(0);
+  const auto& full = mesh.triangles();
+  if (kind == TemplateKind::Full)
+  {
+    t.triangles = full;
+    t.positions = frame0;
+    return t;
+  }
+  auto input = toPolyData(frame0, full);
+  vtkSmartPointer<vtkPolyData> coarse;
+  if (kind == TemplateKind::Reconstructed)
+  {
+    const std::vector<float> normals =
+        frame0Samples.hasNormals()
+            ? frame0Samples.normals
+            : dp::estimateNormals(frame0Samples.points.data(), frame0Samples.numberOfPoints());
+    dp::ReconstructionOptions o;
+    o.targetVertices = vertices;
+    const dp::ReconstructedMesh r = dp::reconstructSurface(
+        frame0Samples.points.data(), normals.data(), frame0Samples.numberOfPoints(), o);
+    coarse = toPolyData(r.positions, r.triangles);
+  }
+  else
+    coarse = decimated(input, vertices);
+  SurfaceDistance truth(frame0, full);
+  for (vtkIdType i = 0; i < coarse->GetNumberOfPoints(); ++i)
+  {
+    double p[3], closest[3];
+    coarse->GetPoint(i, p);
+    vtkIdType cellId = -1;
+    truth.squared(p, &cellId, closest);
+    const std::int64_t* v = &full[3 * cellId];
+    double a[3], b[3], c[3], w[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      a[k] = frame0[3 * v[0] + k];
+      b[k] = frame0[3 * v[1] + k];
+      c[k] = frame0[3 * v[2] + k];
+    }
+    vtkTriangle::BarycentricCoords(closest, a, b, c, w);
+    // A decimated vertex sits on the surface; a reconstructed one up to half a voxel off it,
+    // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is then
+    // that offset.
+    const double* at = kind == TemplateKind::Reconstructed ? p : closest;
+    t.positions.insert(t.positions.end(), at, at + 3);
+    t.onTriangle.push_back(cellId);
+    t.barycentric.insert(t.barycentric.end(), w, w + 3);
+  }
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  auto polys = vtk::TakeSmartPointer(coarse->GetPolys()->NewIterator());
+  for (polys->GoToFirstCell(); !polys->IsDoneWithTraversal(); polys->GoToNextCell())
+  {
+    polys->GetCurrentCell(count, ids);
+    if (count == 3)
+      t.triangles.insert(t.triangles.end(), {ids[0], ids[1], ids[2]});
+  }
+  return t;
+}
+
+/** Where the template's vertices truly are in a frame of the full mesh. */
+inline std::vector<double> groundTruth(const Template& t, const std::vector<double>& frame,
+                                       const std::vector<std::int64_t>& full)
+{
+  if (t.onTriangle.empty())
+    return frame;
+  std::vector<double> out(t.positions.size());
+  for (std::size_t i = 0; i < t.onTriangle.size(); ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      double value = 0;
+      for (int c = 0; c < 3; ++c)
+        value += t.barycentric[3 * i + c] * frame[3 * full[3 * t.onTriangle[i] + c] + k];
+      out[3 * i + k] = value;
+    }
+  return out;
+}
+
+/** The figures of one tracked frame against the truth. */
+struct FrameFigures
+{
+  double vertexSquaredSum = 0; // sum over vertices of |tracked - true|^2
+  double largestVertexError = 0;
+  double surfaceSquaredSum = 0; // sum over tracked vertices of their squared distance to the truth
+  double uncovered = 0;         // share of the true surface farther than the limit from the mesh
+};
+
+/**
+ * Compares a tracked frame with the truth: vertex errors, the distance of each tracked vertex to
+ * the true surface, and the share of `truthSamples` (area-uniform points of the true surface)
+ * farther than `uncoveredLimit` from the tracked surface: the parts the mesh has lost.
+ */
+inline FrameFigures compareFrame(const std::vector<double>& tracked,
+                                 const std::vector<std::int64_t>& trackedTriangles,
+                                 const std::vector<double>& truthVertices,
+                                 const std::vector<double>& truthMesh,
+                                 const std::vector<std::int64_t>& truthTriangles,
+                                 const std::vector<double>& truthSamples, double uncoveredLimit)
+{
+  FrameFigures f;
+  for (std::size_t i = 0; i < tracked.size(); i += 3)
+  {
+    double e2 = 0;
+    for (int k = 0; k < 3; ++k)
+      e2 += (tracked[i + k] - truthVertices[i + k]) * (tracked[i + k] - truthVertices[i + k]);
+    f.vertexSquaredSum += e2;
+    f.largestVertexError = std::max(f.largestVertexError, std::sqrt(e2));
+  }
+  SurfaceDistance truth(truthMesh, truthTriangles);
+  for (std::size_t i = 0; i < tracked.size(); i += 3)
+    f.surfaceSquaredSum += truth.squared(&tracked[i]);
+  SurfaceDistance mesh(tracked, trackedTriangles);
+  std::size_t far = 0;
+  const double limit2 = uncoveredLimit * uncoveredLimit;
+  for (std::size_t i = 0; i < truthSamples.size(); i += 3)
+    far += mesh.squared(&truthSamples[i]) > limit2;
+  f.uncovered = static_cast<double>(far) / static_cast<double>(truthSamples.size() / 3);
+  return f;
+}
+
+/** Sums of squared accelerations (x[t+1] - 2 x[t] + x[t-1]) of the tracked and the true vertices:
+ *  their ratio's square root is the jitter the tracking adds to the motion. */
+class Jitter
+{
+public:
+  void add(const std::vector<double>& tracked, const std::vector<double>& truth)
+  {
+    Tracked.push_back(tracked);
+    Truth.push_back(truth);
+    if (Tracked.size() > 3)
+    {
+      Tracked.erase(Tracked.begin());
+      Truth.erase(Truth.begin());
+    }
+    if (Tracked.size() == 3)
+    {
+      TrackedSum += acceleration2(Tracked);
+      TruthSum += acceleration2(Truth);
+    }
+  }
+  /** RMS acceleration of the tracked vertices over the true one's (1: as smooth as the truth). */
+  double ratio() const { return TruthSum > 0 ? std::sqrt(TrackedSum / TruthSum) : 0.0; }
+
+private:
+  static double acceleration2(const std::vector<std::vector<double>>& x)
+  {
+    double s = 0;
+    for (std::size_t i = 0; i < x[0].size(); ++i)
+    {
+      const double a = x[2][i] - 2 * x[1][i] + x[0][i];
+      s += a * a;
+    }
+    return s;
+  }
+  std::vector<std::vector<double>> Tracked, Truth;
+  double TrackedSum = 0, TruthSum = 0;
+};
+
+} // namespace dp::bench

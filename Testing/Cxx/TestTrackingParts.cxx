@@ -1,0 +1,476 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The tracker's parts, each alone: the closest-point locator against brute force, every energy
+// term's gradient and Gauss-Newton model against finite differences, the deformation graph
+// (rigid motions, geodesic blending, fitting) and the coarse level's node-space gradient.
+#include "dp/AnimatedMesh.h"
+#include "dp/ClothEnergy.h"
+#include "dp/SurfaceSampler.h"
+#include "dp/track/CoverageTerm.h"
+#include "dp/track/DeformationGraph.h"
+#include "dp/track/DistanceTerm.h"
+#include "dp/track/FrameData.h"
+#include "dp/track/GraphRegistration.h"
+#include "dp/track/InternalEnergyTerm.h"
+#include "dp/track/SurfaceLocator.h"
+#include "dp/track/TemporalTerm.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <random>
+
+namespace
+{
+
+struct Shape
+{
+  std::vector<std::int64_t> triangles;
+  std::vector<double> positions;
+};
+
+Shape tube(std::size_t rings = 10, std::size_t segments = 12)
+{
+  dp::BendingTube::Options o;
+  o.rings = rings;
+  o.segments = segments;
+  dp::BendingTube t(o);
+  return {t.triangles(), t.positions(0)};
+}
+
+std::vector<double> jiggle(const std::vector<double>& x, double amount, unsigned seed)
+{
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(-amount, amount);
+  std::vector<double> y(x);
+  for (double& v : y)
+    v += u(rng);
+  return y;
+}
+
+// The analytic gradient of f against central differences at x: the largest difference, relative
+// to the largest gradient component, must stay under `tolerance`.
+void expectGradientMatches(const std::function<double(const double*, double*)>& f,
+                           const std::vector<double>& x, double tolerance, double h = 1e-6)
+{
+  std::vector<double> g(x.size(), 0.0);
+  f(x.data(), g.data());
+  std::vector<double> y(x);
+  double worst = 0, scale = 0;
+  for (std::size_t i = 0; i < x.size(); ++i)
+  {
+    y[i] = x[i] + h;
+    const double fp = f(y.data(), nullptr);
+    y[i] = x[i] - h;
+    const double fm = f(y.data(), nullptr);
+    y[i] = x[i];
+    worst = std::max(worst, std::abs((fp - fm) / (2 * h) - g[i]));
+    scale = std::max(scale, std::abs(g[i]));
+  }
+  ASSERT_GT(scale, 0);
+  EXPECT_LT(worst, tolerance * scale) << "largest gradient component " << scale;
+}
+
+// The frame data of a tube's samples (with their true normals), voxel = diagonal / 60.
+struct Frame
+{
+  Shape shape = tube();
+  dp::TriangleMesh mesh{shape.triangles, shape.positions.size() / 3};
+  double voxel = dp::boundingBoxDiagonal(shape.positions) / 60;
+  std::unique_ptr<dp::FrameData> data;
+  std::vector<double> mass;
+  double L = 0;
+  explicit Frame(const std::vector<double>& truth, bool estimateNormals = false)
+  {
+    dp::SamplerOptions o;
+    o.pointsPerFrame = 3000;
+    const dp::PointCloud c = dp::sampleSurface(truth, shape.triangles, o, 0);
+    dp::FrameDataOptions fo;
+    fo.voxelSize = voxel;
+    fo.surfaceArea = mesh.totalArea(shape.positions.data());
+    fo.spreadCount = 600;
+    data = std::make_unique<dp::FrameData>(c.points.data(), c.numberOfPoints(),
+                                           estimateNormals ? nullptr : c.normals.data(), fo);
+    const dp::ClothEnergy cloth(mesh, shape.positions.data(), dp::ClothParameters{});
+    mass = cloth.vertexMass();
+    L = cloth.lengthScale();
+  }
+};
+
+TEST(SurfaceLocator, FindsTheClosestPointsBruteForceFinds)
+{
+  const Shape s = tube(8, 10);
+  const dp::TriangleMesh mesh(s.triangles, s.positions.size() / 3);
+  dp::SurfaceLocator locator(mesh, s.positions.data());
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.6, 1.6);
+  auto brute = [&](const std::vector<double>& x, const double p[3])
+  {
+    double best = HUGE_VAL;
+    for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+    {
+      double w[3], c[3];
+      best = std::min(best, dp::closestPointOnTriangle(p, &x[3 * s.triangles[3 * t]],
+                                                       &x[3 * s.triangles[3 * t + 1]],
+                                                       &x[3 * s.triangles[3 * t + 2]], w, c));
+    }
+    return best;
+  };
+  for (int round = 0; round < 2; ++round)
+  {
+    // Round 1: the same tree refitted to a deformed shape.
+    const std::vector<double> x = round == 0 ? s.positions : jiggle(s.positions, 0.05, 8);
+    if (round == 1)
+      locator.refit(x.data());
+    for (int i = 0; i < 300; ++i)
+    {
+      const double p[3] = {0.4 * u(rng), 0.4 * u(rng), u(rng)};
+      const double expected = brute(x, p);
+      const dp::SurfaceLocator::Hit hit = locator.closest(p);
+      ASSERT_GE(hit.triangle, 0);
+      EXPECT_NEAR(hit.squaredDistance, expected, 1e-12);
+      // The barycentric weights give the point, which lies at that distance.
+      double d2 = 0, sum = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        double q = 0;
+        for (int c = 0; c < 3; ++c)
+          q += hit.barycentric[c] * x[3 * s.triangles[3 * hit.triangle + c] + k];
+        EXPECT_NEAR(q, hit.point[k], 1e-12);
+        d2 += (q - p[k]) * (q - p[k]);
+        sum += hit.barycentric[k];
+      }
+      EXPECT_NEAR(sum, 1.0, 1e-12);
+      EXPECT_NEAR(d2, expected, 1e-12);
+      // A hint (any triangle) does not change the answer; a bound below the distance finds none.
+      EXPECT_EQ(locator.closest(p, HUGE_VAL, i % 50).triangle, hit.triangle);
+      EXPECT_EQ(locator.closest(p, 0.99 * std::sqrt(expected)).triangle, -1);
+    }
+  }
+}
+
+TEST(FrameData, SpreadsTheSubsampleEvenlyAndFlipsNormals)
+{
+  Frame f(tube().positions);
+  const auto& spread = f.data->spread();
+  EXPECT_GE(spread.size(), 450u); // about the 600 asked for
+  EXPECT_LE(spread.size(), 900u);
+  // Even: the kept points' nearest-neighbour distances are near the spacing an even spread
+  // would have (random samples' would be far more scattered, down to almost 0).
+  const double spacing = std::sqrt(f.mesh.totalArea(f.shape.positions.data()) / spread.size());
+  std::vector<double> nearest(spread.size(), HUGE_VAL);
+  for (std::size_t i = 0; i < spread.size(); ++i)
+    for (std::size_t j = 0; j < spread.size(); ++j)
+    {
+      const double* a = f.data->point(spread[i]);
+      const double* b = f.data->point(spread[j]);
+      if (i != j)
+        nearest[i] = std::min(nearest[i], std::sqrt((a[0] - b[0]) * (a[0] - b[0]) +
+                                                    (a[1] - b[1]) * (a[1] - b[1]) +
+                                                    (a[2] - b[2]) * (a[2] - b[2])));
+    }
+  std::sort(nearest.begin(), nearest.end());
+  EXPECT_GT(nearest[nearest.size() / 2], 0.6 * spacing);
+  EXPECT_GT(nearest[nearest.size() / 20], 0.25 * spacing);
+  const float before = f.data->normal(5)[1];
+  f.data->flipNormals();
+  EXPECT_EQ(f.data->normal(5)[1], -before);
+}
+
+// Every term, at a shape off the data: gradient against finite differences, and the Gauss-Newton
+// model's value and gradient equal to the term's own.
+class Terms : public ::testing::TestWithParam<int>
+{
+};
+
+TEST_P(Terms, GradientAndModelMatchFiniteDifferences)
+{
+  Frame f(tube().positions);
+  const std::vector<double> target = jiggle(f.shape.positions, 0.01, 4);
+  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{1, 0.1, 0.5});
+  std::unique_ptr<dp::EnergyTerm> term;
+  dp::DistanceTermOptions d;
+  d.normalTestDegrees = 180;
+  dp::CoverageOptions c;
+  c.robustScale = 3 * f.voxel;
+  switch (GetParam())
+  {
+  case 0:
+    term = std::make_unique<dp::InternalEnergyTerm>(cloth);
+    break;
+  case 1: // the distance to the data's tangent planes, squared
+    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+    break;
+  case 2: // the paper's distance to the points, linear
+    d.measure = dp::DistanceMeasure::Points;
+    d.squared = false;
+    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+    break;
+  case 3: // robust weights
+    d.robustScale = 2 * f.voxel;
+    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+    break;
+  case 4:
+    term = std::make_unique<dp::CoverageTerm>(*f.data, f.mesh, f.L, c);
+    break;
+  default:
+    term = std::make_unique<dp::TemporalTerm>(target, f.mass, 3.0, f.L, f.voxel);
+  }
+  const std::vector<double> x = jiggle(f.shape.positions, 0.01, 9);
+  term->decide(x.data());
+  term->linearise(x.data());
+  // Small steps stay inside the distance field's voxel cells, where D is smooth.
+  expectGradientMatches([&](const double* p, double* g) { return term->evaluate(p, g); }, x,
+                        GetParam() == 0 ? 1e-5 : 2e-4, GetParam() == 0 ? 1e-6 : 1e-8);
+  std::vector<std::array<std::int64_t, 2>> pairs;
+  term->couplings(pairs);
+  dp::detail::BlockSparseMatrix H(f.mesh.numberOfVertices(), pairs);
+  std::vector<double> modelGradient(x.size(), 0.0), gradient(x.size(), 0.0);
+  const double modelValue = term->addModel(x.data(), H, modelGradient.data());
+  const double value = term->evaluate(x.data(), gradient.data());
+  EXPECT_NEAR(modelValue, value, 1e-12 * std::abs(value));
+  const Eigen::Map<const Eigen::VectorXd> a(modelGradient.data(),
+                                            static_cast<Eigen::Index>(x.size()));
+  const Eigen::Map<const Eigen::VectorXd> b(gradient.data(), static_cast<Eigen::Index>(x.size()));
+  if (GetParam() >= 1 && GetParam() <= 3)
+  {
+    // The distance term's model holds the field's interpolation weights (and, for the paper's
+    // D, reweights by 1 / max(D, voxel)): its gradient leaves out the weights' own slopes, a
+    // voxel-scale ripple, so it points the way the true gradient does without equalling it.
+    EXPECT_GT(a.dot(b), 0.95 * a.norm() * b.norm());
+  }
+  else
+    EXPECT_LT((a - b).norm(), 1e-9 * b.norm());
+  // The model's matrix is positive semidefinite (a sum of J^T W J).
+  // The matrix stores its lower triangle (diagonal blocks whole): its scalar lower triangle,
+  // mirrored, is the full matrix.
+  const Eigen::MatrixXd lower = Eigen::MatrixXd(H.matrix()).triangularView<Eigen::Lower>();
+  Eigen::MatrixXd dense = lower + lower.transpose();
+  dense.diagonal() /= 2;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(dense);
+  EXPECT_GT(eigen.eigenvalues().minCoeff(), -1e-9 * eigen.eigenvalues().maxCoeff());
+  // Points -> mesh and temporal terms are quadratic for fixed correspondences: their model is
+  // exact, so it predicts the term after a step.
+  if (GetParam() >= 4)
+  {
+    const std::vector<double> step = jiggle(std::vector<double>(x.size(), 0.0), 0.003, 2);
+    std::vector<double> moved(x);
+    for (std::size_t i = 0; i < x.size(); ++i)
+      moved[i] += step[i];
+    const Eigen::Map<const Eigen::VectorXd> s(step.data(), static_cast<Eigen::Index>(step.size()));
+    const Eigen::Map<const Eigen::VectorXd> g(gradient.data(),
+                                              static_cast<Eigen::Index>(gradient.size()));
+    const double predicted = value + g.dot(s) + 0.5 * s.dot(dense * s);
+    EXPECT_NEAR(term->evaluate(moved.data(), nullptr), predicted, 1e-9 * std::abs(value));
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Internal_Planes_Points_Robust_Coverage_Temporal, Terms,
+                         ::testing::Values(0, 1, 2, 3, 4, 5));
+
+TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
+{
+  // The data moved away from the mesh: the mesh -> points term sees nothing wrong with a mesh
+  // sitting on a part of the data, but points it does not cover pull it back.
+  Frame f(tube().positions);
+  std::vector<double> x = f.shape.positions;
+  for (std::size_t i = 0; i < x.size(); i += 3)
+    x[i] += 0.02; // the mesh is 0.02 off in x
+  dp::CoverageOptions c;
+  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
+  coverage.linearise(x.data());
+  std::vector<double> g(x.size(), 0.0);
+  coverage.evaluate(x.data(), g.data());
+  double pull = 0;
+  for (std::size_t i = 0; i < x.size(); i += 3)
+    pull += g[i];
+  EXPECT_GT(pull, 0) << "the descent direction moves the mesh back toward -x";
+  std::size_t matched = 0;
+  for (const auto& m : coverage.matches())
+    matched += m.triangle >= 0;
+  EXPECT_GT(matched, coverage.matches().size() / 2);
+  // A normal test refuses points whose normals disagree with the mesh's: turned around, none
+  // pull.
+  f.data->flipNormals();
+  dp::CoverageTerm flipped(*f.data, f.mesh, f.L, c);
+  flipped.linearise(x.data());
+  matched = 0;
+  for (const auto& m : flipped.matches())
+    matched += m.triangle >= 0;
+  EXPECT_EQ(matched, 0u);
+}
+
+TEST(DeformationGraph, MovesRigidlyFitsRigidMotionsAndContinuesThem)
+{
+  const Shape s = tube(16, 12);
+  const dp::TriangleMesh mesh(s.triangles, s.positions.size() / 3);
+  const dp::DeformationGraph graph(mesh, s.positions.data(), 30, 4);
+  EXPECT_EQ(graph.numberOfNodes(), 30u);
+  std::vector<double> x(s.positions.size());
+  graph.deform(graph.identity(), x.data());
+  for (std::size_t i = 0; i < x.size(); ++i)
+    ASSERT_NEAR(x[i], s.positions[i], 1e-12);
+  for (std::size_t v = 0; v < mesh.numberOfVertices(); ++v)
+  {
+    double total = 0;
+    for (auto i = graph.influencesBegin(v); i != graph.influencesEnd(v); ++i)
+      total += i->weight;
+    ASSERT_NEAR(total, 1.0, 1e-12) << v;
+  }
+  // One rigid motion for all nodes moves the mesh rigidly; fit() recovers it from the shape.
+  const Eigen::Matrix3d R = Eigen::AngleAxisd(0.4, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  const Eigen::Vector3d t(0.3, -0.1, 0.2);
+  dp::DeformationGraph::State rigid = graph.identity();
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+  {
+    const Eigen::Vector3d g(graph.nodePosition(j));
+    rigid.rotation[j] = R;
+    rigid.translation[j] = R * g + t - g;
+  }
+  graph.deform(rigid, x.data());
+  for (std::size_t v = 0; v < mesh.numberOfVertices(); ++v)
+    ASSERT_LT((Eigen::Vector3d(&x[3 * v]) - (R * Eigen::Vector3d(&s.positions[3 * v]) + t)).norm(),
+              1e-12);
+  const dp::DeformationGraph::State fitted = graph.fit(x.data());
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+  {
+    EXPECT_LT((fitted.rotation[j] - R).norm(), 1e-9) << j;
+    EXPECT_LT((fitted.translation[j] - rigid.translation[j]).norm(), 1e-9) << j;
+  }
+  // A constant turn, continued: identity -> R -> R^2.
+  dp::DeformationGraph::State half = graph.identity();
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    half.rotation[j] = R;
+  const dp::DeformationGraph::State next = dp::extrapolate(graph.identity(), half, graph, 1.0);
+  EXPECT_LT((next.rotation[0] - R * R).norm(), 1e-12);
+}
+
+TEST(DeformationGraph, BlendsAlongTheSurfaceNotAcrossGaps)
+{
+  // A U of two long strips joined at the bottom, their tops 1/20 of their length apart: close in
+  // space, far along the surface. No vertex of one arm's top blends a node of the other arm.
+  const int rows = 40, columns = 4;
+  std::vector<double> positions;
+  std::vector<std::int64_t> triangles;
+  // The strip runs up one arm (x = 0), across the bottom and up the other (x = 0.05).
+  const int length = 2 * rows + 2;
+  for (int i = 0; i < length; ++i)
+    for (int j = 0; j < columns; ++j)
+    {
+      double x, y;
+      if (i < rows)
+      {
+        x = 0;
+        y = 1.0 - static_cast<double>(i) / rows;
+      }
+      else if (i < rows + 2)
+      {
+        x = 0.025 * (i - rows + 0.5);
+        y = -0.01;
+      }
+      else
+      {
+        x = 0.05;
+        y = static_cast<double>(i - rows - 2) / rows;
+      }
+      positions.insert(positions.end(), {x, y, 0.02 * j});
+    }
+  for (int i = 0; i + 1 < length; ++i)
+    for (int j = 0; j + 1 < columns; ++j)
+    {
+      const std::int64_t a = i * columns + j, b = a + 1, c = a + columns, d = c + 1;
+      triangles.insert(triangles.end(), {a, c, b, b, c, d});
+    }
+  const dp::TriangleMesh mesh(triangles, positions.size() / 3);
+  const dp::DeformationGraph graph(mesh, positions.data(), 40, 4);
+  for (std::size_t v = 0; v < mesh.numberOfVertices(); ++v)
+  {
+    if (positions[3 * v + 1] < 0.5)
+      continue; // the tops only
+    const bool left = positions[3 * v] < 0.025;
+    for (auto i = graph.influencesBegin(v); i != graph.influencesEnd(v); ++i)
+    {
+      const double* g = graph.nodePosition(static_cast<std::size_t>(i->node));
+      EXPECT_EQ(g[0] < 0.025, left) << "vertex " << v << " blends a node of the other arm";
+    }
+  }
+}
+
+TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
+{
+  // E(theta) = data terms at x(theta) + E_reg(theta): its node-space gradient (the vertex model
+  // carried through the blending) against central differences in each node's rotation
+  // (angle-axis increment) and translation.
+  Frame f(tube(16, 12).positions);
+  f.shape = tube(16, 12);
+  f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
+  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
+  f.mass = cloth.vertexMass();
+  const dp::DeformationGraph graph(f.mesh, f.shape.positions.data(), 20, 4);
+  dp::GraphRegistration registration(graph, f.L, f.voxel);
+  // The distance to the points, squared: its model's gradient is exact (the distance to planes
+  // holds the interpolation weights), so the test sees the projection alone.
+  dp::DistanceTermOptions d;
+  d.normalTestDegrees = 180;
+  d.measure = dp::DistanceMeasure::Points;
+  dp::DistanceTerm distance(*f.data, f.mesh, f.mass, f.L, d);
+  dp::CoverageOptions c;
+  c.robustScale = 3 * f.voxel;
+  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
+  coverage.setDiagonalModel(true);
+  std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
+  // A state off the data: every node turned and moved a little, differently.
+  dp::DeformationGraph::State state = graph.identity();
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+  {
+    state.rotation[j] =
+        Eigen::AngleAxisd(0.05 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .matrix();
+    state.translation[j] = 0.01 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+  }
+  std::vector<double> x(f.shape.positions.size());
+  graph.deform(state, x.data());
+  coverage.linearise(x.data());
+  const double rigidity = 3.0;
+  Eigen::VectorXd gradient;
+  registration.model(state, terms, rigidity, gradient);
+  auto energyAt = [&](const dp::DeformationGraph::State& s)
+  {
+    std::vector<double> y(x.size());
+    graph.deform(s, y.data());
+    return dp::evaluateAll(terms, y.data(), nullptr) + registration.regularisation(s, rigidity);
+  };
+  const double h = 1e-7;
+  double worst = 0, scale = 0;
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    for (int k = 0; k < 6; ++k)
+    {
+      dp::DeformationGraph::State plus = state, minus = state;
+      Eigen::Vector3d e = Eigen::Vector3d::Zero();
+      e[k % 3] = h;
+      if (k < 3)
+      {
+        plus.rotation[j] = Eigen::AngleAxisd(h, e.normalized()).matrix() * state.rotation[j];
+        minus.rotation[j] = Eigen::AngleAxisd(-h, e.normalized()).matrix() * state.rotation[j];
+      }
+      else
+      {
+        plus.translation[j] += e;
+        minus.translation[j] -= e;
+      }
+      const double numeric = (energyAt(plus) - energyAt(minus)) / (2 * h);
+      worst = std::max(worst, std::abs(numeric - gradient[static_cast<Eigen::Index>(6 * j + k)]));
+      scale = std::max(scale, std::abs(numeric));
+    }
+  ASSERT_GT(scale, 0);
+  EXPECT_LT(worst, 1e-4 * scale);
+}
+
+} // namespace
