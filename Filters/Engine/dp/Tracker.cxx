@@ -140,6 +140,8 @@ void Tracker::reset()
 {
   P->Predictor.clear();
   P->RecentQuality.clear();
+  if (P->Registration)
+    P->Registration->resetReference();
 }
 
 void Tracker::restartFrom(const std::vector<double>& positions)
@@ -388,6 +390,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   else
   {
     Attempt best = attempt(frame, Start::Predicted);
+    bool restarted = false;
     if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
     {
       for (Start retry : {Start::Still, Start::Template})
@@ -396,13 +399,20 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
           continue;
         Attempt other = attempt(frame, retry);
         ++result.retries;
-        if (other.score() < best.score())
+        // Another start must do clearly better to be kept: the scores of two plausible fits
+        // differ by noise, and a start from elsewhere breaks the motion's continuity.
+        if (other.score() < 0.7 * best.score() &&
+            other.score() < best.score() - 0.5 * Options.recovery.margin)
+        {
           best = std::move(other);
+          restarted = true;
+        }
         if (!failed(best))
           break;
       }
     }
     result.failed = Options.recovery.enabled && failed(best);
+    result.kept = restarted ? 1 : 0;
     P->RecentQuality.push_back(best.quality);
     if (P->RecentQuality.size() > 9)
       P->RecentQuality.erase(P->RecentQuality.begin());
@@ -426,8 +436,16 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   if (P->Graph)
   {
     const DeformationGraph::State state = P->Graph->fit(result.positions.data());
-    P->Predictor.push(result.positions, &state);
+    // After a retry from another start, the motion before it says nothing about the motion after.
+    if (result.retries > 0 && result.kept > 0)
+      P->Predictor.restartFrom(result.positions, &state);
+    else
+      P->Predictor.push(result.positions, &state);
+    if (Options.graph.yieldRate > 0)
+      P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
   }
+  else if (result.retries > 0 && result.kept > 0)
+    P->Predictor.restartFrom(result.positions);
   else
     P->Predictor.push(result.positions);
   result.seconds = elapsed(start);

@@ -73,6 +73,7 @@ struct FrameResult
   double unexplained = 0; // share of the data farther than 3 voxels from the mesh (FrameQuality)
   double unsupported = 0; // share of the mesh farther than 3 voxels from the data
   int retries = 0;        // attempts after the first (the frame's quality failed)
+  int kept = 0;           // which attempt was kept: 0 the first, 1 a retry
   bool failed = false;    // the quality still failed after the retries: do not trust this frame
   double seconds = 0;
   FrameTimings timings;

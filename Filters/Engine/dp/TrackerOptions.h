@@ -62,6 +62,12 @@ struct GraphOptions
   // Scale of the regulariser's robust (Huber) penalty, in voxels: edges bending more than this
   // cost in proportion to their bending (an L1 penalty: joints bend, the rest stays rigid).
   double robustScale = 0.5;
+  // Plasticity: after each frame, where an edge of the graph is bent more than yieldLimit voxels
+  // from what the regulariser measures against, that reference gives way by yieldRate of the
+  // excess, so lasting deformation (a collapse, clothes) is not pulled back to the template while
+  // parts that stay near-rigid keep the template's shape (0 switches it off).
+  double yieldRate = 0.3;
+  double yieldLimit = 1.0;
   int iterations = 10; // Levenberg-Marquardt steps per stage of the schedule (at most)
 };
 

@@ -44,6 +44,7 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   // upper bound), so a vertex couples only the nodes it blends: the graph's own edges.
   const TriangleMesh& mesh = graph.mesh();
   VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
+  resetReference();
   NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
   // The node block each (vertex block, node of a, node of b) adds to, found once.
   VertexModel.forEachBlock(
@@ -72,9 +73,8 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       const auto& edge = edges[index];
       const std::int64_t j = edge[direction], k = edge[1 - direction];
       const double c = scale * (EdgeWeight.empty() ? 1.0 : EdgeWeight[2 * index + direction]);
-      const Eigen::Vector3d r = edgeResidual(state, j, k);
-      const Eigen::Vector3d arm = state.rotation[j] * (Eigen::Vector3d(Graph.nodePosition(k)) -
-                                                       Eigen::Vector3d(Graph.nodePosition(j)));
+      const Eigen::Vector3d r = edgeResidual(state, index, direction);
+      const Eigen::Vector3d arm = state.rotation[j] * Arms[2 * index + direction];
       e += 0.5 * c * r.squaredNorm();
       if (!hessian)
         continue;
@@ -153,11 +153,47 @@ void GraphRegistration::project(const DeformationGraph::State& state,
 }
 
 Eigen::Vector3d GraphRegistration::edgeResidual(const DeformationGraph::State& state,
-                                                std::int64_t j, std::int64_t k) const
+                                                std::size_t index, int direction) const
 {
+  const std::int64_t j = Graph.edges()[index][direction], k = Graph.edges()[index][1 - direction];
   const Eigen::Vector3d gj(Graph.nodePosition(static_cast<std::size_t>(j)));
   const Eigen::Vector3d gk(Graph.nodePosition(static_cast<std::size_t>(k)));
-  return state.rotation[j] * (gk - gj) + gj + state.translation[j] - gk - state.translation[k];
+  return state.rotation[j] * Arms[2 * index + direction] + gj + state.translation[j] - gk -
+         state.translation[k];
+}
+
+void GraphRegistration::resetReference()
+{
+  // The arm of edge (j, k) in node j's frame, as in the template: g_k - g_j.
+  const auto& edges = Graph.edges();
+  Arms.resize(2 * edges.size());
+  for (std::size_t index = 0; index < edges.size(); ++index)
+    for (int direction = 0; direction < 2; ++direction)
+      Arms[2 * index + direction] =
+          Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(edges[index][1 - direction]))) -
+          Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(edges[index][direction])));
+}
+
+void GraphRegistration::yield(const DeformationGraph::State& state, double rate, double limit)
+{
+  // Plasticity: where an edge stays bent beyond `limit` from its reference, the reference gives
+  // way by `rate` of the excess (in node j's frame), so lasting deformation stops being pulled
+  // back while near-rigid parts keep the template's shape.
+  const auto& edges = Graph.edges();
+  for (std::size_t index = 0; index < edges.size(); ++index)
+    for (int direction = 0; direction < 2; ++direction)
+    {
+      const std::int64_t j = edges[index][direction], k = edges[index][1 - direction];
+      const Eigen::Vector3d gj(Graph.nodePosition(static_cast<std::size_t>(j)));
+      const Eigen::Vector3d gk(Graph.nodePosition(static_cast<std::size_t>(k)));
+      const Eigen::Vector3d current =
+          state.rotation[j].transpose() * (gk + state.translation[k] - gj - state.translation[j]);
+      Eigen::Vector3d& arm = Arms[2 * index + direction];
+      const Eigen::Vector3d excess = current - arm;
+      const double size = excess.norm();
+      if (size > limit)
+        arm += rate * (1 - limit / size) * excess;
+    }
 }
 
 void GraphRegistration::reweightEdges(const DeformationGraph::State& state, double robustScale)
@@ -176,8 +212,7 @@ void GraphRegistration::reweightEdges(const DeformationGraph::State& state, doub
     for (int direction = 0; direction < 2; ++direction)
     {
       const double u2 =
-          edgeResidual(state, edges[index][direction], edges[index][1 - direction]).squaredNorm() /
-          (robustScale * robustScale);
+          edgeResidual(state, index, direction).squaredNorm() / (robustScale * robustScale);
       EdgeWeight[2 * index + direction] = std::min(1.0, 1.0 / std::sqrt(u2));
     }
 }

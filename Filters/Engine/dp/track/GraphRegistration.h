@@ -6,21 +6,27 @@
  *
  *   E(theta) = sum_terms E_term(x(theta)) + E_reg(theta),
  *   E_reg = k_reg / (L voxel |G|) * sum_{(j,k) in G} (h(|e_jk|) + h(|e_kj|)),
- *   e_jk  = R_j (g_k - g_j) + g_j + t_j - (g_k + t_k)        (Sumner et al. 2007, E_reg)
- *
- * with h the Huber penalty of scale s (e^2 / 2 below s, linear above: an L1 penalty on bending,
- * minimised by iteratively reweighted least squares), so the graph bends at a few places
- * (joints) and stays rigid elsewhere, the way bodies move. Without it (least squares) the
- * prior spreads bending over every edge and, along the surface where the data say nothing,
- * pulls the shape away from the truth by centimetres on captured humans.
+ *   e_jk  = R_j a_jk + g_j + t_j - (g_k + t_k)        (Sumner et al. 2007, E_reg)
  *
  * over each node's rotation and translation (6 unknowns a node; rotations stay rotations: steps
- * are angle-axis increments R <- exp([w]x) R). The data terms are the fine level's own
- * (DistanceTerm mesh -> points, CoverageTerm points -> mesh) in vertex space; their Gauss-Newton
- * models are carried to the nodes through the blending, H_nodes = B^T H_vertices B with B =
- * dx/dtheta (the points -> mesh term's model replaced by its block-diagonal upper bound, so the
- * nodes' system has the graph's sparsity). E_reg is zero for any rigid motion of the whole graph
- * and measures bending against the template, not the last frame, so shapes do not drift.
+ * are angle-axis increments R <- exp([w]x) R).
+ *
+ * The regulariser: a_jk is the edge's reference in node j's frame, g_k - g_j in the template, so
+ * bending is measured against the reference pose, not the last frame, and shapes do not drift;
+ * E_reg is zero for any rigid motion of the whole graph. h is the Huber penalty of scale s
+ * (e^2 / 2 below s, linear above: an L1 penalty on bending, minimised by iteratively
+ * reweighted least squares), so the graph bends at a few places (joints) and stays rigid
+ * elsewhere, the way bodies move. Least squares instead spreads bending over every edge and,
+ * along the surface where the data say nothing, pulls the shape centimetres off the truth on
+ * captured humans; a redescending penalty frees joints entirely and lets symmetric parts drift.
+ * Plasticity (yield()): where frames keep an edge bent beyond a limit, its reference gives way
+ * by a share of the excess, so lasting deformation (a collapse, clothes) is not pulled back,
+ * while near-rigid parts keep the template's shape.
+ *
+ * The data terms are the fine level's own (DistanceTerm mesh -> points, CoverageTerm points ->
+ * mesh) in vertex space; their Gauss-Newton models are carried to the nodes through the
+ * blending, H_nodes = B^T H_vertices B with B = dx/dtheta (the points -> mesh term's model
+ * replaced by its block-diagonal upper bound, so the nodes' system has the graph's sparsity).
  *
  * registerFrame() runs the schedule that gives the coarse level its capture range: three stages
  * from stiff and far-reaching (the data terms see points up to ~24 voxels away, robustly) to
@@ -69,6 +75,13 @@ public:
   double model(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                double rigidity, Eigen::VectorXd& gradient);
 
+  /** E_reg measures bending against the template again (undoes yield()). */
+  void resetReference();
+
+  /** Lets E_reg's reference give way where `state` (a frame's result) bends an edge beyond
+   *  `limit` (world units): by `rate` of the excess. */
+  void yield(const DeformationGraph::State& state, double rate, double limit);
+
   /** E_reg of a state with weight `rigidity`; adds its Gauss-Newton model when asked. */
   double regularisation(const DeformationGraph::State& state, double rigidity,
                         detail::BlockSparseMatrixOf<6>* hessian = nullptr,
@@ -79,8 +92,8 @@ public:
 private:
   void project(const DeformationGraph::State& state, const Eigen::VectorXd& vertexGradient,
                Eigen::VectorXd& nodeGradient);
-  Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::int64_t j,
-                               std::int64_t k) const;
+  Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::size_t index,
+                               int direction) const;
   void reweightEdges(const DeformationGraph::State& state, double robustScale);
   static DeformationGraph::State retract(const DeformationGraph::State& state,
                                          const Eigen::VectorXd& step);
@@ -90,6 +103,7 @@ private:
   double Voxel;
   double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
   std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
+  std::vector<Eigen::Vector3d> Arms; // per directed edge (j, k): the reference of g_k - g_j
   detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
