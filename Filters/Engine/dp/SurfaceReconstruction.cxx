@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -124,10 +125,12 @@ void evaluate(const Input& in, openvdb::FloatGrid& grid, double h, std::size_t k
 
 // The voxels of holes get the harmonic interpolation (successive over-relaxation of the mean of
 // the six neighbours) of the values around them: the band's, and the pieces' outside it. Across
-// a hole, between an inside piece and the outside one, that is a membrane from rim to rim. A
-// connected part of hole voxels that meets pieces of one sign only (a concave corner of the
-// outside, the hollow of a cupped ear) is no hole: it takes that sign, so no surface appears
-// there even where the band next to it has the other sign (a part too thin for the voxels).
+// a hole, between the inside (band voxels or hole voxels themselves, when the closing filled a
+// thin part) and the outside, that is a membrane from rim to rim. A connected part of hole
+// voxels that meets pieces of one sign only and whose band neighbours mostly have that sign
+// too (a concave corner of the outside, the hollow of a cupped ear) is no hole: it takes that
+// sign, so no surface appears there where a few band voxels next to it have the other one (a
+// part too thin for the voxels).
 void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord>& holes,
                       float background)
 {
@@ -143,6 +146,7 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
   std::vector<std::array<int, 6>> around(n);
   std::vector<float> fixed(n, 0.0f), value(n, 0.0f);
   std::vector<std::uint8_t> meets(n, 0); // bit 0: an inside piece, bit 1: an outside piece
+  std::vector<int> band(n, 0);           // band neighbours: positive ones less negative ones
   {
     auto acc = index->getConstAccessor();
     auto values = grid.getConstAccessor();
@@ -162,12 +166,15 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
           fixed[i] += neighbour;
           if (!values.isValueOn(v))
             meets[i] |= neighbour < 0 ? 1 : 2;
+          else
+            band[i] += neighbour < 0 ? -1 : 1;
         }
     }
   }
   // Connected parts of hole voxels, and what they meet.
   std::vector<int> part(n, -1);
   std::vector<std::uint8_t> partMeets;
+  std::vector<long> partBand;
   std::vector<std::size_t> stack;
   for (std::size_t seed = 0; seed < n; ++seed)
   {
@@ -175,6 +182,7 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
       continue;
     const int p = static_cast<int>(partMeets.size());
     partMeets.push_back(0);
+    partBand.push_back(0);
     part[seed] = p;
     stack.push_back(seed);
     while (!stack.empty())
@@ -182,6 +190,7 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
       const std::size_t i = stack.back();
       stack.pop_back();
       partMeets[p] |= meets[i];
+      partBand[p] += band[i];
       for (int j : around[i])
         if (j >= 0 && part[j] < 0)
         {
@@ -194,7 +203,8 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
   for (std::size_t i = 0; i < n; ++i)
   {
     const std::uint8_t m = partMeets[part[i]];
-    free[i] = m == 0 || m == 3;
+    const long b = partBand[part[i]];
+    free[i] = !((m == 1 && b < 0) || (m == 2 && b > 0));
     if (!free[i])
       value[i] = m == 1 ? -background : background;
   }
@@ -326,6 +336,18 @@ public:
         return Inside[Label[0]] ? -1 : 1;
     const int l = Label[index(c)];
     return l < 0 ? 0 : (Inside[l] ? -1 : 1);
+  }
+
+  /** The border voxels of the pieces whose border mostly agrees, and whether their piece is
+   *  inside. */
+  void borderOfSettledPieces(std::vector<std::pair<openvdb::Coord, bool>>& out) const
+  {
+    border(
+        [&](int piece, const openvdb::Coord& v)
+        {
+          if (!Mixed[piece])
+            out.push_back({v, Inside[piece]});
+        });
   }
 
   /** Border voxels to their piece's sign; every value outside the band (voxels of partly active
@@ -504,35 +526,41 @@ FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
   OutsideBand outside(*grid);
   evaluate(in, *grid, h, k, sigma2);
   outside.findPieces(*grid);
-  // Normals against the pieces: a point whose normal points into an inside piece and away from
-  // an outside one (looked up beyond the band) has it the wrong way round; flipped, and the
-  // field around it evaluated again. (Thin parts, where both lookups land outside or in the
-  // band, are left alone.)
-  std::vector<char> wrong(in.count, 0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 1024),
-                    [&](const tbb::blocked_range<std::size_t>& range)
-                    {
-                      for (std::size_t i = range.begin(); i != range.end(); ++i)
-                      {
-                        int sides[2] = {0, 0};
-                        for (int s = 0; s < 2; ++s)
-                          for (double beyond : {2.0, 3.0})
-                          {
-                            const double distance = (s ? -beyond : beyond) * NarrowBand * h;
-                            double q[3];
-                            for (int c = 0; c < 3; ++c)
-                              q[c] = in.points[3 * i + c] + distance * in.normals[3 * i + c];
-                            sides[s] = outside.side(voxelOf(q, h));
-                            if (sides[s] != 0)
-                              break;
-                          }
-                        wrong[i] = sides[0] < 0 && sides[1] > 0;
-                      }
-                    });
+  // Normals against the pieces: each border voxel of the band (next to a piece whose border
+  // mostly agrees) asks the three points nearest to it whether their planes put it on its
+  // piece's side (the nearest only: beyond a thin part, those of its far side answer). A point that
+  // most of its voxels find on the wrong side has its normal the wrong way round (a patch oriented
+  // against the rest): flipped, and the field around it evaluated again.
   std::vector<std::uint32_t> flipped;
-  for (std::size_t i = 0; i < in.count; ++i)
-    if (wrong[i])
-      flipped.push_back(static_cast<std::uint32_t>(i));
+  {
+    std::vector<std::pair<openvdb::Coord, bool>> voxels; // border voxel, its piece inside
+    outside.borderOfSettledPieces(voxels);
+    std::vector<std::atomic<int>> support(in.count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
+                      [&](const tbb::blocked_range<std::size_t>& range)
+                      {
+                        std::vector<std::uint32_t> ids(k);
+                        std::vector<double> d2(k);
+                        for (std::size_t b = range.begin(); b != range.end(); ++b)
+                        {
+                          const auto& [v, inside] = voxels[b];
+                          const double x[3] = {h * v.x(), h * v.y(), h * v.z()};
+                          const std::size_t found = in.tree.nearest(x, std::min<std::size_t>(k, 3),
+                                                                    ids.data(), d2.data());
+                          for (std::size_t j = 0; j < found; ++j)
+                          {
+                            const double* p = in.points + 3 * ids[j];
+                            const float* n = in.normals + 3 * ids[j];
+                            const double along =
+                                n[0] * (x[0] - p[0]) + n[1] * (x[1] - p[1]) + n[2] * (x[2] - p[2]);
+                            support[ids[j]] += (along < 0) == inside ? 1 : -1;
+                          }
+                        }
+                      });
+    for (std::size_t i = 0; i < in.count; ++i)
+      if (support[i] < 0)
+        flipped.push_back(static_cast<std::uint32_t>(i));
+  }
   std::vector<float> corrected;
   Input again = in;
   if (!flipped.empty())
