@@ -787,6 +787,46 @@ private:
 // Isotropic remeshing (Botsch & Kobbelt 2004) on a corner table: corner c = 3 f + i is vertex
 // i of triangle f; Opp[c] is the corner facing c across the edge opposite c (-1 on a boundary).
 
+// The squared distance to a set of planes, area-weighted: x^T A x + 2 b.x + c (Garland &
+// Heckbert). A collapse puts the merged vertex where the planes around both ends of the edge
+// are best kept, so that tips and thin parts (a toe, a horse's leg) do not shrink.
+struct Quadric
+{
+  double a[6] = {0, 0, 0, 0, 0, 0}; // xx xy xz yy yz zz
+  double b[3] = {0, 0, 0};
+  double c = 0;
+
+  void addPlane(const Vec& normal, double offset, double weight)
+  {
+    const Vec& n = normal;
+    const double w = weight;
+    a[0] += w * n[0] * n[0];
+    a[1] += w * n[0] * n[1];
+    a[2] += w * n[0] * n[2];
+    a[3] += w * n[1] * n[1];
+    a[4] += w * n[1] * n[2];
+    a[5] += w * n[2] * n[2];
+    for (int i = 0; i < 3; ++i)
+      b[i] += w * offset * n[i];
+    c += w * offset * offset;
+  }
+  Quadric& operator+=(const Quadric& q)
+  {
+    for (int i = 0; i < 6; ++i)
+      a[i] += q.a[i];
+    for (int i = 0; i < 3; ++i)
+      b[i] += q.b[i];
+    c += q.c;
+    return *this;
+  }
+  double operator()(const Vec& x) const
+  {
+    return a[0] * x[0] * x[0] + 2 * a[1] * x[0] * x[1] + 2 * a[2] * x[0] * x[2] +
+           a[3] * x[1] * x[1] + 2 * a[4] * x[1] * x[2] + a[5] * x[2] * x[2] +
+           2 * (b[0] * x[0] + b[1] * x[1] + b[2] * x[2]) + c;
+  }
+};
+
 class Remesher
 {
 public:
@@ -841,6 +881,18 @@ public:
     }
     for (int v : Of)
       Live += v >= 0;
+    // Each vertex's quadric: the planes of the fine triangles around it.
+    Planes.assign(X.size(), Quadric{});
+    for (std::size_t f = 0; f < Corner.size(); f += 3)
+    {
+      const Vec n = faceNormal(static_cast<int>(f));
+      const double area = norm(n);
+      if (!(area > 0))
+        continue;
+      const Vec unit = (1 / area) * n;
+      for (int i = 0; i < 3; ++i)
+        Planes[Corner[f + i]].addPlane(unit, -dot(unit, X[Corner[f]]), area);
+    }
   }
 
   std::size_t vertices() const { return Live; }
@@ -935,11 +987,12 @@ public:
   }
 
 private:
-  std::vector<Vec> X;      // vertex positions
-  std::vector<int> Corner; // the vertex of each corner; -1 for a deleted triangle
-  std::vector<int> Opp;    // the opposite corner across the edge facing each corner
-  std::vector<int> Of;     // a corner of each vertex; -1 for a deleted vertex
-  std::size_t Live = 0;    // vertices in use
+  std::vector<Vec> X;          // vertex positions
+  std::vector<Quadric> Planes; // of the fine surface around each vertex
+  std::vector<int> Corner;     // the vertex of each corner; -1 for a deleted triangle
+  std::vector<int> Opp;        // the opposite corner across the edge facing each corner
+  std::vector<int> Of;         // a corner of each vertex; -1 for a deleted vertex
+  std::size_t Live = 0;        // vertices in use
 
   static int next(int c) { return c % 3 == 2 ? c - 2 : c + 1; }
   static int prev(int c) { return c % 3 == 0 ? c + 2 : c - 1; }
@@ -1025,6 +1078,9 @@ private:
     const int m = static_cast<int>(X.size());
     X.push_back(0.5 * (X[a] + X[b]));
     Of.push_back(c2);
+    Quadric q = Planes[a];
+    q += Planes[b];
+    Planes.push_back(q);
     ++Live;
     const int e = newFace(x, m, b); // corners e (x), e+1 (m), e+2 (b)
     link(e + 1, Opp[c1]);
@@ -1109,6 +1165,8 @@ private:
       common += std::binary_search(ringGone.begin(), ringGone.end(), v);
     if (common != (o >= 0 ? 2u : 1u))
       return false;
+    Quadric merged = Planes[keep];
+    merged += Planes[gone];
     Vec target = 0.5 * (X[keep] + X[gone]);
     if (goneOnBoundary && !keepOnBoundary)
     {
@@ -1117,6 +1175,11 @@ private:
     }
     else if (keepOnBoundary && !goneOnBoundary)
       target = X[keep];
+    else
+      // The end or the midpoint that keeps the planes around the edge best.
+      for (const Vec& candidate : {X[keep], X[gone]})
+        if (merged(candidate) < merged(target))
+          target = candidate;
     for (const auto* ring : {&ringKeep, &ringGone})
       for (int v : *ring)
         if (v != keep && v != gone && norm(X[v] - target) > maxLength)
@@ -1162,6 +1225,7 @@ private:
           Opp[f + i] = -1;
         }
     X[keep] = target;
+    Planes[keep] = merged;
     Of[gone] = -1;
     --Live;
     // Corners of the kept vertex and of the opposite vertices in triangles that remain.

@@ -23,16 +23,18 @@
  *    which leaves at worst a small blister instead of a surface far from the data. OpenVDB's
  *    volumeToMesh meshes the zero crossing; the largest connected piece is kept.
  * 2. Isotropic remeshing of that surface to the wanted count (Botsch & Kobbelt 2004): edge
- *    splits, collapses (with the link condition, no folded triangles), flips towards valence 6
- *    and tangential relaxation, every vertex projected back onto the fine surface, at the edge
+ *    splits, collapses (with the link condition, no folded triangles, the merged vertex where
+ *    the fine surface's planes around the edge are best kept, Garland & Heckbert, so that tips
+ *    and thin parts do not shrink), flips towards valence 6 and tangential relaxation, every
+ *    vertex projected back onto the fine surface, at the edge
  *    length that area and count call for, corrected once from the count reached; then the
  *    shortest edges are collapsed or the longest split until the count is met exactly, and
  *    the triangles evened out again. Orientation: the way the data's normals face.
  *
  * Limits: the normals must be mostly consistently oriented (estimateNormals orients them; a
  * scanner's face its position); small wrongly oriented patches are tolerated. Parts thinner
- * than about two fine voxels merge or vanish, and parts much thinner than the target edge
- * length (a horse's legs at a few hundred vertices) shrink into the body. Holes wider than
+ * than about two fine voxels merge or vanish (a horse's ears become blobs); parts much thinner
+ * than the target edge length are kept only coarsely. Holes wider than
  * about twice `holeReach` stay open; bridged holes are smooth membranes, not the true shape.
  * Open data (a surface seen from one side: the border of a piece of space has both signs in
  * large parts) give an open mesh, its boundary where the data end. The vertex count is met
