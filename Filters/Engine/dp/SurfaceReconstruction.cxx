@@ -964,6 +964,13 @@ public:
       flipForValence();
       relax(reference);
     }
+    // Last, the remaining poorly shaped pairs of triangles (where valence and relaxation
+    // disagree, at thin parts) get the diagonal that shapes them better.
+    for (int i = 0; i < 2; ++i)
+    {
+      flipForShape();
+      relax(reference);
+    }
   }
 
   /** Live vertices and triangles, renumbered. */
@@ -1275,6 +1282,29 @@ private:
           any = collapse(c, maxLength) || any;
       if (!any)
         break;
+    }
+  }
+
+  // The shape quality 4 sqrt(3) area / (sum of squared edges) of triangle a b c.
+  static double quality(const Vec& a, const Vec& b, const Vec& c)
+  {
+    const double edges = dot(b - a, b - a) + dot(c - b, c - b) + dot(a - c, a - c);
+    return edges > 0 ? 2 * std::sqrt(3.0) * norm(cross(b - a, c - a)) / edges : 0;
+  }
+
+  void flipForShape()
+  {
+    for (int c = 0; c < static_cast<int>(Corner.size()); ++c)
+    {
+      const int o = Opp[c];
+      if (Corner[c] < 0 || o < 0 || o < c)
+        continue;
+      const Vec &x = X[Corner[c]], &a = X[Corner[next(c)]], &b = X[Corner[prev(c)]],
+                &d = X[Corner[o]];
+      const double before = std::min(quality(x, a, b), quality(d, b, a));
+      const double after = std::min(quality(x, a, d), quality(d, b, x));
+      if (before < 0.3 && after > before + 0.05 && canFlip(c))
+        flip(c);
     }
   }
 
