@@ -2,45 +2,46 @@
 /**
  * @file SurfaceReconstruction.h
  * @brief A triangle mesh from an oriented point cloud: the paper's first step ("polygonize the
- *        first frame's points and simplify to a working resolution") when the user has no
- *        template and the first frame has no polygons. The mesh is the tracker's template:
- *        closed where the data are closed (holes in the data bridged), with the wanted number
- *        of vertices and evenly shaped triangles, facing outward.
+ *        first frame's points and simplify to a working resolution") when the user has no template
+ *        and the first frame has no polygons. The mesh is the tracker's template: closed where the
+ *        data are closed (holes in the data bridged), with the wanted number of vertices and evenly
+ *        shaped triangles, facing the way the data's normals do (outward).
  *
  * Method, in two stages.
  * 1. A faithful surface at a fine voxel size (1.5 median point spacings, whatever the wanted
- *    count). A narrow band of voxels around the points (OpenVDB) holds the signed distance to
- *    the points' tangent planes (Hoppe et al. 1992), averaged over each voxel's nearest points
- *    with Gaussian weights so that noise is smoothed. Holes in the data (gaps up to about twice
+ *    count). A narrow band of voxels around the points (OpenVDB) holds the signed distance to the
+ *    points' tangent planes (Hoppe et al. 1992), averaged over each voxel's nearest points with
+ *    Gaussian weights so that noise is smoothed. Holes in the data (gaps up to about twice
  *    `holeReach`) are the cells that a morphological closing of the points' coarse cells adds;
  *    their voxels get no plane distance (far from the data it is unreliable) but the harmonic
- *    interpolation of the values around them, which spans a hole from rim to rim (parts that
- *    only meet the outside, concave corners, stay outside). Outside the band, each connected
- *    piece of space takes the sign that most of the band's voxels on its border have, so no
- *    crossing appears where the band ends. Normals that most of the border voxels near them
- *    contradict (a wrongly oriented patch, cloth folded over itself) are flipped and the field
- *    evaluated again there; the border voxels still in disagreement take their piece's sign,
- *    which leaves at worst a small blister instead of a surface far from the data. OpenVDB's
- *    volumeToMesh meshes the zero crossing; the largest connected piece is kept.
- * 2. Isotropic remeshing of that surface to the wanted count (Botsch & Kobbelt 2004): edge
- *    splits, collapses (with the link condition, no folded triangles, the merged vertex where
- *    the fine surface's planes around the edge are best kept, Garland & Heckbert, so that tips
- *    and thin parts do not shrink), flips towards valence 6 and tangential relaxation, every
- *    vertex projected back onto the fine surface, at the edge
- *    length that area and count call for, corrected once from the count reached; then the
- *    shortest edges are collapsed or the longest split until the count is met exactly, and
- *    the triangles evened out again. Orientation: the way the data's normals face.
+ *    interpolation of the values around them, which spans a hole from rim to rim (parts that only
+ *    meet the outside, concave corners, stay outside). Outside the band, each connected piece of
+ *    space takes the sign that most of the band's voxels on its border have, so no crossing appears
+ *    where the band ends. Normals that most of the border voxels near them contradict (a wrongly
+ *    oriented patch, cloth folded over itself) are flipped and the field evaluated again there;
+ *    border voxels still in disagreement take their piece's sign, which leaves at worst a small
+ *    blister instead of a surface far from the data. OpenVDB's volumeToMesh meshes the zero
+ *    crossing; the largest connected piece is kept.
+ * 2. Isotropic remeshing of that surface to the wanted count (Botsch & Kobbelt 2004): edge splits,
+ *    collapses (with the link condition, no folded triangles, the merged vertex where the fine
+ *    surface's planes around the edge are best kept, as in Garland & Heckbert's quadric
+ *    simplification, so that tips and thin parts do not shrink), flips towards valence 6 and
+ *    tangential relaxation, every vertex projected back onto the fine surface, at the edge length
+ *    that area and count call for, corrected once from the count reached; then the shortest edges
+ *    are collapsed or the longest split until the count is met exactly, the triangles are evened
+ *    out again and the diagonals of poorly shaped pairs flipped. Orientation: the way the data's
+ *    normals face, by a vote of all triangles.
  *
  * Limits: the normals must be mostly consistently oriented (estimateNormals orients them; a
- * scanner's face its position); small wrongly oriented patches are tolerated. Parts thinner
- * than about two fine voxels merge or vanish (a horse's ears become blobs); parts much thinner
- * than the target edge length are kept only coarsely. Holes wider than
- * about twice `holeReach` stay open; bridged holes are smooth membranes, not the true shape.
- * Open data (a surface seen from one side: the border of a piece of space has both signs in
- * large parts) give an open mesh, its boundary where the data end. The vertex count is met
- * exactly unless the mesh is too small to collapse further. Time: 0.5 to 1 s for 20 000
- * points on two cores (a person 1.70 m tall, 500 to 5000 vertices), about half of it the
- * plane distances.
+ * scanner's face its position); small wrongly oriented patches are tolerated. Parts thinner than
+ * about two fine voxels merge or vanish (a horse's ears become blobs), and parts much thinner than
+ * the target edge length are kept only coarsely. Where the data pass through themselves (an arm
+ * through the body in a captured mesh), a small tunnel inside the shape may remain. Holes wider
+ * than about twice `holeReach` stay open; bridged holes are smooth membranes, not the true shape.
+ * Open data (a surface seen from one side: the border of a piece of space has both signs in large
+ * parts) give an open mesh, its boundary where the data end. The vertex count is met exactly unless
+ * the mesh is too small to collapse further. Time: 0.5 to 1 s for 20 000 points on two cores (a
+ * person 1.70 m tall, 500 to 5000 vertices), about half of it the plane distances.
  */
 #pragma once
 
