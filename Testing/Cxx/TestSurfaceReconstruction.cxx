@@ -212,8 +212,10 @@ TEST(SurfaceReconstruction, BridgesHolesInTheDataWithAClosedWellShapedMesh)
                                                m.positions[3 * v + 2] - holes[h + 2]));
       EXPECT_LT(nearest, 0.1) << "hole " << h / 3 << ", target " << target;
     }
-    // Well-shaped triangles: no slivers for the cloth energy.
+    // Well-shaped triangles: no slivers for the cloth energy, and none flat (which the tracker
+    // refuses).
     EXPECT_LT(mesh.poorlyShapedShare(m.positions.data(), 0.1), 0.002) << target;
+    EXPECT_EQ(mesh.poorlyShapedShare(m.positions.data(), 0.01), 0.0) << target;
   }
 }
 

@@ -1369,6 +1369,30 @@ private:
                           moved[v] = reference.project(target, normal);
                         }
                       });
+    // Moves that would turn a triangle over or flatten it (two vertices onto the same point of
+    // the reference, at a tip) are taken back.
+    for (int pass = 0; pass < 4; ++pass)
+    {
+      bool any = false;
+      for (std::size_t f = 0; f < Corner.size(); f += 3)
+      {
+        if (Corner[f] < 0)
+          continue;
+        const int a = Corner[f], b = Corner[f + 1], c = Corner[f + 2];
+        const Vec before = cross(X[b] - X[a], X[c] - X[a]);
+        const Vec after = cross(moved[b] - moved[a], moved[c] - moved[a]);
+        if (dot(before, after) > 0 && norm(after) > 1e-3 * norm(before))
+          continue;
+        for (int v : {a, b, c})
+          if (moved[v] != X[v])
+          {
+            moved[v] = X[v];
+            any = true;
+          }
+      }
+      if (!any)
+        break;
+    }
     X.swap(moved);
   }
 };
