@@ -965,10 +965,12 @@ public:
       relax(reference);
     }
     // Last, the remaining poorly shaped pairs of triangles (where valence and relaxation
-    // disagree, at thin parts) get the diagonal that shapes them better.
-    for (int i = 0; i < 2; ++i)
+    // disagree, at thin parts) get the diagonal that shapes them better; a needle that keeps
+    // its short edge loses it (collapsed, and the longest edge split for the count).
+    for (int i = 0; i < 3; ++i)
     {
       flipForShape();
+      collapseNeedles(length);
       relax(reference);
     }
   }
@@ -1305,6 +1307,31 @@ private:
       const double after = std::min(quality(x, a, d), quality(d, b, x));
       if (before < 0.3 && after > before + 0.05 && canFlip(c))
         flip(c);
+    }
+  }
+
+  void collapseNeedles(double length)
+  {
+    for (std::size_t f = 0; f < Corner.size(); f += 3)
+    {
+      if (Corner[f] < 0)
+        continue;
+      const Vec &a = X[Corner[f]], &b = X[Corner[f + 1]], &c = X[Corner[f + 2]];
+      if (quality(a, b, c) >= 0.1)
+        continue;
+      // The corner facing the shortest edge.
+      int shortest = static_cast<int>(f);
+      for (int i = 1; i < 3; ++i)
+        if (edgeLength(static_cast<int>(f) + i) < edgeLength(shortest))
+          shortest = static_cast<int>(f) + i;
+      if (edgeLength(shortest) > 0.5 * length || !collapse(shortest, 2 * length))
+        continue;
+      int longest = -1;
+      for (int c2 = 0; c2 < static_cast<int>(Corner.size()); ++c2)
+        if (Corner[c2] >= 0 && (longest < 0 || edgeLength(c2) > edgeLength(longest)))
+          longest = c2;
+      if (longest >= 0)
+        split(longest);
     }
   }
 
