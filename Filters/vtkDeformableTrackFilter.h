@@ -12,9 +12,9 @@
  *
  * The template is input 1 when connected (a vtkPolyData with polygons), else frame 0's own
  * polygons, else a surface reconstructed from frame 0's points (dp::reconstructSurface: signed
- * distance to the points' tangent planes on an OpenVDB grid, meshed at the voxel size that
- * gives about TemplateVertices vertices; frame 0's "Normals" are used when present, else
- * estimated). The output has the template's connectivity; its points follow the requested time.
+ * distance to the points' tangent planes on a fine OpenVDB grid, holes in the data bridged,
+ * remeshed isotropically to TemplateVertices vertices; frame 0's "Normals" are used when
+ * present, else estimated). The output has the template's connectivity; its points follow the requested time.
  * Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's points,
  * -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or outlier
  * cut-off). Field data: "FrameIndex", "Iterations", "InternalEnergy", "DistanceEnergy",

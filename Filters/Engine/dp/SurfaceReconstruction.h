@@ -2,22 +2,46 @@
 /**
  * @file SurfaceReconstruction.h
  * @brief A triangle mesh from an oriented point cloud: the paper's first step ("polygonize the
- *        first frame's points and simplify to a working resolution") when the user has no
- *        template and the first frame has no polygons.
+ *        first frame's points and simplify to a working resolution") when the user has no template
+ *        and the first frame has no polygons. The mesh is the tracker's template: closed where the
+ *        data are closed (holes in the data bridged), with the wanted number of vertices and evenly
+ *        shaped triangles, facing the way the data's normals do (outward).
  *
- * Method: a narrow band of voxels around the points (OpenVDB) holds the signed distance to the
- * points' tangent planes (Hoppe et al. 1992), averaged over each voxel's k nearest points with
- * Gaussian weights so that noise is smoothed; OpenVDB's volumeToMesh meshes its zero crossing
- * (quads, split along their shorter diagonal). Crossings that lie farther than the band's half
- * from the points (where the band ends inside the shape) are dropped, and so are all but the
- * largest connected piece. The voxel size is chosen for the wanted vertex count: a first mesh at
- * a guess, then the size rescaled by sqrt(vertices / wanted) (a surface's vertex count goes as
- * 1 / voxel^2), at most a few times, until the count is within 25% of the wish.
+ * Method, in two stages.
+ * 1. A faithful surface at a fine voxel size (1.5 median point spacings, whatever the wanted
+ *    count). A narrow band of voxels around the points (OpenVDB) holds the signed distance to the
+ *    points' tangent planes (Hoppe et al. 1992), averaged over each voxel's nearest points with
+ *    Gaussian weights so that noise is smoothed. Holes in the data (gaps up to about twice
+ *    `holeReach`) are the cells that a morphological closing of the points' coarse cells adds;
+ *    their voxels get no plane distance (far from the data it is unreliable) but the harmonic
+ *    interpolation of the values around them, which spans a hole from rim to rim (parts that only
+ *    meet the outside, concave corners, stay outside). Outside the band, each connected piece of
+ *    space takes the sign that most of the band's voxels on its border have, so no crossing appears
+ *    where the band ends. Normals that most of the border voxels near them contradict (a wrongly
+ *    oriented patch, cloth folded over itself) are flipped and the field evaluated again there;
+ *    border voxels still in disagreement take their piece's sign, which leaves at worst a small
+ *    blister instead of a surface far from the data. OpenVDB's volumeToMesh meshes the zero
+ *    crossing; the largest connected piece is kept.
+ * 2. Isotropic remeshing of that surface to the wanted count (Botsch & Kobbelt 2004): edge splits,
+ *    collapses (with the link condition, no folded triangles, the merged vertex where the fine
+ *    surface's planes around the edge are best kept, as in Garland & Heckbert's quadric
+ *    simplification, so that tips and thin parts do not shrink), flips towards valence 6 and
+ *    tangential relaxation, every vertex projected back onto the fine surface, at the edge length
+ *    that area and count call for, corrected once from the count reached; then the shortest edges
+ *    are collapsed or the longest split until the count is met exactly, the triangles are evened
+ *    out again and the diagonals of poorly shaped pairs flipped. Orientation: the way the data's
+ *    normals face, by a vote of all triangles.
  *
- * Limits: the normals must be consistently oriented (estimateNormals orients them; a scanner's
- * face its position); parts thinner than about two voxels merge or vanish; where the data have
- * holes wider than the band, the mesh has holes too (the tracker handles open meshes). The
- * vertex count is approximate.
+ * Limits: the normals must be mostly consistently oriented (estimateNormals orients them; a
+ * scanner's face its position); small wrongly oriented patches are tolerated. Parts thinner than
+ * about two fine voxels merge or vanish (a horse's ears become blobs), and parts much thinner than
+ * the target edge length are kept only coarsely. Where the data pass through themselves (an arm
+ * through the body in a captured mesh), a small tunnel inside the shape may remain. Holes wider
+ * than about twice `holeReach` stay open; bridged holes are smooth membranes, not the true shape.
+ * Open data (a surface seen from one side: the border of a piece of space has both signs in large
+ * parts) give an open mesh, its boundary where the data end. The vertex count is met exactly unless
+ * the mesh is too small to collapse further. Time: 0.5 to 0.9 s for 20 000 points on two cores (a
+ * person 1.70 m tall, 500 to 5000 vertices): about 0.4 s the fine surface, the rest remeshing.
  */
 #pragma once
 
@@ -30,23 +54,29 @@ namespace dp
 
 struct ReconstructionOptions
 {
-  std::size_t targetVertices = 1000;        // wanted vertex count (approximate)
+  std::size_t targetVertices = 1000;        // wanted vertex count
   std::size_t neighbours = 8;               // points whose planes each voxel averages
   std::size_t maxActiveVoxels = 50'000'000; // refuse larger grids (memory guard)
+  double voxelSize = 0;     // of the fine grid; 0: 1.5 times the points' median spacing
+  double holeReach = 0.035; // holes in the data are bridged up to about this distance from
+                            // their rim, as a fraction of the bounding box diagonal (0.035:
+                            // 6.7 cm on a person 1.70 m tall; 0: only gaps of a few voxels)
 };
 
 struct ReconstructedMesh
 {
   std::vector<double> positions;       // x y z per vertex
   std::vector<std::int64_t> triangles; // 3 vertex indices each, consistently oriented
-  double voxelSize = 0;                // the voxel size the mesh was made at
+  double voxelSize = 0;                // the fine grid's voxel size
+  bool closed = false;                 // watertight: every edge has two triangles
 };
 
 /**
  * Reconstructs a surface from `count` points (x y z each) with unit normals (nx ny nz each;
  * estimateNormals gives them). Throws std::invalid_argument for fewer than 16 points,
- * non-finite coordinates or normals, or a target under 20 vertices, and std::runtime_error
- * when no surface comes out (points too sparse or too flat for any voxel size tried).
+ * non-finite coordinates or normals, points that all coincide, a target under 20 vertices or
+ * a negative or non-finite voxelSize or holeReach, and std::runtime_error when the fine grid
+ * would exceed maxActiveVoxels (a larger voxelSize helps) or no surface comes out.
  */
 ReconstructedMesh reconstructSurface(const double* points, const float* normals, std::size_t count,
                                      const ReconstructionOptions& options = {});
