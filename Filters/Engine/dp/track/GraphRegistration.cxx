@@ -170,7 +170,8 @@ void GraphRegistration::resetReference()
   for (std::size_t index = 0; index < edges.size(); ++index)
     for (int direction = 0; direction < 2; ++direction)
       Arms[2 * index + direction] =
-          Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(edges[index][1 - direction]))) -
+          Eigen::Vector3d(
+              Graph.nodePosition(static_cast<std::size_t>(edges[index][1 - direction]))) -
           Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(edges[index][direction])));
 }
 

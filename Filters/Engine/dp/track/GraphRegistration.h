@@ -103,7 +103,7 @@ private:
   double Voxel;
   double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
   std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
-  std::vector<Eigen::Vector3d> Arms; // per directed edge (j, k): the reference of g_k - g_j
+  std::vector<Eigen::Vector3d> Arms;        // per directed edge (j, k): the reference of g_k - g_j
   detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
