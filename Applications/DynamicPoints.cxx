@@ -57,7 +57,9 @@ Written to OUTPUT:
                               ParaView); brought up to date after every frame
   tracked.dpz                 the compressed sequence (ParaView or vtkCompressedSequenceReader)
   tracked.glb                 glTF 2.0 animation: morph targets, 24 frames per second
-  report.json, report.png     per-frame residual and time; compression figures
+  report.json, report.png     per frame: distance to the points, quality (share of the
+                              points far from the mesh and of the mesh far from the
+                              points; frames retried and failed), time; compression
 
 Options:
   --pattern GLOB      files of an INPUT folder to read (default: *)
@@ -188,6 +190,9 @@ struct FrameRecord
   int frame;
   double time, rmsResidual, maxResidual, milliseconds;
   long long points, iterations;
+  double unexplained, unsupported; // shares of the points / of the mesh beyond 3 voxels
+  int retries;
+  bool failed;
 };
 
 struct Settings
@@ -354,8 +359,8 @@ private:
     writer->SetCompressorTypeToZLib();
     watch(writer);
     if (!S.quiet)
-      std::printf("%6s %10s %9s %6s %12s %12s %9s\n", "frame", "time", "points", "iter", "rms dist",
-                  "max dist", "ms");
+      std::printf("%6s %10s %9s %6s %12s %12s %9s %8s %8s\n", "frame", "time", "points", "iter",
+                  "rms dist", "max dist", "ms", "far pts%", "bare %");
     for (int f = 0; f < Frames && !Interrupted; ++f)
     {
       const double time = Source->GetFrameTime(f);
@@ -433,13 +438,18 @@ private:
                         largest,
                         1000 * fieldValue(mesh, "Seconds"),
                         static_cast<long long>(Source->GetOutput()->GetNumberOfPoints()),
-                        static_cast<long long>(fieldValue(mesh, "Iterations"))};
+                        static_cast<long long>(fieldValue(mesh, "Iterations")),
+                        fieldValue(mesh, "Unexplained"),
+                        fieldValue(mesh, "Unsupported"),
+                        static_cast<int>(fieldValue(mesh, "Retries")),
+                        fieldValue(mesh, "Failed") > 0};
     Records.push_back(r);
     if (!S.quiet)
     {
       Bar.clear();
-      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f\n", f, time, r.points, r.iterations,
-                  r.rmsResidual, r.maxResidual, r.milliseconds);
+      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f %8.2f %8.2f%s\n", f, time, r.points,
+                  r.iterations, r.rmsResidual, r.maxResidual, r.milliseconds, 100 * r.unexplained,
+                  100 * r.unsupported, r.failed ? "  FAILED" : "");
       std::fflush(stdout);
     }
   }
@@ -500,8 +510,10 @@ private:
         {"vertices", MeshVertices},
         {"triangles", MeshTriangles}};
     report["boundingBoxDiagonal"] = Diagonal;
-    nlohmann::json perFrame = nlohmann::json::array();
-    std::vector<double> rms, largest, ms;
+    nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
+    std::vector<double> rms, largest, ms, unexplained, unsupported;
+    std::vector<std::size_t> failed;
+    int retried = 0;
     for (const FrameRecord& r : Records)
     {
       perFrame.push_back({{"frame", r.frame},
@@ -510,12 +522,26 @@ private:
                           {"iterations", r.iterations},
                           {"rmsResidual", r.rmsResidual},
                           {"maxResidual", r.maxResidual},
-                          {"milliseconds", r.milliseconds}});
+                          {"milliseconds", r.milliseconds},
+                          {"unexplained", r.unexplained},
+                          {"unsupported", r.unsupported},
+                          {"retries", r.retries},
+                          {"failed", r.failed}});
+      unexplained.push_back(100 * r.unexplained);
+      unsupported.push_back(100 * r.unsupported);
+      retried += r.retries > 0 ? 1 : 0;
+      if (r.failed)
+      {
+        failed.push_back(static_cast<std::size_t>(r.frame));
+        failedFrames.push_back(r.frame);
+      }
       rms.push_back(Diagonal > 0 ? 100 * r.rmsResidual / Diagonal : r.rmsResidual);
       largest.push_back(Diagonal > 0 ? 100 * r.maxResidual / Diagonal : r.maxResidual);
       ms.push_back(r.milliseconds);
     }
     report["perFrame"] = perFrame;
+    report["framesRetried"] = retried;
+    report["framesFailed"] = failedFrames;
     std::vector<double> sorted = ms;
     std::sort(sorted.begin(), sorted.end());
     report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
@@ -533,11 +559,19 @@ private:
     writeAtomically(Output / "report.json", report.dump(1) + "\n");
     const dp::cli::PlotPanel residualPanel{
         "distance to the points, % of diagonal",
-        {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}}};
-    const dp::cli::PlotPanel timePanel{"tracking time, ms", {{"per frame", ms, {44, 160, 44}}}};
+        {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}},
+        {},
+        ""};
+    const dp::cli::PlotPanel qualityPanel{"beyond 3 voxels, %",
+                                          {{"points far from mesh", unexplained, {148, 103, 189}},
+                                           {"mesh far from points", unsupported, {140, 86, 75}}},
+                                          failed,
+                                          "failed frame"};
+    const dp::cli::PlotPanel timePanel{
+        "tracking time, ms", {{"per frame", ms, {44, 160, 44}}}, {}, ""};
     dp::cli::writeFramePlot(plot.string(),
                             "DynamicPoints: " + fs::path(InputName).filename().string(),
-                            {residualPanel, timePanel});
+                            {residualPanel, qualityPanel, timePanel});
     std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
   }
 

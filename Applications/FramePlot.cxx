@@ -181,6 +181,16 @@ void writeFramePlot(const std::string& path, const std::string& title,
     canvas.text(panel.yLabel, x0, y1 + 6, 13, 0, 0); // above the axis: no rotated text
 
     int legendY = y1 - 10;
+    if (!panel.marks.empty())
+    {
+      const std::array<unsigned char, 3> red{214, 39, 40};
+      canvas.colour(red);
+      for (std::size_t f : panel.marks)
+        canvas.line(px(static_cast<double>(f)), y0, px(static_cast<double>(f)), y1, 1);
+      canvas.line(x1 + 24, legendY - 8, x1 + 24, legendY + 8, 1);
+      canvas.text(panel.marksLabel, x1 + 42, legendY, 12, 0, 1);
+      legendY -= 22;
+    }
     for (const PlotLine& l : panel.lines)
     {
       canvas.colour(l.colour);

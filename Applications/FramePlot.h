@@ -11,6 +11,7 @@
 #pragma once
 
 #include <array>
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,10 @@ struct PlotPanel
 {
   std::string yLabel;
   std::vector<PlotLine> lines;
+  // Frames marked by a vertical red line across the panel (e.g. frames that failed), with a
+  // legend entry when there are any.
+  std::vector<std::size_t> marks;
+  std::string marksLabel;
 };
 
 /** Writes `panels` to `path` (PNG, width x height per panel). Throws std::runtime_error when

@@ -158,10 +158,15 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   };
   addValue("FrameIndex", static_cast<double>(frame));
   addValue("Iterations", r.iterations);
+  addValue("CoarseIterations", r.coarseIterations);
   addValue("InternalEnergy", r.internalEnergy);
   addValue("DistanceEnergy", r.distanceEnergy);
   addValue("Seconds", r.seconds);
   addValue("EmptyFrame", r.emptyFrame ? 1 : 0);
+  addValue("Unexplained", r.unexplained);
+  addValue("Unsupported", r.unsupported);
+  addValue("Retries", r.retries);
+  addValue("Failed", r.failed ? 1 : 0);
 }
 } // namespace
 
@@ -256,6 +261,14 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       options.provisionalDetermination = this->ProvisionalDetermination;
       options.maxIterations = this->MaximumIterations;
       options.tolerance = this->Tolerance;
+      options.coverage.weight = this->CoverageWeight;
+      options.graph.enabled = this->CoarseLevel;
+      options.graph.nodes = static_cast<std::size_t>(this->GraphNodes);
+      options.graph.rigidity = this->GraphRigidity;
+      options.graph.yieldRate = this->Plasticity;
+      options.temporalWeight = this->TemporalWeight;
+      options.recovery.enabled = this->Recovery;
+      options.recovery.margin = this->FailureMargin;
       try
       {
         const std::size_t vertices = positions.size() / 3;
@@ -265,7 +278,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       catch (const std::exception& e)
       {
         request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-        vtkErrorMacro(<< "cannot track with this template: " << e.what());
+        vtkErrorMacro(<< "cannot track: " << e.what());
         return 0;
       }
       // Slivers slide flat without the shear terms: say so once, with the remedy.
@@ -304,9 +317,17 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       vtkErrorMacro(<< "frame " << frame << ": " << e.what());
       return 0;
     }
-    if (in.Cache.back().emptyFrame)
+    const dp::FrameResult& done = in.Cache.back();
+    if (done.emptyFrame)
     {
       vtkWarningMacro(<< "frame " << frame << " has no points: the mesh continues its motion");
+    }
+    else if (done.failed)
+    {
+      vtkWarningMacro(<< "frame " << frame << " failed after " << done.retries
+                      << " retries: " << 100 * done.unexplained << "% of its points are far from "
+                      << "the mesh and " << 100 * done.unsupported
+                      << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
     }
     this->UpdateProgress(static_cast<double>(in.Cache.size()) / static_cast<double>(target + 1));
     if (in.Cache.size() <= target && !this->GetAbortExecute())
@@ -347,5 +368,13 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "TemplateVertices: " << this->TemplateVertices << "\n";
+  os << indent << "CoverageWeight: " << this->CoverageWeight << "\n";
+  os << indent << "CoarseLevel: " << this->CoarseLevel << "\n";
+  os << indent << "GraphNodes: " << this->GraphNodes << "\n";
+  os << indent << "GraphRigidity: " << this->GraphRigidity << "\n";
+  os << indent << "Plasticity: " << this->Plasticity << "\n";
+  os << indent << "TemporalWeight: " << this->TemporalWeight << "\n";
+  os << indent << "Recovery: " << this->Recovery << "\n";
+  os << indent << "FailureMargin: " << this->FailureMargin << "\n";
   os << indent << "CachedFrames: " << this->Internal->Cache.size() << "\n";
 }

@@ -14,11 +14,16 @@
  * polygons, else a surface reconstructed from frame 0's points (dp::reconstructSurface: signed
  * distance to the points' tangent planes on a fine OpenVDB grid, holes in the data bridged,
  * remeshed isotropically to TemplateVertices vertices; frame 0's "Normals" are used when
- * present, else estimated). The output has the template's connectivity; its points follow the requested time.
- * Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's points,
- * -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or outlier
- * cut-off). Field data: "FrameIndex", "Iterations", "InternalEnergy", "DistanceEnergy",
- * "Seconds", "EmptyFrame".
+ * present, else estimated). The output has the template's connectivity; its points follow the
+ * requested time. Beyond the paper (see dp::Tracker): a points -> mesh term (CoverageWeight), a
+ * coarse level (an embedded deformation graph, CoarseLevel) and failure detection with retries
+ * (Recovery). Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's
+ * points, -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or
+ * outlier cut-off). Field data: "FrameIndex", "Iterations", "CoarseIterations", "InternalEnergy",
+ * "DistanceEnergy", "Seconds", "EmptyFrame", and the frame's quality: "Unexplained" (share of
+ * the points farther than 3 voxels from the mesh), "Unsupported" (share of the mesh farther than
+ * that from the points), "Retries", "Failed" (1: the frame still failed after the retries; do
+ * not trust it; a warning says so).
  *
  * Time: the output publishes the input's time steps. Asking for time t computes the frames up
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),
@@ -133,7 +138,8 @@ public:
 
   ///@{
   /** Move the predicted mesh rigidly onto each frame's points before deforming it (default on):
-   *  keeps a turning shape from slipping along its surface. */
+   *  keeps a turning shape from slipping along its surface. Used only without the coarse level
+   *  (CoarseLevel off), whose registration includes the rigid motion. */
   vtkSetMacro(RigidAlignment, vtkTypeBool);
   vtkGetMacro(RigidAlignment, vtkTypeBool);
   vtkBooleanMacro(RigidAlignment, vtkTypeBool);
@@ -145,6 +151,52 @@ public:
   vtkGetMacro(MaximumIterations, int);
   vtkSetClampMacro(Tolerance, double, 1e-15, 1.0);
   vtkGetMacro(Tolerance, double);
+  ///@}
+
+  ///@{
+  /** Weight of the points -> mesh term (default 50; 0 = the paper's energy alone): the data
+   *  pulls the closest point of the mesh, so a part of the mesh cannot let go of its data (a
+   *  limb) at no cost. */
+  vtkSetClampMacro(CoverageWeight, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(CoverageWeight, double);
+  ///@}
+
+  ///@{
+  /** The coarse level (default on): an embedded deformation graph on the template is registered
+   *  to each frame first, from stiff and far-reaching to supple, so that large and fast motions
+   *  are caught as whole limbs; then the cloth solve refines. GraphNodes: its node count (0 =
+   *  automatic, one per 5 vertices within 30..600). GraphRigidity multiplies its rigidity
+   *  (default 1). Plasticity (0..1, default 0.3): where the shape stays bent far from the
+   *  template (a collapse, clothes), the graph's reference gives way by this share per frame. */
+  vtkSetMacro(CoarseLevel, vtkTypeBool);
+  vtkGetMacro(CoarseLevel, vtkTypeBool);
+  vtkBooleanMacro(CoarseLevel, vtkTypeBool);
+  vtkSetClampMacro(GraphNodes, int, 0, VTK_INT_MAX);
+  vtkGetMacro(GraphNodes, int);
+  vtkSetClampMacro(GraphRigidity, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(GraphRigidity, double);
+  vtkSetClampMacro(Plasticity, double, 0.0, 1.0);
+  vtkGetMacro(Plasticity, double);
+  ///@}
+
+  ///@{
+  /** Weight of the temporal term pulling vertices toward their constant-velocity course
+   *  (default 0 = off; smooths shaky data at the price of some lag). */
+  vtkSetClampMacro(TemporalWeight, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(TemporalWeight, double);
+  ///@}
+
+  ///@{
+  /** Failure detection and recovery (default on): a frame whose share of data unexplained by
+   *  the mesh, or of mesh without data (both beyond 3 voxels), exceeds the take's usual share by
+   *  more than FailureMargin (default 0.003) is tried again from the last frame and from the
+   *  template re-registered; the best attempt is kept, and flagged in "Failed" if it still
+   *  fails. */
+  vtkSetMacro(Recovery, vtkTypeBool);
+  vtkGetMacro(Recovery, vtkTypeBool);
+  vtkBooleanMacro(Recovery, vtkTypeBool);
+  vtkSetClampMacro(FailureMargin, double, 0.0, 1.0);
+  vtkGetMacro(FailureMargin, double);
   ///@}
 
   ///@{
@@ -184,6 +236,14 @@ protected:
   int MaximumIterations = 300;
   double Tolerance = 1e-3;
   int TemplateVertices = 1000;
+  double CoverageWeight = 50.0;
+  vtkTypeBool CoarseLevel = true;
+  int GraphNodes = 0;
+  double GraphRigidity = 1.0;
+  double Plasticity = 0.3;
+  double TemporalWeight = 0.0;
+  vtkTypeBool Recovery = true;
+  double FailureMargin = 0.003;
 
 private:
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

@@ -73,6 +73,22 @@ def main():
         mesh = servermanager.Fetch(track)
         assert mesh.GetNumberOfPolys() > 0 and mesh.GetPointData().GetArray("Residual")
         assert mesh.GetFieldData().GetArray("FrameIndex").GetValue(0) == 2
+        # The frame's quality is field data, and the robust-tracking settings are properties
+        # whose defaults are the engine's and whose documentation says what they do.
+        for name in ("Unexplained", "Unsupported", "Retries", "Failed"):
+            assert mesh.GetFieldData().GetArray(name) is not None, name
+        assert mesh.GetFieldData().GetArray("Failed").GetValue(0) == 0
+        assert track.CoverageWeight == 50 and track.CoarseLevel == 1 and track.Recovery == 1
+        assert abs(track.Plasticity - 0.3) < 1e-12 and track.GraphNodes == 0
+        assert "limb" in track.GetProperty("CoverageWeight").GetDocumentation().GetDescription()
+        # Switched off, the paper's energy alone still tracks (a different result).
+        track.CoverageWeight = 0
+        track.CoarseLevel = 0
+        track.UpdatePipeline(1.0)
+        paper = servermanager.Fetch(track)
+        assert paper.GetNumberOfPoints() == mesh.GetNumberOfPoints()
+        assert paper.GetFieldData().GetArray("CoarseIterations").GetValue(0) == 0
+        assert mesh.GetFieldData().GetArray("CoarseIterations").GetValue(0) > 0
     print("pvpython point sequence test passed")
     return 0
 

@@ -13,6 +13,15 @@ from dp_testing import MessageRecorder, TempDirTestCase, run_tool
 FRAMES = 6
 
 
+def write_ply(path, points, normals):
+    """An ASCII PLY point cloud with normals."""
+    with open(path, "w") as out:
+        out.write("ply\nformat ascii 1.0\nelement vertex %d\n" % len(points))
+        out.write("".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")))
+        out.write("end_header\n")
+        np.savetxt(out, np.hstack([points, normals]), fmt="%.7g")
+
+
 class TestDeformableTrackFilter(TempDirTestCase):
     def setUp(self):
         super().setUp()
@@ -113,6 +122,52 @@ class TestDeformableTrackFilter(TempDirTestCase):
         diagonal = np.linalg.norm(truth.max(axis=0) - truth.min(axis=0))
         gaps, _ = cKDTree(truth).query(points)
         self.assertLess(np.median(gaps), 0.01 * diagonal)
+
+    def test_a_frame_it_cannot_explain_is_retried_flagged_and_reported(self):
+        # Frame 3 gets a ball of points beside the sheet that no deformation of the template
+        # explains: the frame is tried again, flagged in "Failed", and a warning names it.
+        reader = dynamicpoints.vtkPointSequenceSource()
+        reader.SetFileName(self.path("seq", self.frames[3]))
+        reader.Update()
+        frame = dsa.WrapDataObject(reader.GetOutput())
+        points = np.asarray(frame.Points)
+        normals = np.asarray(frame.PointData["Normals"])
+        diagonal = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        rng = np.random.default_rng(3)
+        outward = rng.normal(size=(1500, 3))
+        outward /= np.linalg.norm(outward, axis=1)[:, None]
+        centre = points.max(axis=0) + 0.3 * diagonal
+        ball = centre + 0.1 * diagonal * outward
+        write_ply(self.path("ball.ply"), np.vstack([points, ball]), np.vstack([normals, outward]))
+        source = dynamicpoints.vtkPointSequenceSource()
+        for i, f in enumerate(self.frames):
+            source.AddFileName(self.path("ball.ply") if i == 3 else self.path("seq", f))
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputConnection(source.GetOutputPort())
+        f.SetTemplateConnection(self.template.GetOutputPort())
+        rec = MessageRecorder(f)
+        quality = []
+        for t in range(FRAMES):
+            f.UpdateTimeStep(t)
+            fd = dsa.WrapDataObject(f.GetOutput()).FieldData
+            quality.append({k: fd[k][0] for k in ("Unexplained", "Unsupported", "Retries",
+                                                  "Failed")})
+        self.assertEqual(quality[3]["Failed"], 1, quality)
+        self.assertEqual(quality[3]["Retries"], 2, quality)
+        self.assertGreater(quality[3]["Unexplained"], 0.05, quality)  # the ball: 1500 of 5500
+        for t in (0, 1, 2, 4, 5):
+            self.assertEqual(quality[t]["Failed"], 0, (t, quality))
+            self.assertLess(quality[t]["Unexplained"], 0.01, (t, quality))
+        self.assertIn("frame 3 failed after 2 retries", rec.warning_text)
+        self.assertEqual(rec.errors, [])
+
+    def test_absurd_tracking_parameters_get_an_error_naming_them(self):
+        f = self.tracker()
+        f.SetCoverageWeight(float("nan"))
+        rec = MessageRecorder(f)
+        f.UpdateTimeStep(0)
+        self.assertIn("cannot track: tracker option out of range: coverage weight", rec.error_text)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 0)
 
     def test_without_a_usable_template_it_says_what_to_do(self):
         from vtkmodules.vtkCommonCore import vtkPoints

@@ -76,7 +76,7 @@ class TestDefaultRun(TempDirTestCase):
         self.assertIn("Compressed: ", out)
         self.assertEqual(self.result.stderr.count("error"), 0, self.result.stderr)
         rows = [l.split() for l in out.splitlines()
-                if len(l.split()) == 7 and l.split()[0].isdigit()]
+                if len(l.split()) in (9, 10) and l.split()[0].isdigit() and l.split()[1] != "of"]
         self.assertEqual([int(r[0]) for r in rows], list(range(FRAMES)))
 
     def test_the_tracked_frames_are_a_pvd_sequence_of_one_mesh(self):
@@ -154,6 +154,11 @@ class TestDefaultRun(TempDirTestCase):
             self.assertLess(frame["rmsResidual"], 0.005 * diagonal, frame)
             self.assertGreater(frame["milliseconds"], 0)
             self.assertEqual(frame["points"], 20000)
+            # The tube is followed whole: hardly a point is left far from the mesh.
+            self.assertLess(frame["unexplained"], 0.01, frame)
+            self.assertLess(frame["unsupported"], 0.02, frame)
+            self.assertFalse(frame["failed"], frame)
+        self.assertEqual(report["framesFailed"], [])
         self.assertLessEqual(report["compression"]["KGError"], 0.2)
         self.assertEqual(report["compression"]["Bytes"],
                          os.path.getsize(self.output("tracked.dpz")))
@@ -165,7 +170,7 @@ class TestDefaultRun(TempDirTestCase):
         reader.SetFileName(self.output("report.png"))
         reader.Update()
         image = reader.GetOutput()
-        self.assertEqual(image.GetDimensions()[:2], (960, 680))
+        self.assertEqual(image.GetDimensions()[:2], (960, 1000))  # three panels
         pixels = dsa.WrapDataObject(image).PointData[0].reshape(-1, 3)
         colours = {tuple(p) for p in pixels[::7]}
         # Background, grid, text and the three line colours at least.

@@ -22,6 +22,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <string>
 
 namespace dp
 {
@@ -33,6 +34,37 @@ constexpr double SettledStep = 0.1;
 // The fine level's points -> mesh term: robust scale and reach, in voxels (defaults).
 constexpr double FineCoverageScale = 3.0;
 constexpr double FineCoverageReach = 8.0;
+
+// Throws std::invalid_argument naming the first option out of its range (NaN included).
+void validate(const TrackerOptions& o)
+{
+  const auto check = [](bool ok, const char* what)
+  {
+    if (!ok)
+      throw std::invalid_argument(std::string("tracker option out of range: ") + what);
+  };
+  const auto nonNegative = [](double v) { return v >= 0 && std::isfinite(v); };
+  check(nonNegative(o.distanceWeight), "distance weight (>= 0)");
+  check(nonNegative(o.cloth.stretch) && nonNegative(o.cloth.shear) && nonNegative(o.cloth.bend),
+        "cloth stiffnesses (>= 0)");
+  check(o.maxIterations >= 1, "iteration limit (>= 1)");
+  check(o.tolerance > 0 && o.tolerance <= 1, "tolerance (in (0, 1])");
+  check(nonNegative(o.voxelSize) && nonNegative(o.bandWidth), "voxel size and band (>= 0)");
+  check(nonNegative(o.outlierDistance), "outlier distance (>= 0)");
+  check(o.restUpdate >= 0 && o.restUpdate <= 1, "rest update (in [0, 1])");
+  check(nonNegative(o.coverage.weight) && nonNegative(o.coverage.pointToPoint),
+        "coverage weight and point-to-point share (>= 0)");
+  check(nonNegative(o.coverage.robustScale) && nonNegative(o.coverage.maxDistance),
+        "coverage robust scale and reach (>= 0)");
+  check(nonNegative(o.temporalWeight), "temporal weight (>= 0)");
+  check(nonNegative(o.graph.rigidity) && nonNegative(o.graph.robustScale),
+        "graph rigidity and robust scale (>= 0)");
+  check(o.graph.iterations >= 0, "graph iterations (>= 0)");
+  check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
+  check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
+  check(o.recovery.reach > 0 && std::isfinite(o.recovery.reach), "recovery reach (> 0)");
+  check(nonNegative(o.recovery.margin), "failure margin (>= 0)");
+}
 
 double elapsed(std::chrono::steady_clock::time_point since)
 {
@@ -105,16 +137,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
     : Mesh(std::move(mesh)), Template(std::move(templatePositions)), Options(options),
       Cloth(Mesh, Template.data(), options.cloth), P(std::make_unique<Parts>())
 {
-  if (options.distanceWeight < 0 || options.cloth.stretch < 0 || options.cloth.shear < 0 ||
-      options.cloth.bend < 0 || options.maxIterations < 1 || !(options.tolerance > 0) ||
-      options.voxelSize < 0 || options.bandWidth < 0 || options.outlierDistance < 0 ||
-      !(options.restUpdate >= 0 && options.restUpdate <= 1) || options.coverage.weight < 0 ||
-      options.coverage.pointToPoint < 0 || options.temporalWeight < 0 ||
-      options.graph.rigidity < 0 || options.graph.iterations < 0 || options.graph.robustScale < 0 ||
-      !(options.recovery.reach > 0) || !(options.recovery.margin >= 0))
-    throw std::invalid_argument("tracker options out of range (weights, sizes and tolerance "
-                                "must be non-negative, iterations at least 1, the rest update "
-                                "between 0 and 1)");
+  validate(options);
   TemplateRest = Cloth.restState();
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
   P->Newton = std::make_unique<GaussNewtonSolver>(Mesh.numberOfVertices(), finePairs(Mesh));
