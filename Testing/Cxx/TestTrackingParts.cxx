@@ -473,4 +473,54 @@ TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
   EXPECT_LT(worst, 1e-4 * scale);
 }
 
+TEST(GraphRegistration, LimbsBendButDoNotStretch)
+{
+  // The regulariser alone on a graph stretched uniformly about its centre (every edge longer by
+  // the same share): its gradient against central differences, and its growth with the stretch.
+  const Shape shape = tube(16, 12);
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  const dp::DeformationGraph graph(mesh, shape.positions.data(), 20, 4);
+  const double voxel = 0.01;
+  dp::GraphRegistration registration(graph, 1.0, voxel);
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    centre += Eigen::Vector3d(graph.nodePosition(j)) / static_cast<double>(graph.numberOfNodes());
+  auto stretched = [&](double factor)
+  {
+    dp::DeformationGraph::State s = graph.identity();
+    for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+      s.translation[j] = (factor - 1) * (Eigen::Vector3d(graph.nodePosition(j)) - centre);
+    return s;
+  };
+  const double rigidity = 2.0;
+  const double e13 = registration.regularisation(stretched(1.3), rigidity);
+  const double e16 = registration.regularisation(stretched(1.6), rigidity);
+  ASSERT_GT(e13, 0);
+  // Bending is least squares outside a solve (no Huber weights yet): alone it grows as
+  // (0.6 / 0.3)^2 = 4; the stretch term as (0.5 / 0.2)^2 = 6.25.
+  EXPECT_GT(e16 / e13, 5.0);
+
+  const dp::DeformationGraph::State state = stretched(1.3);
+  dp::detail::BlockSparseMatrixOf<6> hessian(graph.numberOfNodes(), graph.edges());
+  Eigen::VectorXd gradient =
+      Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * graph.numberOfNodes()));
+  registration.regularisation(state, rigidity, &hessian, &gradient);
+  const double h = 1e-7;
+  double worst = 0, scale = 0;
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    for (int k = 3; k < 6; ++k)
+    {
+      dp::DeformationGraph::State plus = state, minus = state;
+      plus.translation[j][k - 3] += h;
+      minus.translation[j][k - 3] -= h;
+      const double numeric = (registration.regularisation(plus, rigidity) -
+                              registration.regularisation(minus, rigidity)) /
+                             (2 * h);
+      worst = std::max(worst, std::abs(numeric - gradient[static_cast<Eigen::Index>(6 * j + k)]));
+      scale = std::max(scale, std::abs(numeric));
+    }
+  ASSERT_GT(scale, 0);
+  EXPECT_LT(worst, 1e-4 * scale);
+}
+
 } // namespace

@@ -115,7 +115,11 @@ struct Tracker::Parts
   std::unique_ptr<GraphRegistration> Registration;
   std::unique_ptr<GaussNewtonSolver> Newton;
   MotionPredictor Predictor;
-  std::vector<FrameQuality> RecentQuality; // of the last frames kept (the take's usual quality)
+  std::vector<FrameQuality> RecentQuality; // of the last frames that did not fail (the usual)
+  // The last frame that did not fail, while the frames after it fail: a retry starts there.
+  std::vector<double> LastGood;
+  DeformationGraph::State LastGoodState;
+  bool LastFailed = false;
 };
 
 // One way of solving a frame, and how well it did.
@@ -163,6 +167,8 @@ void Tracker::reset()
 {
   P->Predictor.clear();
   P->RecentQuality.clear();
+  P->LastGood.clear();
+  P->LastFailed = false;
   if (P->Registration)
     P->Registration->resetReference();
 }
@@ -258,6 +264,8 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
       predictor.predictState(graph, Options.motionPrediction ? 1.0 : 0.0, a.state);
     else if (start == Start::Still)
       a.state = *predictor.lastState();
+    else if (start == Start::LastGood)
+      a.state = P->LastGoodState;
     else
     {
       // The template, moved rigidly onto the last shape: every node takes the same motion.
@@ -277,7 +285,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   }
   else
   {
-    x = predictor.empty() ? Template : predictor.last();
+    x = predictor.empty() ? Template : start == Start::LastGood ? P->LastGood : predictor.last();
     if (!predictor.empty() && Options.motionPrediction && start == Start::Predicted)
     {
       distance.decide(x.data());
@@ -306,7 +314,9 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
 
   // The fine level.
   clock = std::chrono::steady_clock::now();
-  distance.setRobustScale(Options.distanceMeasure == DistanceMeasure::Planes ? 0.0 : 0.0);
+  // The fine level starts within reach of the data: the paper's term, not robust (the coarse
+  // level left it with its own robust scale).
+  distance.setRobustScale(0.0);
   if (coverage)
   {
     coverage->setRobustScale(Options.coverage.robustScale > 0 ? Options.coverage.robustScale
@@ -416,9 +426,10 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     bool restarted = false;
     if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
     {
-      for (Start retry : {Start::Still, Start::Template})
+      for (Start retry : {Start::Still, Start::LastGood, Start::Template})
       {
-        if (!P->Graph && retry == Start::Template)
+        if ((!P->Graph && retry == Start::Template) ||
+            (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
           continue;
         Attempt other = attempt(frame, retry);
         ++result.retries;
@@ -436,9 +447,13 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     }
     result.failed = Options.recovery.enabled && failed(best);
     result.kept = restarted ? 1 : 0;
-    P->RecentQuality.push_back(best.quality);
-    if (P->RecentQuality.size() > 9)
-      P->RecentQuality.erase(P->RecentQuality.begin());
+    // A failed frame says nothing of the take's usual quality.
+    if (!result.failed)
+    {
+      P->RecentQuality.push_back(best.quality);
+      if (P->RecentQuality.size() > 9)
+        P->RecentQuality.erase(P->RecentQuality.begin());
+    }
     result.startPositions = best.startPositions;
     result.coarsePositions = best.coarsePositions;
     result.positions = std::move(best.positions);
@@ -464,13 +479,19 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       P->Predictor.restartFrom(result.positions, &state);
     else
       P->Predictor.push(result.positions, &state);
-    if (Options.graph.yieldRate > 0)
+    // A failed frame's bending is not lasting deformation: the reference does not yield to it.
+    if (Options.graph.yieldRate > 0 && !result.failed)
       P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
+    if (!result.failed)
+      P->LastGoodState = state;
   }
   else if (result.retries > 0 && result.kept > 0)
     P->Predictor.restartFrom(result.positions);
   else
     P->Predictor.push(result.positions);
+  if (!result.failed)
+    P->LastGood = result.positions;
+  P->LastFailed = result.failed;
   result.seconds = elapsed(start);
   return result;
 }

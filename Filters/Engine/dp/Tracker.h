@@ -22,9 +22,11 @@
  * so large motions are caught as whole limbs, with rigidity measured against the template,
  * not the last frame); the fine level (a solver over all the terms, from the coarse result);
  * then the frame's quality from both directions (FrameQuality). A frame whose quality fails
- * is tried again from the last frame without extrapolation and from the template re-registered
- * rigidly to the last frame; the best attempt is kept, and the frame is flagged if it still
- * fails.
+ * is tried again from the last frame without extrapolation, from the last frame that did not
+ * fail (when the last one failed), and from the template re-registered rigidly to the last
+ * frame; the best attempt is kept, and the frame is flagged if it still fails. A flagged frame
+ * does not count in the take's usual quality, and the coarse level's reference does not yield
+ * to it.
  *
  * Solvers of the fine level (Solvers.h): Gauss-Newton (default), L-BFGS, and the paper's
  * steepest descent with h = 1.9 / k_max, motion prediction (MP: the best of the extrapolations
@@ -120,6 +122,7 @@ private:
   {
     Predicted, // the motion of the last frames continued
     Still,     // the last frame, no extrapolation
+    LastGood,  // the last frame that did not fail (while the frames since fail)
     Template   // the template, moved rigidly onto the last frame
   };
   Attempt attempt(const class FrameData& frame, Start start);

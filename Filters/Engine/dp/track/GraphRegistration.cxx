@@ -34,6 +34,10 @@ struct Stage
 constexpr Stage Schedule[] = {{10.0, 24.0}, {3.0, 12.0}, {3.0, 6.0}};
 // A solve ends when a step gains less than this share of the energy.
 constexpr double Tolerance = 1e-6;
+// The stretch term: weight against the bending term's, and the share of an edge's length it
+// may change freely (skin over a bending joint).
+constexpr double StretchWeight = 10.0;
+constexpr double StretchFreedom = 0.1;
 } // namespace
 
 GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengthScale,
@@ -90,6 +94,44 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
       gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
     }
+  return e + stretching(state, StretchWeight * scale, hessian, gradient);
+}
+
+double GraphRegistration::stretching(const DeformationGraph::State& state, double weight,
+                                     detail::BlockSparseMatrixOf<6>* hessian,
+                                     Eigen::VectorXd* gradient) const
+{
+  // Per edge: s = the change of |(g_k + t_k) - (g_j + t_j)| from the reference length beyond a
+  // free share; E = weight / 2 * s^2, least squares at any size. Limbs bend at joints but do not
+  // stretch: without it a hoof passing close to another limb's data is pulled along with it,
+  // and the bending term's L1 penalty hardly resists.
+  const auto& edges = Graph.edges();
+  double e = 0;
+  for (std::size_t index = 0; index < edges.size(); ++index)
+  {
+    const std::int64_t j = edges[index][0], k = edges[index][1];
+    const Eigen::Vector3d d =
+        Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(k))) + state.translation[k] -
+        Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(j))) - state.translation[j];
+    const double length = d.norm(), rest = Arms[2 * index].norm();
+    const double change = length - rest, free = StretchFreedom * rest;
+    if (std::abs(change) <= free || length <= 0)
+      continue;
+    const double excess = change > 0 ? change - free : change + free;
+    e += 0.5 * weight * excess * excess;
+    if (!hessian)
+      continue;
+    // ds/dt_k = u^T, ds/dt_j = -u^T (u = d / |d|): Gauss-Newton blocks on the translations.
+    const Eigen::Vector3d u = d / length;
+    Matrix66 kk = Matrix66::Zero();
+    kk.bottomRightCorner<3, 3>() = weight * u * u.transpose();
+    const Matrix66 jk = -kk;
+    hessian->addBlock(hessian->slotOf(j, j), kk.data());
+    hessian->addBlock(hessian->slotOf(k, k), kk.data());
+    hessian->addBlock(hessian->slotOf(j, k), jk.data());
+    gradient->segment<3>(6 * j + 3) -= weight * excess * u;
+    gradient->segment<3>(6 * k + 3) += weight * excess * u;
+  }
   return e;
 }
 

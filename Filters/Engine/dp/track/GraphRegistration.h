@@ -19,6 +19,10 @@
  * elsewhere, the way bodies move. Least squares instead spreads bending over every edge and,
  * along the surface where the data say nothing, pulls the shape centimetres off the truth on
  * captured humans; a redescending penalty frees joints entirely and lets symmetric parts drift.
+ * E_reg also holds a stretch term, k_s / 2 * sum_(j,k) s_jk^2 with s_jk the change of the
+ * deformed edge's length |g_k + t_k - g_j - t_j| from |a_jk| beyond a free 10 %: least squares
+ * at any size, so limbs bend (Huber) but do not stretch (a hoof passing by another limb's data
+ * is not pulled along with it, horse-gallop with holes).
  * Plasticity (yield()): where frames keep an edge bent beyond a limit, its reference gives way
  * by a share of the excess, so lasting deformation (a collapse, clothes) is not pulled back,
  * while near-rigid parts keep the template's shape.
@@ -95,6 +99,8 @@ private:
   Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::size_t index,
                                int direction) const;
   void reweightEdges(const DeformationGraph::State& state, double robustScale);
+  double stretching(const DeformationGraph::State& state, double weight,
+                    detail::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
   static DeformationGraph::State retract(const DeformationGraph::State& state,
                                          const Eigen::VectorXd& step);
 
