@@ -320,7 +320,8 @@ const char* Usage =
     "             [--stiffness ST,SH,BE] [--tolerance T] [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
-    "             [--rigidity R] [--rigidity-scale VOXELS] [--coverage-weight W] "
+    "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--coverage-weight "
+    "W] "
     "[--coverage-points N] [--temporal-weight W] [--no-recovery]\n"
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
@@ -422,6 +423,8 @@ int main(int argc, char** argv)
             static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
       else if (arg == "--rigidity")
         options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--stretch-weight")
+        options.graph.stretchWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--rigidity-scale")
         options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--coverage-points")

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <map>
 #include <random>
+#include <string>
 
 namespace
 {
@@ -284,6 +285,24 @@ TEST(Tracker, RefusesOptionsOutOfRange)
   EXPECT_THROW(make(o), std::invalid_argument);
   o = dp::TrackerOptions{};
   o.maxIterations = 0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  // The robust tracking's settings, NaN included; the message names the option.
+  o = dp::TrackerOptions{};
+  o.graph.stretchWeight = std::nan("");
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.graph.yieldRate = 1.5;
+  try
+  {
+    make(o);
+    ADD_FAILURE() << "a yield rate of 1.5 was accepted";
+  }
+  catch (const std::invalid_argument& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("yield rate"), std::string::npos) << e.what();
+  }
+  o = dp::TrackerOptions{};
+  o.coverage.weight = -1;
   EXPECT_THROW(make(o), std::invalid_argument);
 }
 

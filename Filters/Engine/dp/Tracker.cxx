@@ -62,6 +62,7 @@ void validate(const TrackerOptions& o)
   check(o.graph.iterations >= 0, "graph iterations (>= 0)");
   check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
   check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
+  check(nonNegative(o.graph.stretchWeight), "graph stretch weight (>= 0)");
   check(o.recovery.reach > 0 && std::isfinite(o.recovery.reach), "recovery reach (> 0)");
   check(nonNegative(o.recovery.margin), "failure margin (>= 0)");
 }
@@ -115,7 +116,7 @@ struct Tracker::Parts
   std::unique_ptr<GraphRegistration> Registration;
   std::unique_ptr<GaussNewtonSolver> Newton;
   MotionPredictor Predictor;
-  std::vector<FrameQuality> RecentQuality; // of the last frames that did not fail (the usual)
+  std::vector<FrameQuality> RecentQuality; // of the last frames (the take's usual quality)
   // The last frame that did not fail, while the frames after it fail: a retry starts there.
   std::vector<double> LastGood;
   DeformationGraph::State LastGoodState;
@@ -153,6 +154,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
     P->Graph = std::make_unique<DeformationGraph>(
         Mesh, Template.data(), nodes, std::max<std::size_t>(1, options.graph.influences));
     P->Registration = std::make_unique<GraphRegistration>(*P->Graph, Cloth.lengthScale(), Voxel);
+    P->Registration->setStretchWeight(options.graph.stretchWeight);
   }
 }
 
@@ -447,13 +449,9 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
     }
     result.failed = Options.recovery.enabled && failed(best);
     result.kept = restarted ? 1 : 0;
-    // A failed frame says nothing of the take's usual quality.
-    if (!result.failed)
-    {
-      P->RecentQuality.push_back(best.quality);
-      if (P->RecentQuality.size() > 9)
-        P->RecentQuality.erase(P->RecentQuality.begin());
-    }
+    P->RecentQuality.push_back(best.quality);
+    if (P->RecentQuality.size() > 9)
+      P->RecentQuality.erase(P->RecentQuality.begin());
     result.startPositions = best.startPositions;
     result.coarsePositions = best.coarsePositions;
     result.positions = std::move(best.positions);
@@ -479,8 +477,7 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
       P->Predictor.restartFrom(result.positions, &state);
     else
       P->Predictor.push(result.positions, &state);
-    // A failed frame's bending is not lasting deformation: the reference does not yield to it.
-    if (Options.graph.yieldRate > 0 && !result.failed)
+    if (Options.graph.yieldRate > 0)
       P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
     if (!result.failed)
       P->LastGoodState = state;

@@ -24,9 +24,7 @@
  * then the frame's quality from both directions (FrameQuality). A frame whose quality fails
  * is tried again from the last frame without extrapolation, from the last frame that did not
  * fail (when the last one failed), and from the template re-registered rigidly to the last
- * frame; the best attempt is kept, and the frame is flagged if it still fails. A flagged frame
- * does not count in the take's usual quality, and the coarse level's reference does not yield
- * to it.
+ * frame; the best attempt is kept, and the frame is flagged if it still fails.
  *
  * Solvers of the fine level (Solvers.h): Gauss-Newton (default), L-BFGS, and the paper's
  * steepest descent with h = 1.9 / k_max, motion prediction (MP: the best of the extrapolations

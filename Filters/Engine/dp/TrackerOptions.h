@@ -68,6 +68,9 @@ struct GraphOptions
   // parts that stay near-rigid keep the template's shape (0 switches it off).
   double yieldRate = 0.3;
   double yieldLimit = 1.0;
+  // Weight of the stretch term (edge lengths beyond a free 10 %, least squares) against the
+  // bending term's: limbs bend but do not stretch. 0 switches it off.
+  double stretchWeight = 1.0;
   int iterations = 10; // Levenberg-Marquardt steps per stage of the schedule (at most)
 };
 

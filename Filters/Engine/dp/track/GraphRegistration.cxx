@@ -34,9 +34,7 @@ struct Stage
 constexpr Stage Schedule[] = {{10.0, 24.0}, {3.0, 12.0}, {3.0, 6.0}};
 // A solve ends when a step gains less than this share of the energy.
 constexpr double Tolerance = 1e-6;
-// The stretch term: weight against the bending term's, and the share of an edge's length it
-// may change freely (skin over a bending joint).
-constexpr double StretchWeight = 10.0;
+// The stretch term: the share of an edge's length that may change freely (skin over a joint).
 constexpr double StretchFreedom = 0.1;
 } // namespace
 
@@ -94,7 +92,7 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
       gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
     }
-  return e + stretching(state, StretchWeight * scale, hessian, gradient);
+  return StretchWeight > 0 ? e + stretching(state, StretchWeight * scale, hessian, gradient) : e;
 }
 
 double GraphRegistration::stretching(const DeformationGraph::State& state, double weight,

@@ -79,6 +79,9 @@ public:
   double model(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                double rigidity, Eigen::VectorXd& gradient);
 
+  /** k_s, the stretch term's weight against the bending term's (0: no stretch term). */
+  void setStretchWeight(double weight) { StretchWeight = weight; }
+
   /** E_reg measures bending against the template again (undoes yield()). */
   void resetReference();
 
@@ -107,6 +110,7 @@ private:
   const DeformationGraph& Graph;
   double Scale; // 1 / (L voxel)
   double Voxel;
+  double StretchWeight = 1.0;
   double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
   std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
   std::vector<Eigen::Vector3d> Arms;        // per directed edge (j, k): the reference of g_k - g_j
