@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <random>
 
@@ -524,6 +526,44 @@ TEST(Normals, EstimatedNormalsMatchTheSurfaceAndPointOutward)
   }
   EXPECT_GT(static_cast<double>(aligned) / static_cast<double>(n), 0.95);
   EXPECT_GT(static_cast<double>(outward) / static_cast<double>(n), 0.95);
+}
+
+TEST(Normals, EachSeparatePartIsOrientedAndReportedOnItsOwn)
+{
+  // Two spheres far apart: two parts of the neighbour graph, each oriented outward from its own
+  // largest-x point, and no part label shared between them (the tracker votes on the
+  // orientation part by part).
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> g;
+  std::vector<double> points, outward;
+  for (int i = 0; i < 4000; ++i)
+  {
+    double v[3] = {g(rng), g(rng), g(rng)};
+    const double r = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    const double shift = i < 2000 ? 0.0 : 3.0;
+    for (int c = 0; c < 3; ++c)
+    {
+      points.push_back(0.5 * v[c] / r + (c == 0 ? shift : 0.0));
+      outward.push_back(v[c] / r);
+    }
+  }
+  std::vector<std::uint32_t> parts;
+  const std::vector<float> normals = dp::estimateNormals(points.data(), 4000, 16, &parts);
+  ASSERT_EQ(parts.size(), 4000u);
+  std::size_t right = 0;
+  for (std::size_t i = 0; i < 4000; ++i)
+    right += normals[3 * i] * outward[3 * i] + normals[3 * i + 1] * outward[3 * i + 1] +
+                 normals[3 * i + 2] * outward[3 * i + 2] >
+             0;
+  EXPECT_GT(right, 3900u);
+  std::vector<std::uint32_t> first(parts.begin(), parts.begin() + 2000);
+  std::vector<std::uint32_t> second(parts.begin() + 2000, parts.end());
+  std::sort(first.begin(), first.end());
+  std::sort(second.begin(), second.end());
+  std::vector<std::uint32_t> shared;
+  std::set_intersection(first.begin(), first.end(), second.begin(), second.end(),
+                        std::back_inserter(shared));
+  EXPECT_TRUE(shared.empty());
 }
 
 } // namespace

@@ -494,9 +494,15 @@ void DistanceField::sampleMany(const double* positions, std::size_t count,
                     });
 }
 
-std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours)
+std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours,
+                                   std::vector<std::uint32_t>* parts)
 {
+  // 1 - |cos| of the angle beyond which orientation carried from one point to the next starts a
+  // new part (60 degrees).
+  constexpr float WeakOrientation = 0.5f;
   std::vector<float> normals(3 * count, 0.0f);
+  if (parts)
+    parts->assign(count, 0);
   if (count == 0)
     return normals;
   const std::size_t k = std::max<std::size_t>(3, std::min(neighbours, count));
@@ -530,12 +536,27 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
                       }
                     });
 
-  // Orientation: Prim's spanning tree on the neighbour graph with weight 1 - |n_i . n_j|, so
-  // orientation crosses the flattest, most reliable edges first.
+  // Orientation: Prim's spanning tree on the neighbour graph with weight 1 - |n_i . n_j| plus
+  // |n_i . d_ij| (d_ij the unit step from point i to j), so orientation crosses the flattest,
+  // most reliable edges first, and last a step along the normal: from one side of a thin gap to
+  // the other (a hand on the body, touching thighs), where the normals are opposite but |n_i .
+  // n_j| alone would call the edge the surest of all.
   auto dot = [&](std::size_t a, std::size_t b)
   {
     return normals[3 * a] * normals[3 * b] + normals[3 * a + 1] * normals[3 * b + 1] +
            normals[3 * a + 2] * normals[3 * b + 2];
+  };
+  auto weight = [&](std::size_t a, std::size_t b)
+  {
+    double d[3], length2 = 0, along = 0;
+    for (int c = 0; c < 3; ++c)
+    {
+      d[c] = points[3 * b + c] - points[3 * a + c];
+      length2 += d[c] * d[c];
+      along += d[c] * normals[3 * a + c];
+    }
+    const double across = length2 > 0 ? std::abs(along) / std::sqrt(length2) : 0.0;
+    return static_cast<float>(1.0 - std::abs(dot(a, b)) + across);
   };
   std::vector<char> done(count, 0);
   // Seeds in order of decreasing x, so each connected part starts at its largest-x point.
@@ -546,10 +567,13 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
             [&](std::uint32_t a, std::uint32_t b) { return points[3 * a] > points[3 * b]; });
   using Edge = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>; // weight, (from, to)
   std::priority_queue<Edge, std::vector<Edge>, std::greater<Edge>> queue;
+  std::uint32_t part = 0;
   for (std::uint32_t seed : order)
   {
     if (done[seed])
       continue;
+    if (parts)
+      (*parts)[seed] = part;
     if (normals[3 * seed] < 0)
       for (int c = 0; c < 3; ++c)
         normals[3 * seed + c] = -normals[3 * seed + c];
@@ -560,13 +584,14 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
       {
         const std::uint32_t to = graph[from * k + j];
         if (!done[to])
-          queue.push({1.0f - std::abs(dot(from, to)), {from, to}});
+          queue.push({weight(from, to), {from, to}});
       }
     };
     push(seed);
     while (!queue.empty())
     {
       const auto [from, to] = queue.top().second;
+      const float cost = queue.top().first;
       queue.pop();
       if (done[to])
         continue;
@@ -574,8 +599,17 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
         for (int c = 0; c < 3; ++c)
           normals[3 * to + c] = -normals[3 * to + c];
       done[to] = 1;
+      if (parts)
+      {
+        // Orientation carried across a sharp turn of the normals is the least sure: a new part.
+        if (cost > WeakOrientation)
+          (*parts)[to] = ++part;
+        else
+          (*parts)[to] = (*parts)[from];
+      }
       push(to);
     }
+    ++part;
   }
   return normals;
 }

@@ -188,8 +188,9 @@ void Tracker::restartFrom(const std::vector<double>& positions)
 
 void Tracker::orientData(FrameData& frame) const
 {
-  // Normals estimated from points are oriented consistently but perhaps inward: compare them with
-  // the mesh's where the last shape meets the data and flip them all if most disagree.
+  // Normals estimated from points are oriented consistently within each part of the data but
+  // perhaps inward: compare them with the mesh's where the last shape meets the data and flip a
+  // part (all of them, for normals given) if most of its points disagree.
   if (frame.spread().empty())
     return;
   const std::vector<double>& x = P->Predictor.empty() ? Template : P->Predictor.last();
@@ -197,7 +198,8 @@ void Tracker::orientData(FrameData& frame) const
   std::vector<double> normals(x.size());
   Mesh.vertexNormals(x.data(), normals.data());
   const auto& tri = Mesh.triangles();
-  double agree = 0, disagree = 0;
+  const std::size_t parts = std::max<std::size_t>(1, frame.numberOfParts());
+  std::vector<double> agree(parts, 0), disagree(parts, 0);
   for (std::uint32_t p : frame.spread())
   {
     const SurfaceLocator::Hit hit = locator.closest(frame.point(p), 3 * Voxel);
@@ -208,10 +210,17 @@ void Tracker::orientData(FrameData& frame) const
       for (int k = 0; k < 3; ++k)
         along +=
             hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k] * frame.normal(p)[k];
-    (along >= 0 ? agree : disagree) += 1;
+    const std::uint32_t part = frame.numberOfParts() > 0 ? frame.part(p) : 0;
+    (along >= 0 ? agree : disagree)[part] += 1;
   }
-  if (disagree > agree)
-    frame.flipNormals();
+  for (std::uint32_t part = 0; part < parts; ++part)
+    if (disagree[part] > agree[part])
+    {
+      if (frame.numberOfParts() > 0)
+        frame.flipNormals(part);
+      else
+        frame.flipNormals();
+    }
 }
 
 bool Tracker::failed(const Attempt& a) const

@@ -58,8 +58,15 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
   field.bandWidth = options.bandWidth > 0 ? options.bandWidth : 4 * options.voxelSize;
   field.lazy = true; // only the voxels around the mesh are ever needed
   Field.build(points, count, field);
-  Normals =
-      normals ? std::vector<float>(normals, normals + 3 * count) : estimateNormals(points, count);
+  if (normals)
+    Normals.assign(normals, normals + 3 * count);
+  else
+  {
+    std::vector<std::uint32_t> parts;
+    Normals = estimateNormals(points, count, 16, &parts);
+    Parts = std::move(parts);
+    PartCount = Parts.empty() ? 0 : *std::max_element(Parts.begin(), Parts.end()) + 1;
+  }
   if (options.spreadCount > 0 && options.surfaceArea > 0)
   {
     // A surface of area A meets about A / cell^2 cells of a grid (fewer where it is flat along an

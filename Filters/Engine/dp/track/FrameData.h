@@ -66,6 +66,17 @@ public:
     for (float& n : Normals)
       n = -n;
   }
+  /** Estimated normals are oriented part by part (estimateNormals): the number of parts (0 for
+   *  normals given), each point's part, and turning one part's normals around. */
+  std::size_t numberOfParts() const { return PartCount; }
+  std::uint32_t part(std::size_t i) const { return Parts[i]; }
+  void flipNormals(std::uint32_t part)
+  {
+    for (std::size_t i = 0; i < Parts.size(); ++i)
+      if (Parts[i] == part)
+        for (int c = 0; c < 3; ++c)
+          Normals[3 * i + c] = -Normals[3 * i + c];
+  }
   /** Indices of the well-spread subsample, in increasing order. */
   const std::vector<std::uint32_t>& spread() const { return Spread; }
 
@@ -74,6 +85,8 @@ private:
   double Voxel = 0;
   DistanceField Field;
   std::vector<float> Normals;
+  std::vector<std::uint32_t> Parts; // of the estimated normals' orientation
+  std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
 };
 
