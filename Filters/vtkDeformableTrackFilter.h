@@ -181,7 +181,8 @@ public:
 
   ///@{
   /** Weight of the temporal term pulling vertices toward their constant-velocity course
-   *  (default 0 = off; smooths shaky data at the price of some lag). */
+   *  (default 0 = off; about 1 halves the shake of slow, non-rigid motion, but lags fast
+   *  motion such as a jumping human). */
   vtkSetClampMacro(TemporalWeight, double, 0.0, VTK_DOUBLE_MAX);
   vtkGetMacro(TemporalWeight, double);
   ///@}
