@@ -418,6 +418,14 @@ private:
     else
       std::cout << Written.size() << " of " << Frames << " frame(s) tracked: " << Pvd.string()
                 << " (" << MeshVertices << " vertices, " << MeshTriangles << " triangles)\n";
+    std::string failed;
+    for (const FrameRecord& r : Records)
+      if (r.failed)
+        failed += (failed.empty() ? "" : ", ") + std::to_string(r.frame);
+    if (!failed.empty())
+      std::cerr << "warning: frame(s) " << failed
+                << " failed after retries (mesh and points do not match there): do not trust "
+                   "them; report.json and report.png mark them\n";
   }
 
   // The frame's line of the table and of the report.

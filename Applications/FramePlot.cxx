@@ -170,6 +170,8 @@ void writeFramePlot(const std::string& path, const std::string& title,
     }
     for (double t : niceTicks(0, xMax, 10))
     {
+      if (t != std::round(t)) // frames are whole
+        continue;
       canvas.colour(grey);
       canvas.line(px(t), y0, px(t), y1);
       canvas.text(tickText(t), static_cast<int>(px(t)), y0 - 6, 12, 1, 2);

@@ -228,6 +228,37 @@ class TestBadInput(TempDirTestCase):
         run_tool("dynamicpoints-sample", "--frames", frames, "--points", 3000, self.path("seq"))
         return self.path("seq", "points.series")
 
+    def test_a_frame_the_mesh_cannot_explain_is_flagged_in_the_report(self):
+        # Frame 3 gets a ball of points beside the sheet that no deformation of the template
+        # explains: the job finishes, says which frame to distrust, and the report lists it.
+        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 6, "--points", 4000,
+                 self.path("seq"))
+        os.remove(self.path("seq", "points.series"))
+        reader = dynamicpoints.vtkPointSequenceSource()
+        reader.SetFileName(self.path("seq", "frame_0003.ply"))
+        reader.Update()
+        frame = dsa.WrapDataObject(reader.GetOutput())
+        points, normals = np.asarray(frame.Points), np.asarray(frame.PointData["Normals"])
+        size = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+        outward = np.random.default_rng(3).normal(size=(1500, 3))
+        outward /= np.linalg.norm(outward, axis=1)[:, None]
+        ball = points.max(axis=0) + 0.3 * size + 0.1 * size * outward
+        with open(self.path("seq", "frame_0003.ply"), "w") as out:
+            out.write("ply\nformat ascii 1.0\nelement vertex %d\n" % (len(points) + len(ball)))
+            out.write("".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")))
+            out.write("end_header\n")
+            np.savetxt(out, np.hstack([np.vstack([points, ball]), np.vstack([normals, outward])]),
+                       fmt="%.7g")
+        result = self.run_main(self.path("seq"), "--vertices", 300)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("frame 3 failed after 2 retries", result.stderr)
+        self.assertIn("frame(s) 3 failed after retries", result.stderr)
+        with open(self.path("out", "report.json")) as f:
+            report = json.load(f)
+        self.assertEqual(report["framesFailed"], [3])
+        self.assertGreater(report["perFrame"][3]["unexplained"], 0.1)
+        self.assertEqual(report["perFrame"][3]["retries"], 2)
+
     def test_missing_folder(self):
         result = self.run_main(self.path("no-such-folder"))
         self.assertEqual(result.returncode, 1)
