@@ -9,6 +9,8 @@
 #include "dp/TriangleMesh.h"
 #include "dp/track/SurfaceLocator.h"
 
+#include "NumericChecks.h"
+
 #include <gtest/gtest.h>
 #include <memory>
 #include <tbb/global_control.h>
@@ -36,38 +38,8 @@ MeshData tube(std::size_t rings = 10, std::size_t segments = 12, std::size_t fra
   return {t.triangles(), t.positions(frame)};
 }
 
-std::vector<double> jiggle(const std::vector<double>& x, double amount, unsigned seed)
-{
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-amount, amount);
-  std::vector<double> y(x);
-  for (double& v : y)
-    v += u(rng);
-  return y;
-}
-
-// Checks the analytic gradient of f against central differences at x.
-template <typename F>
-void expectGradientMatches(F f, const std::vector<double>& x, double tolerance)
-{
-  std::vector<double> g(x.size(), 0.0);
-  f(x.data(), g.data());
-  const double h = 1e-6;
-  std::vector<double> y(x);
-  double worst = 0, scale = 0;
-  for (std::size_t i = 0; i < x.size(); ++i)
-  {
-    y[i] = x[i] + h;
-    const double fp = f(y.data(), nullptr);
-    y[i] = x[i] - h;
-    const double fm = f(y.data(), nullptr);
-    y[i] = x[i];
-    worst = std::max(worst, std::abs((fp - fm) / (2 * h) - g[i]));
-    scale = std::max(scale, std::abs(g[i]));
-  }
-  ASSERT_GT(scale, 0);
-  EXPECT_LT(worst, tolerance * scale) << "largest gradient component " << scale;
-}
+using dp::test::expectGradientMatches;
+using dp::test::jiggle;
 
 class ClothTerms : public ::testing::TestWithParam<int>
 {

@@ -14,6 +14,8 @@
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
 
+#include "NumericChecks.h"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Eigenvalues>
@@ -43,38 +45,8 @@ Shape tube(std::size_t rings = 10, std::size_t segments = 12)
   return {t.triangles(), t.positions(0)};
 }
 
-std::vector<double> jiggle(const std::vector<double>& x, double amount, unsigned seed)
-{
-  std::mt19937_64 rng(seed);
-  std::uniform_real_distribution<double> u(-amount, amount);
-  std::vector<double> y(x);
-  for (double& v : y)
-    v += u(rng);
-  return y;
-}
-
-// The analytic gradient of f against central differences at x: the largest difference, relative
-// to the largest gradient component, must stay under `tolerance`.
-void expectGradientMatches(const std::function<double(const double*, double*)>& f,
-                           const std::vector<double>& x, double tolerance, double h = 1e-6)
-{
-  std::vector<double> g(x.size(), 0.0);
-  f(x.data(), g.data());
-  std::vector<double> y(x);
-  double worst = 0, scale = 0;
-  for (std::size_t i = 0; i < x.size(); ++i)
-  {
-    y[i] = x[i] + h;
-    const double fp = f(y.data(), nullptr);
-    y[i] = x[i] - h;
-    const double fm = f(y.data(), nullptr);
-    y[i] = x[i];
-    worst = std::max(worst, std::abs((fp - fm) / (2 * h) - g[i]));
-    scale = std::max(scale, std::abs(g[i]));
-  }
-  ASSERT_GT(scale, 0);
-  EXPECT_LT(worst, tolerance * scale) << "largest gradient component " << scale;
-}
+using dp::test::expectGradientMatches;
+using dp::test::jiggle;
 
 // The frame data of a tube's samples (with their true normals), voxel = diagonal / 60.
 struct Frame

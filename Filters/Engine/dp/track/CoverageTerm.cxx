@@ -88,16 +88,23 @@ void CoverageTerm::linearise(const double* x)
       });
 }
 
-void CoverageTerm::residual(const double* x, const Match& m, double r[3]) const
+double CoverageTerm::pull(const double* x, const Match& m, Pull& p) const
 {
   const auto& tri = Mesh.triangles();
-  const double* p = Frame.point(m.point);
+  const double* point = Frame.point(m.point);
+  const float* normal = Frame.normal(m.point);
   for (int k = 0; k < 3; ++k)
   {
-    r[k] = -p[k];
+    p.n[k] = normal[k];
+    p.r[k] = -point[k];
     for (int c = 0; c < 3; ++c)
-      r[k] += m.barycentric[c] * x[3 * tri[3 * m.triangle + c] + k];
+      p.r[k] += m.barycentric[c] * x[3 * tri[3 * m.triangle + c] + k];
   }
+  p.along = p.n[0] * p.r[0] + p.n[1] * p.r[1] + p.n[2] * p.r[2];
+  p.c = Scale * m.weight;
+  const double mu = Options.pointToPoint;
+  return 0.5 * p.c *
+         (p.along * p.along + mu * (p.r[0] * p.r[0] + p.r[1] * p.r[1] + p.r[2] * p.r[2]));
 }
 
 double CoverageTerm::evaluate(const double* x, double* gradient) const
@@ -109,18 +116,14 @@ double CoverageTerm::evaluate(const double* x, double* gradient) const
   {
     if (m.triangle < 0)
       continue;
-    double r[3];
-    residual(x, m, r);
-    const float* n = Frame.normal(m.point);
-    const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-    const double c = Scale * m.weight;
-    e += 0.5 * c * (along * along + mu * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]));
+    Pull p;
+    e += pull(x, m, p);
     if (!gradient)
       continue;
     // d/ds = c (n (n.r) + mu r), spread over the triangle's vertices by the barycentric weights.
     double g[3];
     for (int k = 0; k < 3; ++k)
-      g[k] = c * (n[k] * along + mu * r[k]);
+      g[k] = p.c * (p.n[k] * p.along + mu * p.r[k]);
     for (int v = 0; v < 3; ++v)
       for (int k = 0; k < 3; ++k)
         gradient[3 * tri[3 * m.triangle + v] + k] += m.barycentric[v] * g[k];
@@ -138,13 +141,9 @@ double CoverageTerm::addModel(const double* x, detail::BlockSparseMatrix& hessia
   {
     if (m.triangle < 0)
       continue;
-    double r[3];
-    residual(x, m, r);
-    const float* nf = Frame.normal(m.point);
-    const double n[3] = {nf[0], nf[1], nf[2]};
-    const double along = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-    const double c = Scale * m.weight;
-    e += 0.5 * c * (along * along + mu * (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]));
+    Pull p;
+    e += pull(x, m, p);
+    const double *n = p.n, *r = p.r, along = p.along, c = p.c;
     // Block (a, b) of the matrix: c b_a b_b (n n^T + mu I). The diagonal model keeps only
     // c b_a (n n^T + mu I) on each vertex's block: since the b_a are convex weights,
     // |sum_a b_a y_a|^2 <= sum_a b_a |y_a|^2, so it bounds the term from above (a majorizer):

@@ -76,7 +76,13 @@ public:
 
 private:
   // s_p(x) - p for a match.
-  void residual(const double* x, const Match& m, double r[3]) const;
+  // One match at x: r = the closest surface point - the data point, the data normal n, n.r and
+  // the match's weight c; returns its energy c / 2 ((n.r)^2 + mu |r|^2).
+  struct Pull
+  {
+    double r[3], n[3], along, c;
+  };
+  double pull(const double* x, const Match& m, Pull& p) const;
 
   const FrameData& Frame;
   const TriangleMesh& Mesh;
