@@ -244,6 +244,35 @@ bool Tracker::failed(const Attempt& a) const
          a.quality.unsupported > usual(unsupported) + Options.recovery.margin;
 }
 
+void Tracker::startState(Start start, Attempt& a) const
+{
+  const DeformationGraph& graph = *P->Graph;
+  const MotionPredictor& predictor = P->Predictor;
+  DeformationGraph::State& state = a.state;
+  state = graph.identity();
+  if (predictor.empty())
+    return;
+  if (start == Start::Predicted)
+    predictor.predictState(graph, Options.motionPrediction ? 1.0 : 0.0, state);
+  else if (start == Start::Still)
+    state = *predictor.lastState();
+  else if (start == Start::LastGood)
+    state = P->LastGoodState;
+  else
+  {
+    // The template, moved rigidly onto the last shape: every node takes the same motion.
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    rigidFit(Template, predictor.last(), Cloth.vertexMass(), R, t);
+    for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    {
+      const Eigen::Vector3d g(graph.nodePosition(j));
+      state.rotation[j] = R;
+      state.translation[j] = R * g + t - g;
+    }
+  }
+}
+
 Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
 {
   Attempt a;
@@ -268,31 +297,9 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   std::vector<double> x;
   if (P->Graph)
   {
-    const DeformationGraph& graph = *P->Graph;
-    if (predictor.empty())
-      a.state = graph.identity();
-    else if (start == Start::Predicted)
-      predictor.predictState(graph, Options.motionPrediction ? 1.0 : 0.0, a.state);
-    else if (start == Start::Still)
-      a.state = *predictor.lastState();
-    else if (start == Start::LastGood)
-      a.state = P->LastGoodState;
-    else
-    {
-      // The template, moved rigidly onto the last shape: every node takes the same motion.
-      Eigen::Matrix3d R;
-      Eigen::Vector3d t;
-      rigidFit(Template, predictor.last(), mass, R, t);
-      a.state = graph.identity();
-      for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
-      {
-        const Eigen::Vector3d g(graph.nodePosition(j));
-        a.state.rotation[j] = R;
-        a.state.translation[j] = R * g + t - g;
-      }
-    }
+    startState(start, a);
     x.resize(Template.size());
-    graph.deform(a.state, x.data());
+    P->Graph->deform(a.state, x.data());
   }
   else
   {
@@ -401,6 +408,83 @@ void Tracker::trackEmptyFrame(FrameResult& result)
   result.positions = std::move(x);
 }
 
+Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& result)
+{
+  Attempt best = attempt(frame, Start::Predicted);
+  bool restarted = false;
+  if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
+  {
+    for (Start retry : {Start::Still, Start::LastGood, Start::Template})
+    {
+      if ((!P->Graph && retry == Start::Template) ||
+          (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
+        continue;
+      Attempt other = attempt(frame, retry);
+      ++result.retries;
+      // Another start must do clearly better to be kept: the scores of two plausible fits
+      // differ by noise, and a start from elsewhere breaks the motion's continuity.
+      if (other.score() < 0.7 * best.score() &&
+          other.score() < best.score() - 0.5 * Options.recovery.margin)
+      {
+        best = std::move(other);
+        restarted = true;
+      }
+      if (!failed(best))
+        break;
+    }
+  }
+  result.failed = Options.recovery.enabled && failed(best);
+  result.kept = restarted ? 1 : 0;
+  P->RecentQuality.push_back(best.quality);
+  if (P->RecentQuality.size() > 9)
+    P->RecentQuality.erase(P->RecentQuality.begin());
+  return best;
+}
+
+void Tracker::keep(Attempt&& best, FrameResult& result)
+{
+  result.startPositions = best.startPositions;
+  result.coarsePositions = best.coarsePositions;
+  result.positions = std::move(best.positions);
+  result.residual = std::move(best.residual);
+  result.rejected = std::move(best.rejected);
+  result.frozen = std::move(best.frozen);
+  result.iterations = best.iterations;
+  result.coarseIterations = best.coarseIterations;
+  result.internalEnergy = best.internalEnergy;
+  result.distanceEnergy = best.distanceEnergy;
+  result.unexplained = best.quality.unexplained;
+  result.unsupported = best.quality.unsupported;
+  result.timings.prediction = best.timings.prediction;
+  result.timings.coarse = best.timings.coarse;
+  result.timings.fine = best.timings.fine;
+  result.timings.quality = best.timings.quality;
+}
+
+void Tracker::remember(const FrameResult& result)
+{
+  if (P->Graph)
+  {
+    const DeformationGraph::State state = P->Graph->fit(result.positions.data());
+    // After a retry from another start, the motion before it says nothing about the motion after.
+    if (result.retries > 0 && result.kept > 0)
+      P->Predictor.restartFrom(result.positions, &state);
+    else
+      P->Predictor.push(result.positions, &state);
+    if (Options.graph.yieldRate > 0)
+      P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
+    if (!result.failed)
+      P->LastGoodState = state;
+  }
+  else if (result.retries > 0 && result.kept > 0)
+    P->Predictor.restartFrom(result.positions);
+  else
+    P->Predictor.push(result.positions);
+  if (!result.failed)
+    P->LastGood = result.positions;
+  P->LastFailed = result.failed;
+}
+
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
 {
   const auto start = std::chrono::steady_clock::now();
@@ -432,72 +516,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   if (frame.empty())
     trackEmptyFrame(result);
   else
-  {
-    Attempt best = attempt(frame, Start::Predicted);
-    bool restarted = false;
-    if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
-    {
-      for (Start retry : {Start::Still, Start::LastGood, Start::Template})
-      {
-        if ((!P->Graph && retry == Start::Template) ||
-            (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
-          continue;
-        Attempt other = attempt(frame, retry);
-        ++result.retries;
-        // Another start must do clearly better to be kept: the scores of two plausible fits
-        // differ by noise, and a start from elsewhere breaks the motion's continuity.
-        if (other.score() < 0.7 * best.score() &&
-            other.score() < best.score() - 0.5 * Options.recovery.margin)
-        {
-          best = std::move(other);
-          restarted = true;
-        }
-        if (!failed(best))
-          break;
-      }
-    }
-    result.failed = Options.recovery.enabled && failed(best);
-    result.kept = restarted ? 1 : 0;
-    P->RecentQuality.push_back(best.quality);
-    if (P->RecentQuality.size() > 9)
-      P->RecentQuality.erase(P->RecentQuality.begin());
-    result.startPositions = best.startPositions;
-    result.coarsePositions = best.coarsePositions;
-    result.positions = std::move(best.positions);
-    result.residual = std::move(best.residual);
-    result.rejected = std::move(best.rejected);
-    result.frozen = std::move(best.frozen);
-    result.iterations = best.iterations;
-    result.coarseIterations = best.coarseIterations;
-    result.internalEnergy = best.internalEnergy;
-    result.distanceEnergy = best.distanceEnergy;
-    result.unexplained = best.quality.unexplained;
-    result.unsupported = best.quality.unsupported;
-    result.timings.prediction = best.timings.prediction;
-    result.timings.coarse = best.timings.coarse;
-    result.timings.fine = best.timings.fine;
-    result.timings.quality = best.timings.quality;
-  }
-  if (P->Graph)
-  {
-    const DeformationGraph::State state = P->Graph->fit(result.positions.data());
-    // After a retry from another start, the motion before it says nothing about the motion after.
-    if (result.retries > 0 && result.kept > 0)
-      P->Predictor.restartFrom(result.positions, &state);
-    else
-      P->Predictor.push(result.positions, &state);
-    if (Options.graph.yieldRate > 0)
-      P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
-    if (!result.failed)
-      P->LastGoodState = state;
-  }
-  else if (result.retries > 0 && result.kept > 0)
-    P->Predictor.restartFrom(result.positions);
-  else
-    P->Predictor.push(result.positions);
-  if (!result.failed)
-    P->LastGood = result.positions;
-  P->LastFailed = result.failed;
+    keep(solveWithRetries(frame, result), result);
+  remember(result);
   result.seconds = elapsed(start);
   return result;
 }

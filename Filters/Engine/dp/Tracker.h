@@ -124,7 +124,17 @@ private:
     Template   // the template, moved rigidly onto the last frame
   };
   Attempt attempt(const class FrameData& frame, Start start);
+  /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
+   *  frame 0). */
+  void startState(Start start, Attempt& a) const;
   bool failed(const Attempt& a) const;
+  /** The predicted attempt, then the retries while it fails; counts them in `result`. */
+  Attempt solveWithRetries(const class FrameData& frame, FrameResult& result);
+  /** Moves the kept attempt's outcome into `result`. */
+  static void keep(Attempt&& best, FrameResult& result);
+  /** What the next frames need of this one: motion history, the graph's reference, the last
+   *  frame that did not fail. */
+  void remember(const FrameResult& result);
   void trackEmptyFrame(FrameResult& result);
   void orientData(class FrameData& frame) const;
 
