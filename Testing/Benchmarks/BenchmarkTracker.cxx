@@ -294,16 +294,6 @@ bool oneOf(const std::string& option, const std::string& value, const char* firs
   return value == second;
 }
 
-std::vector<std::string> splitList(const std::string& list)
-{
-  std::vector<std::string> out;
-  std::stringstream in(list);
-  for (std::string item; std::getline(in, item, ',');)
-    if (!item.empty())
-      out.push_back(item);
-  return out;
-}
-
 const char* solverName(dp::TrackerSolver s)
 {
   return s == dp::TrackerSolver::GaussNewton ? "Gauss-Newton"
@@ -320,9 +310,10 @@ const char* Usage =
     "             [--stiffness ST,SH,BE] [--tolerance T] [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
-    "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--coverage-weight "
+    "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
+    "RATE] [--coverage-weight "
     "W] "
-    "[--coverage-points N] [--temporal-weight W] [--no-recovery]\n"
+    "[--coverage-points N] [--point-to-point SHARE] [--temporal-weight W] [--no-recovery]\n"
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
@@ -425,10 +416,14 @@ int main(int argc, char** argv)
         options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--stretch-weight")
         options.graph.stretchWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+      else if (arg == "--plasticity")
+        options.graph.yieldRate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--rigidity-scale")
         options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--coverage-points")
         options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+      else if (arg == "--point-to-point")
+        options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--coverage-weight")
         options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--temporal-weight")

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -50,6 +51,17 @@ inline std::string cpuModel()
     if (line.rfind("model name", 0) == 0)
       return line.substr(line.find(':') + 2);
   return "unknown CPU";
+}
+
+/** The items of a comma-separated list (empty items skipped). */
+inline std::vector<std::string> splitList(const std::string& list)
+{
+  std::vector<std::string> out;
+  std::stringstream in(list);
+  for (std::string item; std::getline(in, item, ',');)
+    if (!item.empty())
+      out.push_back(item);
+  return out;
 }
 
 } // namespace dp::bench
