@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDistanceFieldFilter.h"
 
-#include "dp/DistanceField.h"
+#include "dp/DistanceField.h" // estimateNormals
+#include "dp/DistanceImage.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkDataArray.h"
@@ -64,6 +65,89 @@ int vtkDistanceFieldFilter::RequestUpdateExtent(vtkInformation*, vtkInformationV
   return 1; // the whole point set, whatever part of the image is asked for
 }
 
+namespace
+{
+// The bounds of the finite points and their diagonal (a small positive length for one point).
+double boundsOf(const std::vector<double>& xyz, double box[6])
+{
+  box[0] = box[1] = xyz[0];
+  box[2] = box[3] = xyz[1];
+  box[4] = box[5] = xyz[2];
+  for (std::size_t i = 0; i < xyz.size(); i += 3)
+    for (int k = 0; k < 3; ++k)
+    {
+      box[2 * k] = std::min(box[2 * k], xyz[i + k]);
+      box[2 * k + 1] = std::max(box[2 * k + 1], xyz[i + k]);
+    }
+  const double diagonal =
+      std::sqrt((box[1] - box[0]) * (box[1] - box[0]) + (box[3] - box[2]) * (box[3] - box[2]) +
+                (box[5] - box[4]) * (box[5] - box[4]));
+  return diagonal > 0
+             ? diagonal
+             : std::max(1.0, std::abs(box[0]) + std::abs(box[2]) + std::abs(box[4])) * 1e-3;
+}
+// The output's point arrays from the engine's image: the nearest point's id and normal, and the
+// gradient of the distance (the unit vector away from the nearest point).
+void fillArrays(vtkImageData* output, const std::vector<double>& xyz,
+                const std::vector<vtkIdType>& ids, const std::vector<float>& normals,
+                const dp::ImageGrid& grid, const dp::DistanceImage& field)
+{
+  const vtkIdType samples = static_cast<vtkIdType>(grid.voxelCount());
+  vtkNew<vtkFloatArray> distance;
+  distance->SetName("Distance");
+  distance->SetNumberOfTuples(samples);
+  std::copy(field.distance.begin(), field.distance.end(), distance->GetPointer(0));
+  vtkNew<vtkFloatArray> gradient;
+  gradient->SetName("Gradient");
+  gradient->SetNumberOfComponents(3);
+  gradient->SetNumberOfTuples(samples);
+  vtkNew<vtkIdTypeArray> nearest;
+  nearest->SetName("NearestPointId");
+  nearest->SetNumberOfTuples(samples);
+  vtkNew<vtkUnsignedCharArray> inBand;
+  inBand->SetName("InBand");
+  inBand->SetNumberOfTuples(samples);
+  std::copy(field.exact.begin(), field.exact.end(), inBand->GetPointer(0));
+  vtkNew<vtkFloatArray> nearestNormal;
+  nearestNormal->SetName("NearestNormal");
+  nearestNormal->SetNumberOfComponents(3);
+  if (!normals.empty())
+    nearestNormal->SetNumberOfTuples(samples);
+
+  const std::size_t nx = static_cast<std::size_t>(grid.dimensions[0]);
+  const std::size_t ny = static_cast<std::size_t>(grid.dimensions[1]);
+  vtkSMPTools::For(0, samples,
+                   [&](vtkIdType begin, vtkIdType end)
+                   {
+                     for (vtkIdType id = begin; id < end; ++id)
+                     {
+                       const std::size_t v = static_cast<std::size_t>(id);
+                       const std::size_t p = static_cast<std::size_t>(field.nearest[v]);
+                       const double x[3] = {
+                           grid.origin[0] + static_cast<double>(v % nx) * grid.spacing[0],
+                           grid.origin[1] + static_cast<double>((v / nx) % ny) * grid.spacing[1],
+                           grid.origin[2] + static_cast<double>(v / (nx * ny)) * grid.spacing[2]};
+                       // The gradient of the distance to the nearest point: the unit vector away
+                       // from it.
+                       const double d = field.distance[v];
+                       for (int c = 0; c < 3; ++c)
+                         gradient->SetTypedComponent(
+                             id, c, d > 0 ? static_cast<float>((x[c] - xyz[3 * p + c]) / d) : 0.0f);
+                       nearest->SetValue(id, ids[p]);
+                       if (!normals.empty())
+                         for (int c = 0; c < 3; ++c)
+                           nearestNormal->SetTypedComponent(id, c, normals[3 * p + c]);
+                     }
+                   });
+  output->GetPointData()->SetScalars(distance);
+  output->GetPointData()->SetVectors(gradient);
+  output->GetPointData()->AddArray(nearest);
+  output->GetPointData()->AddArray(inBand);
+  if (!normals.empty())
+    output->GetPointData()->AddArray(nearestNormal);
+}
+} // namespace
+
 int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
                                         vtkInformationVector* outputVector)
 {
@@ -73,43 +157,22 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   if (!input || !output)
     return 0;
 
-  if (this->VoxelSize < 0 || !std::isfinite(this->VoxelSize))
-  {
-    vtkErrorMacro("VoxelSize must be positive, or 0 for automatic; got " << this->VoxelSize);
-    return 0;
-  }
   if (this->BandWidth < 0 || !std::isfinite(this->BandWidth))
   {
     vtkErrorMacro("BandWidth must be positive, or 0 for 3 voxels; got " << this->BandWidth);
     return 0;
   }
   const vtkDP::TargetPoints target = vtkDP::finitePoints(input);
-  const vtkIdType dropped = target.dropped;
-  if (dropped > 0)
+  if (target.dropped > 0)
   {
-    vtkWarningMacro("dropped " << dropped << " input point(s) with NaN or infinite coordinates");
+    vtkWarningMacro("dropped " << target.dropped
+                               << " input point(s) with NaN or infinite coordinates");
   }
   if (target.ids.empty())
   {
     vtkErrorMacro("the input has no points: a distance field needs at least one");
     return 0;
   }
-
-  // Bounds of the finite points; the automatic voxel size is the paper's 1/200 of the diagonal.
-  double box[6] = {target.xyz[0], target.xyz[0], target.xyz[1],
-                   target.xyz[1], target.xyz[2], target.xyz[2]};
-  for (std::size_t i = 0; i < target.ids.size(); ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      box[2 * k] = std::min(box[2 * k], target.xyz[3 * i + k]);
-      box[2 * k + 1] = std::max(box[2 * k + 1], target.xyz[3 * i + k]);
-    }
-  double diagonal =
-      std::sqrt((box[1] - box[0]) * (box[1] - box[0]) + (box[3] - box[2]) * (box[3] - box[2]) +
-                (box[5] - box[4]) * (box[5] - box[4]));
-  if (diagonal <= 0)
-    diagonal = std::max(1.0, std::abs(box[0]) + std::abs(box[2]) + std::abs(box[4])) * 1e-3;
-  const double voxel = this->VoxelSize > 0 ? this->VoxelSize : diagonal / 200.0;
 
   int extent[6];
   outInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
@@ -123,30 +186,8 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
     return 0;
   }
 
-  dp::DistanceField field;
-  dp::DistanceFieldOptions options;
-  options.voxelSize = voxel;
-  options.bandWidth = this->BandWidth;
-  options.maxActiveVoxels = static_cast<std::size_t>(this->MaximumNumberOfVoxels);
-  this->UpdateProgress(0.05);
-  try
-  {
-    field.build(target.xyz.data(), target.ids.size(), options);
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
-  }
-  this->UpdateProgress(0.4);
-  if (this->GetAbortExecute())
-    return 1;
-
-  std::vector<float> normals = target.normals;
-  if (normals.empty() && this->ComputeNormals)
-    normals = dp::estimateNormals(target.xyz.data(), target.ids.size());
-  this->UpdateProgress(0.5);
-
+  double box[6];
+  const double diagonal = boundsOf(target.xyz, box);
   double bounds[6];
   std::copy(this->Bounds, this->Bounds + 6, bounds);
   if (this->AdjustBounds)
@@ -155,65 +196,41 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
       bounds[2 * k] = box[2 * k] - this->AdjustDistance * diagonal;
       bounds[2 * k + 1] = box[2 * k + 1] + this->AdjustDistance * diagonal;
     }
-  double origin[3], spacing[3];
+  dp::ImageGrid grid;
   for (int k = 0; k < 3; ++k)
   {
-    origin[k] = bounds[2 * k];
-    spacing[k] = (bounds[2 * k + 1] - bounds[2 * k]) / extent[2 * k + 1];
-    if (!(spacing[k] > 0))
-      spacing[k] = voxel;
+    grid.dimensions[k] = extent[2 * k + 1] + 1;
+    grid.origin[k] = bounds[2 * k];
+    grid.spacing[k] = (bounds[2 * k + 1] - bounds[2 * k]) / extent[2 * k + 1];
+    if (!(grid.spacing[k] > 0))
+      grid.spacing[k] = diagonal / 200.0;
   }
+  const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+  this->UpdateProgress(0.05);
+  dp::DistanceImage field;
+  try
+  {
+    field = dp::computeDistanceImage(target.xyz.data(), target.ids.size(), grid,
+                                     this->BandWidth > 0 ? this->BandWidth : 3 * largestSpacing);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
+  this->UpdateProgress(0.6);
+  if (this->GetAbortExecute())
+    return 1;
+
+  std::vector<float> normals = target.normals;
+  if (normals.empty() && this->ComputeNormals)
+    normals = dp::estimateNormals(target.xyz.data(), target.ids.size());
+  this->UpdateProgress(0.8);
+
   output->SetExtent(extent);
-  output->SetOrigin(origin);
-  output->SetSpacing(spacing);
-
-  vtkNew<vtkFloatArray> distance;
-  distance->SetName("Distance");
-  distance->SetNumberOfTuples(samples);
-  vtkNew<vtkFloatArray> gradient;
-  gradient->SetName("Gradient");
-  gradient->SetNumberOfComponents(3);
-  gradient->SetNumberOfTuples(samples);
-  vtkNew<vtkIdTypeArray> nearest;
-  nearest->SetName("NearestPointId");
-  nearest->SetNumberOfTuples(samples);
-  vtkNew<vtkUnsignedCharArray> inBand;
-  inBand->SetName("InBand");
-  inBand->SetNumberOfTuples(samples);
-  vtkNew<vtkFloatArray> nearestNormal;
-  nearestNormal->SetName("NearestNormal");
-  nearestNormal->SetNumberOfComponents(3);
-  if (!normals.empty())
-    nearestNormal->SetNumberOfTuples(samples);
-
-  const int nx = extent[1] + 1, ny = extent[3] + 1;
-  vtkSMPTools::For(0, samples,
-                   [&](vtkIdType begin, vtkIdType end)
-                   {
-                     for (vtkIdType id = begin; id < end; ++id)
-                     {
-                       const vtkIdType i = id % nx, j = (id / nx) % ny,
-                                       k = id / (static_cast<vtkIdType>(nx) * ny);
-                       const double x[3] = {origin[0] + i * spacing[0], origin[1] + j * spacing[1],
-                                            origin[2] + k * spacing[2]};
-                       const dp::DistanceSample s = field.sample(x);
-                       distance->SetValue(id, static_cast<float>(s.distance));
-                       for (int c = 0; c < 3; ++c)
-                         gradient->SetTypedComponent(id, c, static_cast<float>(s.gradient[c]));
-                       nearest->SetValue(id, target.ids[static_cast<std::size_t>(s.nearest)]);
-                       inBand->SetValue(id, s.inBand ? 1 : 0);
-                       if (!normals.empty())
-                         for (int c = 0; c < 3; ++c)
-                           nearestNormal->SetTypedComponent(id, c, normals[3 * s.nearest + c]);
-                     }
-                   });
-  output->GetPointData()->SetScalars(distance);
-  output->GetPointData()->SetVectors(gradient);
-  output->GetPointData()->AddArray(nearest);
-  output->GetPointData()->AddArray(inBand);
-  if (!normals.empty())
-    output->GetPointData()->AddArray(nearestNormal);
-
+  output->SetOrigin(grid.origin.data());
+  output->SetSpacing(grid.spacing.data());
+  fillArrays(output, target.xyz, target.ids, normals, grid, field);
   auto addValue = [output](const char* name, double value)
   {
     vtkNew<vtkDoubleArray> a;
@@ -221,10 +238,8 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
     a->InsertNextValue(value);
     output->GetFieldData()->AddArray(a);
   };
-  addValue("ActiveVoxels", static_cast<double>(field.activeVoxelCount()));
-  addValue("VoxelSize", field.voxelSize());
-  addValue("BandWidth", field.bandWidth());
-  addValue("FieldMemoryBytes", static_cast<double>(field.memoryBytes()));
+  addValue("BandWidth", field.bandWidth);
+  addValue("BandVoxels", static_cast<double>(field.bandVoxels));
   this->UpdateProgress(1.0);
   return 1;
 }
@@ -232,7 +247,6 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
 void vtkDistanceFieldFilter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "VoxelSize: " << this->VoxelSize << "\n";
   os << indent << "BandWidth: " << this->BandWidth << "\n";
   os << indent << "Dimensions: " << this->Dimensions[0] << " " << this->Dimensions[1] << " "
      << this->Dimensions[2] << "\n";

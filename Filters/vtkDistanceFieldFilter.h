@@ -1,35 +1,34 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @class   vtkDistanceFieldFilter
- * @brief   unsigned distance field of a point cloud, built on a sparse OpenVDB grid
+ * @brief   unsigned distance from the voxels of an image to a point cloud, with the nearest points
  *
- * vtkDistanceFieldFilter computes the distance from space to the points of its input (any
- * vtkPointSet; cells are ignored) and samples it on a vtkImageData for viewing (volume
- * rendering, contouring). It is the field D of the distance energy E_dis = sum_i m_i D_i of
- * Shinya, Shioya & Shiraishi, "Unification of Dynamic Point Data" (the paper uses a dense
- * 200^3 voxel box and a vector distance transform; here the field lives on a sparse band of
- * an OpenVDB grid whose voxels store the index of their nearest point).
+ * vtkDistanceFieldFilter computes the distance from each point of its output image to the points
+ * of its input (any vtkPointSet; cells are ignored), for viewing (volume rendering, contouring)
+ * or further processing. It is the field D of the distance energy E_dis = sum_i m_i D_i of
+ * Shinya, Shioya & Shiraishi, "Unification of Dynamic Point Data", computed the paper's way on a
+ * dense box of voxels: exact nearest points within a band around the points, a vector distance
+ * transform beyond it (linear in the voxels; see dp::computeDistanceImage).
  *
- * Parameters follow vtkUnsignedDistance / vtkSignedDistance:
- * - VoxelSize: resolution of the field in world units (0, the default: the input's bounding
- *   box diagonal / 200, the paper's setting);
- * - BandWidth: the band around the points held in the grid (0, the default: 3 voxels).
- *   Outside it distances are exact nearest-point distances from a kd-tree, so the field is
- *   defined (and pulls toward the data) everywhere;
+ * Parameters follow vtkUnsignedDistance:
  * - Dimensions (default 128^3) and Bounds of the output image; with AdjustBounds on (default)
- *   the bounds are the input's, padded by AdjustDistance times the diagonal. The output only
- *   samples the field: its spacing need not be the voxel size.
+ *   the bounds are the input's, padded by AdjustDistance times the diagonal. The image's voxels
+ *   are the field's: no resampling;
+ * - BandWidth: within this distance of the points every voxel's distance and nearest point are
+ *   exact (0, the default: 3 voxels of the image). Beyond it the distance is to a real input
+ *   point found by the transform: never below the true distance, above it by a small fraction of
+ *   a voxel.
  *
- * Output point arrays: "Distance" (active scalars), "Gradient" (active vectors),
- * "NearestPointId" (index of the nearest input point), "NearestNormal" (that point's normal:
- * the input's "Normals" when present, otherwise estimated by local PCA and consistently
- * oriented, see ComputeNormals) and "InBand" (1 where all 8 surrounding voxels are in the band).
- * Field data: "ActiveVoxels", "VoxelSize", "BandWidth", "FieldMemoryBytes".
+ * Output point arrays: "Distance" (active scalars), "Gradient" (active vectors: the unit vector
+ * away from the nearest point), "NearestPointId" (index of the nearest input point),
+ * "NearestNormal" (that point's normal: the input's "Normals" when present, otherwise estimated
+ * by local PCA and consistently oriented, see ComputeNormals) and "InBand" (1 where the voxel is
+ * within the band: its values are exact). Field data: "BandWidth", "BandVoxels".
  *
  * @warning Points with NaN/Inf coordinates are dropped with a warning. An empty input, a
- * negative VoxelSize or BandWidth, or settings that would need more than
- * MaximumNumberOfVoxels voxels (or output samples) are errors with the numbers in the message;
- * nothing is allocated in that case. Sampling is multi-threaded (TBB).
+ * negative BandWidth, or an image of more than MaximumNumberOfVoxels samples are errors with the
+ * numbers in the message; nothing is allocated in that case. Multi-threaded (TBB); the same
+ * result on any number of threads.
  */
 #ifndef vtkDistanceFieldFilter_h
 #define vtkDistanceFieldFilter_h
@@ -45,13 +44,8 @@ public:
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   ///@{
-  /** Voxel size of the field in world units; 0 (default) = bounding-box diagonal / 200. */
-  vtkSetMacro(VoxelSize, double);
-  vtkGetMacro(VoxelSize, double);
-  ///@}
-
-  ///@{
-  /** Width of the band kept in the grid, in world units; 0 (default) = 3 voxels. */
+  /** Within this distance of the points (world units) the values are exact; 0 (default): 3
+   *  voxels of the output image. */
   vtkSetMacro(BandWidth, double);
   vtkGetMacro(BandWidth, double);
   ///@}
@@ -85,7 +79,7 @@ public:
   ///@}
 
   ///@{
-  /** Refuse fields or outputs larger than this many voxels / samples (default 200 million). */
+  /** Refuse output images of more samples than this (default 200 million). */
   vtkSetClampMacro(MaximumNumberOfVoxels, vtkIdType, 1, VTK_ID_MAX);
   vtkGetMacro(MaximumNumberOfVoxels, vtkIdType);
   ///@}
@@ -99,7 +93,6 @@ protected:
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  double VoxelSize = 0.0;
   double BandWidth = 0.0;
   int Dimensions[3] = {128, 128, 128};
   double Bounds[6] = {-1.0, 1.0, -1.0, 1.0, -1.0, 1.0};

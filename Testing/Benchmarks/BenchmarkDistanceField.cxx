@@ -14,6 +14,7 @@
 #include "dp/FrameSequence.h"
 #include "dp/SurfaceSampler.h"
 
+#include "vtkDistanceFieldFilter.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
 #include "vtkNew.h"
@@ -21,6 +22,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
+#include "vtkStaticPointLocator.h"
 #include "vtkUnsignedDistance.h"
 
 #include <tbb/global_control.h>
@@ -317,6 +319,93 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
               vtkRandom.rms / voxel);
 }
 
+// The filter as users call it: vtkDistanceFieldFilter and vtkUnsignedDistance (radius 3 voxels)
+// on the same points and the same image (points on a sphere of radius 0.5, the image over
+// [-0.6, 0.6]^3), medians of `repeats` runs each, in one run; then ours against exact
+// nearest-point distances at a sample of the image's voxels, within the band and beyond it.
+void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool withVTK)
+{
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> gauss;
+  vtkNew<vtkPoints> xyz;
+  xyz->SetDataTypeToDouble();
+  xyz->SetNumberOfPoints(static_cast<vtkIdType>(pointCount));
+  for (std::size_t i = 0; i < pointCount; ++i)
+  {
+    double p[3] = {gauss(rng), gauss(rng), gauss(rng)};
+    const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    for (double& c : p)
+      c *= 0.5 / r;
+    xyz->SetPoint(static_cast<vtkIdType>(i), p);
+  }
+  vtkNew<vtkPolyData> cloud;
+  cloud->SetPoints(xyz);
+  const double voxel = 1.2 / (size - 1), band = 3 * voxel;
+
+  auto timeIt = [&](vtkAlgorithm* algorithm)
+  {
+    std::vector<double> t;
+    for (std::size_t r = 0; r < repeats; ++r)
+    {
+      algorithm->Modified();
+      const double start = now();
+      algorithm->Update();
+      t.push_back(now() - start);
+    }
+    return median(t);
+  };
+  vtkNew<vtkDistanceFieldFilter> ours;
+  ours->SetInputData(cloud);
+  ours->SetDimensions(size, size, size);
+  ours->AdjustBoundsOff();
+  ours->SetBounds(-0.6, 0.6, -0.6, 0.6, -0.6, 0.6);
+  ours->SetBandWidth(band);
+  ours->ComputeNormalsOff();
+  const double oursTime = timeIt(ours);
+  double theirsTime = 0;
+  if (withVTK)
+  {
+    vtkNew<vtkUnsignedDistance> theirs;
+    theirs->SetInputData(cloud);
+    theirs->SetDimensions(size, size, size);
+    theirs->AdjustBoundsOff();
+    theirs->SetBounds(-0.6, 0.6, -0.6, 0.6, -0.6, 0.6);
+    theirs->SetRadius(band);
+    theirs->CappingOn();
+    theirs->SetOutputScalarTypeToFloat();
+    theirsTime = timeIt(theirs);
+  }
+
+  vtkNew<vtkStaticPointLocator> locator;
+  locator->SetDataSet(cloud);
+  locator->BuildLocator();
+  vtkImageData* image = ours->GetOutput();
+  vtkDataArray* distance = image->GetPointData()->GetArray("Distance");
+  Errors inBand, beyond;
+  double below = 0;
+  const vtkIdType voxels = image->GetNumberOfPoints();
+  for (vtkIdType id = 0; id < voxels; id += 7)
+  {
+    double x[3], p[3];
+    image->GetPoint(id, x);
+    xyz->GetPoint(locator->FindClosestPoint(x), p);
+    const double exact = std::sqrt(vtkMath::Distance2BetweenPoints(x, p));
+    const double error = distance->GetTuple1(id) - exact;
+    below = std::max(below, -error);
+    accumulate(exact <= band ? inBand : beyond, error);
+  }
+  finish(inBand);
+  finish(beyond);
+  std::printf("%8zu points %4d^3: vtkDistanceFieldFilter %8.1f ms", pointCount, size,
+              1e3 * oursTime);
+  if (withVTK)
+    std::printf(", vtkUnsignedDistance %9.1f ms, ratio %5.1fx", 1e3 * theirsTime,
+                theirsTime / oursTime);
+  std::printf("\n    ours vs exact, in voxels: band (<= 3 voxels) max %.2g; beyond max %.3f RMS "
+              "%.4f; never below exact by more than %.2g\n",
+              inBand.max / voxel, beyond.max / voxel, beyond.rms / voxel, below / voxel);
+}
+
 } // namespace
 
 int main(int argc, char** argv)
@@ -325,6 +414,7 @@ int main(int argc, char** argv)
   std::size_t repeats = 5, small = 20000, large = 1000000;
   std::string data = "../shared/data";
   bool vtkLarge = true;
+  std::vector<int> imageSizes{100, 200};
   try
   {
     for (int i = 1; i < argc; ++i)
@@ -338,12 +428,19 @@ int main(int argc, char** argv)
         large = parseCount(arg, optionValue(argc, argv, i), 0, 100000000);
       else if (arg == "--data")
         data = optionValue(argc, argv, i);
+      else if (arg == "--image-sizes")
+      {
+        imageSizes.clear();
+        for (const std::string& v : splitList(optionValue(argc, argv, i)))
+          imageSizes.push_back(static_cast<int>(parseCount(arg, v, 2, 2000)));
+      }
       else if (arg == "--no-vtk-large")
         vtkLarge = false;
       else
       {
         std::cout << "Usage: BenchmarkDistanceField [--repeats N] [--points N] [--large-points N]"
-                     " [--data DIR] [--no-vtk-large]\n";
+                     " [--data DIR] [--no-vtk-large]\n"
+                     "                              [--image-sizes N,N...]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -355,6 +452,16 @@ int main(int argc, char** argv)
   }
   std::printf("machine: %s, %u hardware threads; Release build\n", cpuModel().c_str(),
               std::thread::hardware_concurrency());
+  std::printf("vtkDistanceFieldFilter against vtkUnsignedDistance on the same image "
+              "(sphere, radius 0.5; image [-0.6, 0.6]^3; band = radius = 3 voxels; medians of %zu; "
+              "%d SMP thread(s)):\n",
+              repeats, vtkSMPTools::GetEstimatedNumberOfThreads());
+  for (int size : imageSizes)
+  {
+    runImageCase(small, size, repeats, true);
+    if (large > 0)
+      runImageCase(large, size, std::max<std::size_t>(1, repeats / 2), vtkLarge);
+  }
   const Figure figure = loadFigure(data, 1.7);
   const double voxel = 0.012, band = 3 * voxel;
   const int boxVoxels = 200;

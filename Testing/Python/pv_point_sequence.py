@@ -64,7 +64,8 @@ def main():
         assert image.GetDimensions() == (24, 24, 24), image.GetDimensions()
         distance = image.GetPointData().GetArray("Distance")
         assert distance is not None and distance.GetRange()[1] > 0
-        assert "diagonal" in field.GetProperty("VoxelSize").GetDocumentation().GetDescription()
+        assert "exact" in field.GetProperty("BandWidth").GetDocumentation().GetDescription()
+        assert image.GetFieldData().GetArray("BandVoxels").GetValue(0) > 0
         # The tracker: the template is the first truth mesh; track to the third time step.
         template = OpenDataFile(os.path.join(tmp, "truth", "frame_0000.ply"))
         track = ns["DeformableTrack"](Input=reader, Template=template)

@@ -1,5 +1,5 @@
 """vtkDistanceFieldFilter from Python: values against exact nearest-point distances (scipy's
-kd-tree), its arrays, bounds, time, and bad input."""
+kd-tree) within the band and beyond, its arrays, bounds, time, and bad input."""
 import unittest
 
 import numpy as np
@@ -45,38 +45,59 @@ class TestDistanceFieldFilter(TempDirTestCase):
             getattr(f, "Set" + name)(*value) if isinstance(value, tuple) else getattr(f, "Set" + name)(value)
         return f
 
-    def test_distances_match_exact_nearest_points_within_the_stated_bound(self):
-        voxel = 0.02
-        f = self.field(VoxelSize=voxel, BandWidth=0.06)
+    def test_exact_in_the_band_and_a_close_upper_bound_beyond(self):
+        band = 0.06
+        f = self.field(BandWidth=band)
         f.Update()
         image = dsa.WrapDataObject(f.GetOutput())
+        voxel = max(f.GetOutput().GetSpacing())
         grid = image_points(f.GetOutput())
         cloud = dsa.WrapDataObject(self.source.GetOutput())
         tree = cKDTree(np.asarray(cloud.Points))
         exact, nearest = tree.query(grid)
         distance = np.asarray(image.PointData["Distance"])
-        error = np.abs(distance - exact)
-        # Trilinear interpolation of exact voxel-centre distances: bound stated in voxels.
-        self.assertLess(error.max(), 0.75 * voxel)
-        self.assertLess(np.sqrt((error ** 2).mean()), 0.2 * voxel)
-        # The reported nearest point is (about) as near as the true one.
+        in_band = np.asarray(image.PointData["InBand"]) == 1
+        # The band is exactly where the nearest point is within BandWidth (up to rounding).
+        clear = np.abs(exact - band) > 1e-6
+        np.testing.assert_array_equal(in_band[clear], (exact <= band)[clear])
+        self.assertGreater(in_band.sum(), 1000)
+        self.assertGreater((~in_band).sum(), 5000)
+        # Within the band: exact (float32). Beyond: a real point, so never nearer than the
+        # nearest, and within a voxel of it.
+        np.testing.assert_allclose(distance[in_band], exact[in_band], atol=1e-6)
+        error = distance[~in_band] - exact[~in_band]
+        self.assertGreater(error.min(), -1e-6)
+        self.assertLess(error.max(), voxel)
+        self.assertLess(np.sqrt((error ** 2).mean()), 0.15 * voxel)
+        # The reported nearest point is at the reported distance.
         ids = np.asarray(image.PointData["NearestPointId"])
         via_ids = np.linalg.norm(grid - np.asarray(cloud.Points)[ids], axis=1)
-        self.assertLess(np.abs(via_ids - exact).max(), 0.75 * voxel)
-        # Far from the data the gradient is a unit vector pointing away from the nearest point.
-        far = exact > 4 * voxel
-        self.assertGreater(far.sum(), 1000)
-        gradient = np.asarray(image.PointData["Gradient"])[far]
+        np.testing.assert_allclose(via_ids, distance, atol=1e-6)
+        # The gradient is the unit vector away from the reported nearest point; beyond the band
+        # it points about the way the true nearest point's does.
+        gradient = np.asarray(image.PointData["Gradient"])
+        moved = distance > 1e-6
+        np.testing.assert_allclose(gradient[moved], ((grid - np.asarray(cloud.Points)[ids])
+                                                     / distance[:, None])[moved], atol=1e-5)
+        far = ~in_band
         away = (grid - np.asarray(cloud.Points)[nearest])[far]
         away /= np.linalg.norm(away, axis=1, keepdims=True)
-        cosine = (gradient * away).sum(axis=1) / np.linalg.norm(gradient, axis=1)
-        self.assertGreater(np.mean(cosine > 0.95), 0.95)
-        self.assertEqual(image.PointData["InBand"].max(), 1)
-        self.assertEqual(image.PointData["InBand"].min(), 0)
-        self.assertGreater(f.GetOutput().GetFieldData().GetArray("ActiveVoxels").GetValue(0), 1000)
+        cosine = (gradient[far] * away).sum(axis=1)
+        self.assertGreater(cosine.mean(), 0.97)
+        self.assertGreater(np.mean(cosine > 0.8), 0.95)
+        fields = f.GetOutput().GetFieldData()
+        self.assertEqual(fields.GetArray("BandVoxels").GetValue(0), in_band.sum())
+        self.assertAlmostEqual(fields.GetArray("BandWidth").GetValue(0), band)
+
+    def test_the_default_band_is_three_voxels_of_the_image(self):
+        f = self.field()
+        f.Update()
+        voxel = max(f.GetOutput().GetSpacing())
+        band = f.GetOutput().GetFieldData().GetArray("BandWidth").GetValue(0)
+        self.assertAlmostEqual(band, 3 * voxel)
 
     def test_nearest_normals_come_from_the_input_or_are_estimated(self):
-        f = self.field(VoxelSize=0.03)
+        f = self.field()
         f.Update()
         image = dsa.WrapDataObject(f.GetOutput())
         cloud = dsa.WrapDataObject(self.source.GetOutput())
@@ -117,10 +138,8 @@ class TestDistanceFieldFilter(TempDirTestCase):
         empty = dynamicpoints.vtkDistanceFieldFilter()
         empty.SetInputData(vtkPolyData())
         cases.append((empty, "has no points"))
-        negative = self.field(VoxelSize=-0.5)
-        cases.append((negative, "VoxelSize must be positive"))
-        huge = self.field(VoxelSize=1e-5, BandWidth=0.5)
-        cases.append((huge, "use a larger voxel size"))
+        negative = self.field(BandWidth=-0.5)
+        cases.append((negative, "BandWidth must be positive"))
         too_many_samples = self.field(Dimensions=(3000, 3000, 3000))
         cases.append((too_many_samples, "output samples"))
         for f, message in cases:
