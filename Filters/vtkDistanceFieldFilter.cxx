@@ -17,12 +17,12 @@
 #include "vtkObjectFactory.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
-#include "vtkSMPTools.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <algorithm>
 #include <cmath>
+#include <type_traits>
 #include <vector>
 
 vtkStandardNewMacro(vtkDistanceFieldFilter);
@@ -114,31 +114,11 @@ void fillArrays(vtkImageData* output, const std::vector<double>& xyz,
   if (!normals.empty())
     nearestNormal->SetNumberOfTuples(samples);
 
-  const std::size_t nx = static_cast<std::size_t>(grid.dimensions[0]);
-  const std::size_t ny = static_cast<std::size_t>(grid.dimensions[1]);
-  vtkSMPTools::For(0, samples,
-                   [&](vtkIdType begin, vtkIdType end)
-                   {
-                     for (vtkIdType id = begin; id < end; ++id)
-                     {
-                       const std::size_t v = static_cast<std::size_t>(id);
-                       const std::size_t p = static_cast<std::size_t>(field.nearest[v]);
-                       const double x[3] = {
-                           grid.origin[0] + static_cast<double>(v % nx) * grid.spacing[0],
-                           grid.origin[1] + static_cast<double>((v / nx) % ny) * grid.spacing[1],
-                           grid.origin[2] + static_cast<double>(v / (nx * ny)) * grid.spacing[2]};
-                       // The gradient of the distance to the nearest point: the unit vector away
-                       // from it.
-                       const double d = field.distance[v];
-                       for (int c = 0; c < 3; ++c)
-                         gradient->SetTypedComponent(
-                             id, c, d > 0 ? static_cast<float>((x[c] - xyz[3 * p + c]) / d) : 0.0f);
-                       nearest->SetValue(id, ids[p]);
-                       if (!normals.empty())
-                         for (int c = 0; c < 3; ++c)
-                           nearestNormal->SetTypedComponent(id, c, normals[3 * p + c]);
-                     }
-                   });
+  static_assert(std::is_same<vtkIdType, long long>::value, "vtkIdType is 64-bit here");
+  dp::distanceGradient(xyz.data(), grid, field, gradient->GetPointer(0));
+  dp::gatherNearest(field, ids.data(), nearest->GetPointer(0));
+  if (!normals.empty())
+    dp::gatherNearest(field, normals.data(), 3, nearestNormal->GetPointer(0));
   output->GetPointData()->SetScalars(distance);
   output->GetPointData()->SetVectors(gradient);
   output->GetPointData()->AddArray(nearest);

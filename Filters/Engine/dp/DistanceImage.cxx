@@ -21,6 +21,8 @@ namespace
 {
 constexpr std::uint64_t NoKey = std::numeric_limits<std::uint64_t>::max();
 constexpr double Infinity = std::numeric_limits<double>::infinity();
+constexpr float FarAway = std::numeric_limits<float>::infinity();
+constexpr std::uint32_t NoPoint = std::numeric_limits<std::uint32_t>::max();
 
 void validate(const double* points, std::size_t count, const ImageGrid& grid, double bandWidth)
 {
@@ -51,11 +53,12 @@ void validate(const double* points, std::size_t count, const ImageGrid& grid, do
                                   " has a non-finite coordinate");
 }
 
-// (distance, index) as one integer whose order is the pair's: a non-negative float's bits grow
-// with its value, so an atomic minimum of keys keeps the nearest point, ties to the lower index.
-std::uint64_t keyOf(double distance, std::uint32_t index)
+// (squared distance, index) as one integer whose order is the pair's: a non-negative float's
+// bits grow with its value, so an atomic minimum of keys keeps the nearest point, ties to the
+// lower index.
+std::uint64_t keyOf(double distance2, std::uint32_t index)
 {
-  const float d = static_cast<float>(distance);
+  const float d = static_cast<float>(distance2);
   std::uint32_t bits;
   std::memcpy(&bits, &d, sizeof bits);
   return (static_cast<std::uint64_t>(bits) << 32) | index;
@@ -130,174 +133,235 @@ std::unique_ptr<std::atomic<std::uint64_t>[]> splatBand(const double* points, st
   return keys;
 }
 
-// One axis of the separable transform on one line: out[p] = min_q f[q] + w (p - q)^2 over the
-// line's finite f (the lower envelope of parabolas), carrying the winner's seed.
+// One axis of the separable transform on one line, in place: g[p] <- min_q g[q] + w (p - q)^2
+// over the line's finite g (the lower envelope of parabolas), carrying the winner's point. In
+// single precision and voxel units: it only picks each voxel's seed, whose point's distance is
+// then computed exactly.
 struct LineScratch
 {
-  std::vector<double> f, z;
+  std::vector<float> f, h, z;
   std::vector<int> v;
-  std::vector<std::int32_t> seed;
+  std::vector<std::uint32_t> point;
 };
 
-void transformLine(double* g, std::int32_t* seed, std::size_t stride, int length, double w,
-                   LineScratch& s)
+void transformLine(float* g, std::uint32_t* point, int length, float w, LineScratch& s)
 {
   s.f.resize(length);
-  s.seed.resize(length);
+  s.h.resize(length);
   s.v.resize(length);
   s.z.resize(length + 1);
-  for (int q = 0; q < length; ++q)
-  {
-    s.f[q] = g[q * stride];
-    s.seed[q] = seed[q * stride];
-  }
+  s.point.assign(point, point + length);
+  const float inverse = 1.0f / w;
   int k = -1;
   for (int q = 0; q < length; ++q)
   {
-    if (s.f[q] == Infinity)
+    if (g[q] == FarAway)
       continue;
-    double cut = -Infinity;
+    s.f[q] = g[q] * inverse;
+    s.h[q] = s.f[q] + static_cast<float>(q) * static_cast<float>(q); // where the cuts come from
+    float cut = -FarAway;
     while (k >= 0)
     {
       const int r = s.v[k];
-      cut = ((s.f[q] + w * q * q) - (s.f[r] + w * r * r)) / (2.0 * w * (q - r));
+      cut = (s.h[q] - s.h[r]) / static_cast<float>(2 * (q - r));
       if (cut > s.z[k])
         break;
       --k;
-      cut = -Infinity;
+      cut = -FarAway;
     }
     ++k;
     s.v[k] = q;
     s.z[k] = cut;
   }
   if (k < 0)
-    return; // no seed on this line yet: everything stays infinite
-  s.z[k + 1] = Infinity;
+    return; // no seed on this line yet: everything stays far away
+  s.z[k + 1] = FarAway;
   int j = 0;
   for (int p = 0; p < length; ++p)
   {
-    while (s.z[j + 1] < p)
+    while (s.z[j + 1] < static_cast<float>(p))
       ++j;
     const int q = s.v[j];
-    g[p * stride] = s.f[q] + w * (p - q) * (p - q);
-    seed[p * stride] = s.seed[q];
+    const float step = static_cast<float>(p - q);
+    g[p] = w * (s.f[q] + step * step);
+    point[p] = s.point[q];
   }
 }
 
-// Step 2: the exact distance transform of the seeds, axis by axis; each voxel ends with the
-// index of its nearest seed voxel (-1 when there is none).
-std::vector<std::int32_t> nearestSeeds(const std::vector<std::int32_t>& seeds,
-                                       const ImageGrid& grid)
+// Lines along y or z are strided: a block of Block neighbouring lines (along x) is copied into
+// contiguous buffers, transformed and copied back, so each cache line read serves all of them.
+constexpr std::size_t Block = 16;
+
+void transformStridedAxis(std::vector<float>& g, std::vector<std::uint32_t>& point,
+                          const std::size_t dim[3], int axis, float w)
+{
+  const std::size_t nx = dim[0], stride = axis == 1 ? dim[0] : dim[0] * dim[1];
+  const std::size_t length = dim[axis], other = axis == 1 ? dim[2] : dim[1];
+  const std::size_t blocks = (nx + Block - 1) / Block;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, other * blocks, 4),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    {
+                      LineScratch scratch;
+                      std::vector<float> lineG(Block * length);
+                      std::vector<std::uint32_t> linePoint(Block * length);
+                      for (std::size_t task = r.begin(); task < r.end(); ++task)
+                      {
+                        const std::size_t o = task / blocks, x0 = (task % blocks) * Block;
+                        const std::size_t width = std::min(Block, nx - x0);
+                        // The first voxel of the block's lines: x0 in row o of the other axis.
+                        const std::size_t first = x0 + o * (axis == 1 ? dim[0] * dim[1] : dim[0]);
+                        for (std::size_t q = 0; q < length; ++q)
+                          for (std::size_t b = 0; b < width; ++b)
+                          {
+                            lineG[b * length + q] = g[first + q * stride + b];
+                            linePoint[b * length + q] = point[first + q * stride + b];
+                          }
+                        for (std::size_t b = 0; b < width; ++b)
+                          transformLine(&lineG[b * length], &linePoint[b * length],
+                                        static_cast<int>(length), w, scratch);
+                        for (std::size_t q = 0; q < length; ++q)
+                          for (std::size_t b = 0; b < width; ++b)
+                          {
+                            g[first + q * stride + b] = lineG[b * length + q];
+                            point[first + q * stride + b] = linePoint[b * length + q];
+                          }
+                      }
+                    });
+}
+
+// Step 2: the exact distance transform of the seed voxels (in voxel-centre distances), axis by
+// axis; each voxel ends with the point of its nearest seed (NoPoint when there is none).
+std::vector<std::uint32_t> nearestSeedPoints(const std::vector<std::size_t>& seeds,
+                                             const std::atomic<std::uint64_t>* keys,
+                                             const ImageGrid& grid)
 {
   const std::size_t n = grid.voxelCount();
-  std::vector<double> g(n, Infinity);
-  std::vector<std::int32_t> seed(n, -1);
-  for (std::int32_t v : seeds)
+  std::vector<float> g(n, FarAway);
+  std::vector<std::uint32_t> point(n, NoPoint);
+  for (std::size_t v : seeds)
   {
-    g[static_cast<std::size_t>(v)] = 0;
-    seed[static_cast<std::size_t>(v)] = v;
+    g[v] = 0;
+    point[v] = static_cast<std::uint32_t>(keys[v].load(std::memory_order_relaxed) & 0xffffffffu);
   }
   const std::size_t dim[3] = {static_cast<std::size_t>(grid.dimensions[0]),
                               static_cast<std::size_t>(grid.dimensions[1]),
                               static_cast<std::size_t>(grid.dimensions[2])};
-  const std::size_t stride[3] = {1, dim[0], dim[0] * dim[1]};
-  for (int axis = 0; axis < 3; ++axis)
-  {
-    // Lines along `axis`: indexed by the other two coordinates.
-    const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-    const std::size_t lines = dim[a] * dim[b];
-    const double w = grid.spacing[axis] * grid.spacing[axis];
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, lines, 64),
-                      [&](const tbb::blocked_range<std::size_t>& r)
-                      {
-                        LineScratch scratch;
-                        for (std::size_t line = r.begin(); line < r.end(); ++line)
-                        {
-                          const std::size_t first =
-                              (line % dim[a]) * stride[a] + (line / dim[a]) * stride[b];
-                          transformLine(&g[first], &seed[first], stride[axis],
-                                        static_cast<int>(dim[axis]), w, scratch);
-                        }
-                      });
-  }
-  return seed;
+  const float w0 = static_cast<float>(grid.spacing[0] * grid.spacing[0]);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dim[1] * dim[2], 16),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    {
+                      LineScratch scratch;
+                      for (std::size_t line = r.begin(); line < r.end(); ++line)
+                        transformLine(&g[line * dim[0]], &point[line * dim[0]],
+                                      static_cast<int>(dim[0]), w0, scratch);
+                    });
+  transformStridedAxis(g, point, dim, 1, static_cast<float>(grid.spacing[1] * grid.spacing[1]));
+  transformStridedAxis(g, point, dim, 2, static_cast<float>(grid.spacing[2] * grid.spacing[2]));
+  return point;
 }
 
-double distanceTo(const double* point, const double x[3])
-{
-  const double dx = x[0] - point[0], dy = x[1] - point[1], dz = x[2] - point[2];
-  return std::sqrt(dx * dx + dy * dy + dz * dz);
-}
-
-// The nearest point found for a voxel so far (ties to the lower index: deterministic).
+// The nearest point found for a voxel so far, by squared distance in single precision (the
+// output's; twice the throughput), ties to the lower index, so the result does not depend on the
+// order candidates come in.
 struct Candidate
 {
-  std::int64_t index = -1;
-  double distance = Infinity;
-  bool exact = false;
+  std::uint32_t index = NoPoint;
+  float distance2 = std::numeric_limits<float>::infinity();
 
-  void offer(std::int64_t point, double d)
+  void offer(const float* points, std::uint32_t p, const float x[3])
   {
-    if (d < distance || (d == distance && point < index))
+    const float* q = points + 3 * static_cast<std::size_t>(p);
+    const float dx = x[0] - q[0], dy = x[1] - q[1], dz = x[2] - q[2];
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    if (d2 < distance2 || (d2 == distance2 && p < index))
     {
-      index = point;
-      distance = d;
+      index = p;
+      distance2 = d2;
     }
   }
 };
 
-// Step 3: each voxel's nearest point from the band, else from the transform's seeds.
-struct VoxelLookup
+// Calls visit(v, x, around) for every voxel v of the image, x its centre and around its six
+// face neighbours (v itself where the image ends), rows in parallel: no division per voxel.
+template <class Visit>
+void forEachVoxel(const ImageGrid& grid, Visit&& visit)
 {
-  const ImageGrid& grid;
-  const double* points;
-  const std::atomic<std::uint64_t>* keys;
-  const std::vector<std::int32_t>& seed;
-
-  Candidate nearest(std::size_t v, const detail::KdTree* outsideTree,
-                    const std::vector<std::uint32_t>& outsideIndex) const
-  {
-    const std::size_t nx = static_cast<std::size_t>(grid.dimensions[0]);
-    const std::size_t ny = static_cast<std::size_t>(grid.dimensions[1]);
-    const std::size_t nz = static_cast<std::size_t>(grid.dimensions[2]);
-    const std::size_t i = v % nx, j = (v / nx) % ny, k = v / (nx * ny);
-    const double x[3] = {grid.origin[0] + static_cast<double>(i) * grid.spacing[0],
-                         grid.origin[1] + static_cast<double>(j) * grid.spacing[1],
-                         grid.origin[2] + static_cast<double>(k) * grid.spacing[2]};
-    Candidate c;
-    const std::uint64_t key = keys[v].load(std::memory_order_relaxed);
-    if (key != NoKey)
-    {
-      c.exact = true;
-      c.offer(static_cast<std::int64_t>(key & 0xffffffffu),
-              distanceTo(points + 3 * (key & 0xffffffffu), x));
-      return c;
-    }
-    // The nearest seed's point, or a neighbour's nearest seed's point when nearer: the seed
-    // nearest to the voxel's centre need not hold the point nearest to it.
-    const std::size_t around[7] = {v,
-                                   i > 0 ? v - 1 : v,
-                                   i + 1 < nx ? v + 1 : v,
-                                   j > 0 ? v - nx : v,
-                                   j + 1 < ny ? v + nx : v,
-                                   k > 0 ? v - nx * ny : v,
-                                   k + 1 < nz ? v + nx * ny : v};
-    for (std::size_t u : around)
-      if (seed[u] >= 0)
+  const std::size_t nx = static_cast<std::size_t>(grid.dimensions[0]);
+  const std::size_t ny = static_cast<std::size_t>(grid.dimensions[1]);
+  const std::size_t nz = static_cast<std::size_t>(grid.dimensions[2]);
+  const std::size_t slice = nx * ny;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, ny * nz, 8),
+      [&](const tbb::blocked_range<std::size_t>& r)
       {
-        const std::uint64_t p =
-            keys[static_cast<std::size_t>(seed[u])].load(std::memory_order_relaxed) & 0xffffffffu;
-        c.offer(static_cast<std::int64_t>(p), distanceTo(points + 3 * p, x));
-      }
-    if (outsideTree)
-    {
-      double d2 = 0;
-      const std::uint32_t o = outsideTree->nearest(x, &d2);
-      c.offer(outsideIndex[o], std::sqrt(d2));
-    }
-    return c;
-  }
-};
+        for (std::size_t row = r.begin(); row < r.end(); ++row)
+        {
+          const std::size_t j = row % ny, k = row / ny, first = row * nx;
+          float x[3] = {0.0f, static_cast<float>(grid.origin[1] + j * grid.spacing[1]),
+                        static_cast<float>(grid.origin[2] + k * grid.spacing[2])};
+          for (std::size_t i = 0; i < nx; ++i)
+          {
+            const std::size_t v = first + i;
+            x[0] = static_cast<float>(grid.origin[0] + i * grid.spacing[0]);
+            const std::size_t around[6] = {i > 0 ? v - 1 : v,     i + 1 < nx ? v + 1 : v,
+                                           j > 0 ? v - nx : v,    j + 1 < ny ? v + nx : v,
+                                           k > 0 ? v - slice : v, k + 1 < nz ? v + slice : v};
+            visit(v, x, around);
+          }
+        }
+      });
+}
+
+// Step 3: each voxel's nearest point: from the band (exact), else its nearest seed's point, or
+// a point outside the image when nearer.
+void assignVoxels(const float* points, const ImageGrid& grid,
+                  const std::atomic<std::uint64_t>* keys, const std::vector<std::uint32_t>& seed,
+                  const detail::KdTree* outsideTree, const std::vector<std::uint32_t>& outsideIndex,
+                  DistanceImage& out)
+{
+  forEachVoxel(grid,
+               [&](std::size_t v, const float* x, const std::size_t*)
+               {
+                 Candidate c;
+                 const std::uint64_t key = keys[v].load(std::memory_order_relaxed);
+                 out.exact[v] = key != NoKey ? 1 : 0;
+                 if (key != NoKey)
+                   c.offer(points, static_cast<std::uint32_t>(key & 0xffffffffu), x);
+                 else
+                 {
+                   if (seed[v] != NoPoint)
+                     c.offer(points, seed[v], x);
+                   if (outsideTree)
+                   {
+                     const double q[3] = {x[0], x[1], x[2]};
+                     c.offer(points, outsideIndex[outsideTree->nearest(q)], x);
+                   }
+                 }
+                 out.nearest[v] = c.index;
+                 out.distance[v] = static_cast<float>(std::sqrt(c.distance2));
+               });
+}
+
+// Step 4: beyond the band, each voxel also tries the points its six neighbours found (read from
+// a copy, so the order of the voxels does not matter): the seed nearest to a voxel's centre need
+// not hold the point nearest to it, and a neighbour's often does.
+void refineBeyondBand(const float* points, const ImageGrid& grid, DistanceImage& out)
+{
+  const std::vector<std::uint32_t> found = out.nearest;
+  forEachVoxel(grid,
+               [&](std::size_t v, const float* x, const std::size_t* around)
+               {
+                 if (out.exact[v])
+                   return;
+                 Candidate c;
+                 c.offer(points, found[v], x);
+                 for (int a = 0; a < 6; ++a)
+                   if (found[around[a]] != c.index)
+                     c.offer(points, found[around[a]], x);
+                 out.nearest[v] = c.index;
+                 out.distance[v] = static_cast<float>(std::sqrt(c.distance2));
+               });
+}
 
 } // namespace
 
@@ -315,7 +379,7 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
   // Seeds: the voxels points fall in (their nearest point is exact, within half a diagonal).
   // Points outside the image have no seed; a kd-tree finds them beyond the band.
   const std::size_t n = grid.voxelCount();
-  std::vector<std::int32_t> seeds;
+  std::vector<std::size_t> seeds;
   std::vector<double> outside;
   std::vector<std::uint32_t> outsideIndex;
   for (std::size_t p = 0; p < count; ++p)
@@ -330,16 +394,14 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
       stride *= static_cast<std::size_t>(grid.dimensions[a]);
     }
     if (inside)
-      seeds.push_back(static_cast<std::int32_t>(voxel));
+      seeds.push_back(voxel);
     else
     {
       outside.insert(outside.end(), points + 3 * p, points + 3 * p + 3);
       outsideIndex.push_back(static_cast<std::uint32_t>(p));
     }
   }
-  std::sort(seeds.begin(), seeds.end());
-  seeds.erase(std::unique(seeds.begin(), seeds.end()), seeds.end());
-  const std::vector<std::int32_t> seed = nearestSeeds(seeds, grid);
+  const std::vector<std::uint32_t> seed = nearestSeedPoints(seeds, keys.get(), grid);
   std::unique_ptr<detail::KdTree> outsideTree;
   if (!outsideIndex.empty())
     outsideTree = std::make_unique<detail::KdTree>(outside.data(), outsideIndex.size());
@@ -347,21 +409,47 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
   out.distance.resize(n);
   out.nearest.resize(n);
   out.exact.resize(n);
-  const VoxelLookup lookup{grid, points, keys.get(), seed};
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r)
-                    {
-                      for (std::size_t v = r.begin(); v < r.end(); ++v)
-                      {
-                        const Candidate c = lookup.nearest(v, outsideTree.get(), outsideIndex);
-                        out.exact[v] = c.exact ? 1 : 0;
-                        out.nearest[v] = c.index;
-                        out.distance[v] = static_cast<float>(c.distance);
-                      }
-                    });
+  const std::vector<float> single(points, points + 3 * count);
+  assignVoxels(single.data(), grid, keys.get(), seed, outsideTree.get(), outsideIndex, out);
+  refineBeyondBand(single.data(), grid, out);
   for (std::uint8_t e : out.exact)
     out.bandVoxels += e;
   return out;
+}
+
+void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImage& image,
+                      float* out)
+{
+  forEachVoxel(grid,
+               [&](std::size_t v, const float* x, const std::size_t*)
+               {
+                 const double* p = points + 3 * image.nearest[v];
+                 const double d = image.distance[v];
+                 for (int c = 0; c < 3; ++c)
+                   out[3 * v + c] = d > 0 ? static_cast<float>((x[c] - p[c]) / d) : 0.0f;
+               });
+}
+
+void gatherNearest(const DistanceImage& image, const float* perPoint, int components, float* out)
+{
+  const std::size_t m = static_cast<std::size_t>(components);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.nearest.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    {
+                      for (std::size_t v = r.begin(); v < r.end(); ++v)
+                        std::copy_n(perPoint + m * static_cast<std::size_t>(image.nearest[v]), m,
+                                    out + m * v);
+                    });
+}
+
+void gatherNearest(const DistanceImage& image, const long long* perPoint, long long* out)
+{
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.nearest.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    {
+                      for (std::size_t v = r.begin(); v < r.end(); ++v)
+                        out[v] = perPoint[image.nearest[v]];
+                    });
 }
 
 } // namespace dp

@@ -16,12 +16,14 @@
  *    seed voxels (those holding a point) by separable lower envelopes of parabolas (Felzenszwalb &
  *    Huttenlocher, "Distance Transforms of Sampled Functions", 2012: one pass per axis, the
  *    image's lines in parallel) gives each voxel its nearest seed, and the voxel takes that
- *    seed's nearest point. The distance is to a real input point, so it is never below the true
- *    distance, and above it by a small fraction of a voxel away from the data.
+ *    seed's nearest point; a last pass lets each voxel take a face neighbour's point when nearer.
+ * The distance is to a real input point, so it is never below the true distance, and above it by a
+ * fraction of a voxel (RMS about 0.1 voxel).
  *
  * Limits: the band is at least half a voxel diagonal (seeds must be exact). Points outside the
- * image are found beyond the band by a kd-tree (slower: one query per such voxel). Up to 2^32
- * points; the caller bounds the voxel count (memory: about 21 bytes per voxel while computing).
+ * image are found beyond the band by a kd-tree (slower: one query per such voxel). Up to
+ * 2^32 - 1 points and 2^31 - 1 voxels; the caller bounds the voxel count (memory: 9 bytes per
+ * voxel in the result, about 30 while computing). Distances are in single precision.
  */
 #pragma once
 
@@ -49,11 +51,11 @@ struct ImageGrid
 
 struct DistanceImage
 {
-  std::vector<float> distance;       // per voxel, to `nearest`
-  std::vector<std::int64_t> nearest; // per voxel: index of its nearest point
-  std::vector<std::uint8_t> exact;   // per voxel: 1 within the band (the distance is exact)
-  double bandWidth = 0;              // the band used (at least half a voxel diagonal)
-  std::size_t bandVoxels = 0;        // voxels with exact = 1
+  std::vector<float> distance;        // per voxel, to `nearest`
+  std::vector<std::uint32_t> nearest; // per voxel: index of its nearest point
+  std::vector<std::uint8_t> exact;    // per voxel: 1 within the band (the distance is exact)
+  double bandWidth = 0;               // the band used (at least half a voxel diagonal)
+  std::size_t bandVoxels = 0;         // voxels with exact = 1
 };
 
 /**
@@ -63,5 +65,15 @@ struct DistanceImage
  */
 DistanceImage computeDistanceImage(const double* points, std::size_t count, const ImageGrid& grid,
                                    double bandWidth);
+
+/** The distance's gradient at every voxel: the unit vector away from its nearest point (zero on
+ *  a point); `out` holds 3 floats per voxel. In parallel. */
+void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImage& image,
+                      float* out);
+
+/** Per voxel, the `components` values its nearest point has in `perPoint` (e.g. normals). */
+void gatherNearest(const DistanceImage& image, const float* perPoint, int components, float* out);
+/** Per voxel, its nearest point's entry in `perPoint` (e.g. ids). */
+void gatherNearest(const DistanceImage& image, const long long* perPoint, long long* out);
 
 } // namespace dp
