@@ -133,6 +133,40 @@ std::unique_ptr<std::atomic<std::uint64_t>[]> splatBand(const double* points, st
   return keys;
 }
 
+// Seeds: the voxels the points fall in (their nearest point is exact: within half a diagonal).
+// Points outside the image have no seed; a kd-tree finds them beyond the band.
+struct PointsByVoxel
+{
+  std::vector<std::size_t> seeds;
+  std::vector<double> outside; // x y z of the points outside the image
+  std::vector<std::uint32_t> outsideIndex;
+};
+
+PointsByVoxel sortPoints(const double* points, std::size_t count, const ImageGrid& grid)
+{
+  PointsByVoxel out;
+  for (std::size_t p = 0; p < count; ++p)
+  {
+    std::size_t voxel = 0, stride = 1;
+    bool inside = true;
+    for (int a = 0; a < 3; ++a)
+    {
+      const double c = std::round((points[3 * p + a] - grid.origin[a]) / grid.spacing[a]);
+      inside = inside && c >= 0 && c <= grid.dimensions[a] - 1;
+      voxel += inside ? static_cast<std::size_t>(c) * stride : 0;
+      stride *= static_cast<std::size_t>(grid.dimensions[a]);
+    }
+    if (inside)
+      out.seeds.push_back(voxel);
+    else
+    {
+      out.outside.insert(out.outside.end(), points + 3 * p, points + 3 * p + 3);
+      out.outsideIndex.push_back(static_cast<std::uint32_t>(p));
+    }
+  }
+  return out;
+}
+
 // One axis of the separable transform on one line, in place: g[p] <- min_q g[q] + w (p - q)^2
 // over the line's finite g (the lower envelope of parabolas), carrying the winner's point. In
 // single precision and voxel units: it only picks each voxel's seed, whose point's distance is
@@ -376,41 +410,19 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
   const std::unique_ptr<std::atomic<std::uint64_t>[]> keys =
       splatBand(points, count, grid, out.bandWidth);
 
-  // Seeds: the voxels points fall in (their nearest point is exact, within half a diagonal).
-  // Points outside the image have no seed; a kd-tree finds them beyond the band.
-  const std::size_t n = grid.voxelCount();
-  std::vector<std::size_t> seeds;
-  std::vector<double> outside;
-  std::vector<std::uint32_t> outsideIndex;
-  for (std::size_t p = 0; p < count; ++p)
-  {
-    std::size_t voxel = 0, stride = 1;
-    bool inside = true;
-    for (int a = 0; a < 3; ++a)
-    {
-      const double c = std::round((points[3 * p + a] - grid.origin[a]) / h[a]);
-      inside = inside && c >= 0 && c <= grid.dimensions[a] - 1;
-      voxel += inside ? static_cast<std::size_t>(c) * stride : 0;
-      stride *= static_cast<std::size_t>(grid.dimensions[a]);
-    }
-    if (inside)
-      seeds.push_back(voxel);
-    else
-    {
-      outside.insert(outside.end(), points + 3 * p, points + 3 * p + 3);
-      outsideIndex.push_back(static_cast<std::uint32_t>(p));
-    }
-  }
-  const std::vector<std::uint32_t> seed = nearestSeedPoints(seeds, keys.get(), grid);
+  const PointsByVoxel sorted = sortPoints(points, count, grid);
+  const std::vector<std::uint32_t> seed = nearestSeedPoints(sorted.seeds, keys.get(), grid);
   std::unique_ptr<detail::KdTree> outsideTree;
-  if (!outsideIndex.empty())
-    outsideTree = std::make_unique<detail::KdTree>(outside.data(), outsideIndex.size());
+  if (!sorted.outsideIndex.empty())
+    outsideTree =
+        std::make_unique<detail::KdTree>(sorted.outside.data(), sorted.outsideIndex.size());
 
+  const std::size_t n = grid.voxelCount();
   out.distance.resize(n);
   out.nearest.resize(n);
   out.exact.resize(n);
   const std::vector<float> single(points, points + 3 * count);
-  assignVoxels(single.data(), grid, keys.get(), seed, outsideTree.get(), outsideIndex, out);
+  assignVoxels(single.data(), grid, keys.get(), seed, outsideTree.get(), sorted.outsideIndex, out);
   refineBeyondBand(single.data(), grid, out);
   for (std::uint8_t e : out.exact)
     out.bandVoxels += e;
