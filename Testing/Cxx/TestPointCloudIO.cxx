@@ -155,6 +155,67 @@ TEST(PLY, MalformedFilesAreErrorsNamingTheFile)
   }
 }
 
+// Inputs a coverage-guided fuzzer (issue 15) turned up: numbers whose conversion to an integer
+// was undefined behaviour (then a loop of about 2^64 steps). Each is refused, naming the file.
+TEST(FuzzFindings, PlyListLengthThatIsNotACountIsAnError)
+{
+  TempDir dir;
+  const std::string path = dir.file("list.ply");
+  const std::string head = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty "
+                           "float y\nproperty float z\nelement face 1\nproperty list uchar int "
+                           "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  for (const char* length : {"-90.35", "2.5", "1e300", "nan", "99"})
+  {
+    writeText(path, head + length + " 0 1 2\n");
+    expectFileError([&] { dp::readPLY(path); }, path, "list length");
+  }
+  // The same in an element that is skipped (not a face), and in a binary file (a negative char).
+  writeText(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                  "property float z\nelement extra 1\nproperty list char int stuff\nend_header\n"
+                  "0 0 0\n-3 1 2 3\n");
+  expectFileError([&] { dp::readPLY(path); }, path, "list length");
+  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                       "property float y\nproperty float z\nelement face 1\nproperty list char "
+                       "int vertex_indices\nend_header\n";
+  binary += std::string(12, '\0') + std::string(1, static_cast<char>(-3)) + std::string(12, '\0');
+  writeText(path, binary);
+  expectFileError([&] { dp::readPLY(path); }, path, "list length");
+}
+
+TEST(FuzzFindings, PcdHeaderNumbersOutOfRangeAreErrors)
+{
+  TempDir dir;
+  const std::string path = dir.file("header.pcd");
+  const std::pair<std::string, std::string> cases[] = {
+      {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 1.3e106\n", "bad SIZE entry '1.3e106'"},
+      {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 2.5\n", "bad COUNT entry"},
+      {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1e300\n", "bad WIDTH value"},
+      {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nPOINTS inf\n", "bad POINTS value"},
+      {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000000000000000\nHEIGHT "
+       "1000000000000000\nDATA ascii\n",
+       "too large"},
+  };
+  for (const auto& [text, expected] : cases)
+  {
+    writeText(path, text);
+    expectFileError([&] { dp::readPCD(path); }, path, expected);
+  }
+}
+
+TEST(FuzzFindings, ObjFaceIndexOutOfRangeIsAnError)
+{
+  TempDir dir;
+  const std::string path = dir.file("face.obj");
+  for (const char* index : {"1.8e94", "-1.8e94", "2.5", "nan", "4"})
+  {
+    writeText(path, std::string("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 ") + index + "\n");
+    expectFileError([&] { dp::readOBJ(path); }, path, "face");
+  }
+  // A normal index out of range is ignored (the vertex keeps no normal), never cast.
+  writeText(path, "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1e300 2//1 3//1\n");
+  EXPECT_EQ(dp::readOBJ(path).numberOfPoints(), 3u);
+}
+
 TEST(Reading, MissingFileAndDirectoryAreErrorsNamingThem)
 {
   TempDir dir;

@@ -5,6 +5,7 @@
 #include "dp/detail/FileText.h"
 
 #include <cstring>
+#include <limits>
 
 namespace dp
 {
@@ -166,7 +167,8 @@ PointCloud readPCD(const std::string& path)
       for (std::size_t k = 0; k < values.size(); ++k)
       {
         double v = 0;
-        if (!detail::parseNumber(values[k], v) || v <= 0)
+        // SIZE is 1 to 8 bytes, COUNT a field's values: anything past 2^20 is not a PCD header.
+        if (!detail::parseNumber(values[k], v) || v <= 0 || !detail::wholeNumberWithin(v, 1 << 20))
           fail("bad " + std::string(written) + " entry '" + std::string(values[k]) + "'");
         assign(fields[k], static_cast<int>(v));
       }
@@ -201,8 +203,11 @@ PointCloud readPCD(const std::string& path)
     else if (keyword == "width" || keyword == "height" || keyword == "points")
     {
       double v = -1;
-      if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0)
-        fail("bad " + std::string(written) + " value");
+      // Whole and below 2^50 (a petabyte of points), so it can be counted and multiplied.
+      if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0 ||
+          !detail::wholeNumberWithin(v, 1125899906842624.0))
+        fail("bad " + std::string(written) + " value '" +
+             (values.empty() ? std::string() : std::string(values[0])) + "'");
       const auto count = static_cast<std::size_t>(v);
       if (keyword == "width")
         width = count, haveWidth = true;
@@ -222,6 +227,8 @@ PointCloud readPCD(const std::string& path)
   {
     if (!haveWidth)
       throw FileError(path, "PCD header has neither POINTS nor WIDTH");
+    if (height > 0 && width > std::numeric_limits<std::size_t>::max() / height)
+      throw FileError(path, "PCD header's WIDTH x HEIGHT is too large to be a point count");
     points = width * height;
   }
   if (fields.empty())

@@ -4,6 +4,7 @@
 #include "dp/detail/FileText.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <optional>
 
@@ -331,6 +332,21 @@ private:
                             std::to_string(item + 1));
 }
 
+// A list's length as read: a whole number from 0 to what the data left can hold (each entry takes
+// at least a byte), else an error naming the element; casting anything else is undefined.
+std::size_t listLength(const std::string& path, const PlyElement& element, std::size_t item,
+                       double value, const BodyReader& reader)
+{
+  if (!(value >= 0) || value != std::floor(value) ||
+      value > static_cast<double>(reader.remaining()))
+  {
+    throw FileError(path, "PLY '" + element.name + "' element number " + std::to_string(item + 1) +
+                              " has a list length of " + std::to_string(value) +
+                              ", not a count the file can hold");
+  }
+  return static_cast<std::size_t>(value);
+}
+
 void readVertices(const std::string& path, const PlyElement& element, BodyReader& reader,
                   PointCloud& cloud)
 {
@@ -467,7 +483,7 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
       }
       if (!reader.read(prop.countType, value))
         truncated(path, element, f);
-      const auto length = static_cast<std::size_t>(value);
+      const std::size_t length = listLength(path, element, f, value, reader);
       for (std::size_t k = 0; k < length; ++k)
       {
         if (!reader.read(prop.type, value))
@@ -534,7 +550,7 @@ void skipElement(const std::string& path, const PlyElement& element, BodyReader&
       if (!reader.read(prop.isList ? prop.countType : prop.type, value))
         truncated(path, element, i);
       if (prop.isList)
-        for (std::size_t k = 0, len = static_cast<std::size_t>(value); k < len; ++k)
+        for (std::size_t k = 0, len = listLength(path, element, i, value, reader); k < len; ++k)
           if (!reader.read(prop.type, value))
             truncated(path, element, i);
     }

@@ -4,6 +4,7 @@
 #include "dp/detail/FileText.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace dp
@@ -266,8 +267,12 @@ PointCloud readOBJ(const std::string& path)
         // v, v/vt, v//vn or v/vt/vn; negative indices count back from the end.
         const std::size_t slash = t.find('/');
         double v = 0;
-        if (!detail::parseNumber(t.substr(0, slash), v) || v == 0)
+        if (!detail::parseNumber(t.substr(0, slash), v) || v == 0 ||
+            !detail::wholeNumberWithin(v, 9e15))
           fail("bad face vertex '" + std::string(t) + "'");
+        if (std::abs(v) > static_cast<double>(nv))
+          fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +
+               " vertices are defined so far");
         auto index = static_cast<std::int64_t>(v);
         index = index > 0 ? index - 1 : nv + index;
         if (index < 0 || index >= nv)
@@ -278,7 +283,8 @@ PointCloud readOBJ(const std::string& path)
         if (slash != std::string_view::npos && lastSlash > slash) // v//vn or v/vt/vn
         {
           double vn = 0;
-          if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0)
+          if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0 &&
+              detail::wholeNumberWithin(vn, static_cast<double>(nn)))
           {
             auto n = static_cast<std::int64_t>(vn);
             n = n > 0 ? n - 1 : nn + n;

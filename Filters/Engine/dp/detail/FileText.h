@@ -5,6 +5,7 @@
 #include "dp/PointCloud.h"
 
 #include <charconv>
+#include <cmath>
 #include <string>
 #include <string_view>
 
@@ -61,6 +62,13 @@ inline std::string_view nextToken(std::string_view& s, bool commaIsSeparator = f
   std::string_view token = s.substr(0, i);
   s.remove_prefix(i);
   return token;
+}
+
+/** True for a whole number from -limit to limit: what may be cast to an integer type (casting
+ *  a NaN, an infinity or anything out of range is undefined behaviour). */
+inline bool wholeNumberWithin(double value, double limit)
+{
+  return value >= -limit && value <= limit && std::floor(value) == value; // false for NaN
 }
 
 /** Parses a whole token as a number (accepts nan/inf); false if it is not one. */
