@@ -182,6 +182,17 @@ TEST(FuzzFindings, PlyListLengthThatIsNotACountIsAnError)
   expectFileError([&] { dp::readPLY(path); }, path, "list length");
 }
 
+TEST(FuzzFindings, ElementAndPointCountsThatAreNotCountsAreErrors)
+{
+  TempDir dir;
+  const std::string ply = dir.file("count.ply");
+  writeText(ply, "ply\nformat ascii 1.0\nelement vertex 1e300\nproperty float x\nend_header\n");
+  expectFileError([&] { dp::readPLY(ply); }, ply, "malformed element line");
+  const std::string pts = dir.file("count.pts");
+  writeText(pts, "1e300\n1 2 3\n");
+  expectFileError([&] { dp::readTextPoints(pts); }, pts, "is not a count");
+}
+
 TEST(FuzzFindings, PcdHeaderNumbersOutOfRangeAreErrors)
 {
   TempDir dir;

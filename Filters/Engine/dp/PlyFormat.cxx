@@ -226,7 +226,8 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
       PlyElement element;
       element.name = std::string(detail::nextToken(rest));
       double count = -1;
-      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) || count < 0)
+      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) ||
+          count < 0 || !detail::wholeNumberWithin(count, 1125899906842624.0))
       {
         fail("malformed element line '" + std::string(line) + "'");
       }

@@ -81,6 +81,9 @@ PointCloud readTextPoints(const std::string& path)
     // A PTS file starts with a line holding only the point count.
     if (!sawData && isPts && row.size() == 1 && declaredCount == 0)
     {
+      if (!(row[0] >= 0) || !detail::wholeNumberWithin(row[0], 1125899906842624.0))
+        throw FileError(path, "line " + std::to_string(lineNumber) + ": the point count '" +
+                                  std::string(line) + "' is not a count");
       declaredCount = static_cast<std::size_t>(row[0]);
       continue;
     }
