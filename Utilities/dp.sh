@@ -15,7 +15,7 @@ build="${DP_BUILD_DIR:-$root/build}"
 # The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev libraries are the ones its CMake
 # package looks for. Debian's libvtk9-dev cannot be installed beside it (see README).
 packages=(
-  cmake ninja-build g++ pkg-config
+  cmake ninja-build g++ pkg-config clang
   paraview paraview-dev python3-paraview python3-dev python3-numpy python3-mpi4py
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
   qtxmlpatterns5-dev-tools libopenmpi-dev openmpi-bin

@@ -182,6 +182,32 @@ TEST(FuzzFindings, PlyListLengthThatIsNotACountIsAnError)
   expectFileError([&] { dp::readPLY(path); }, path, "list length");
 }
 
+TEST(FuzzFindings, PlyVertexListsNanColoursAndASecondVertexElement)
+{
+  TempDir dir;
+  const std::string path = dir.file("vertex.ply");
+  const std::string xyz = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty "
+                          "float y\nproperty float z\n";
+  // A list in the vertex element whose length is negative.
+  writeText(path, xyz + "property list char int extra\nend_header\n0 0 0 -33 1\n");
+  expectFileError([&] { dp::readPLY(path); }, path, "list length");
+  // Float colour channels that are NaN read as black (clamping keeps a NaN; casting it was
+  // undefined), the others as they are.
+  writeText(path, xyz + "property float red\nproperty float green\nproperty float blue\n"
+                        "end_header\n0 0 0 nan 1 0\n");
+  const dp::PointCloud cloud = dp::readPLY(path);
+  ASSERT_EQ(cloud.colorComponents, 3);
+  EXPECT_EQ(cloud.colors[0], 0);
+  EXPECT_EQ(cloud.colors[1], 255);
+  EXPECT_EQ(cloud.colors[2], 0);
+  // A second vertex element used to overwrite the points but not the normals: an overflow later.
+  writeText(path, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float "
+                  "y\nproperty float z\nproperty float nx\nproperty float ny\nproperty float "
+                  "nz\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
+                  "end_header\n0 0 0 0 0 1\n1 1 1\n2 2 2\n");
+  expectFileError([&] { dp::readPLY(path); }, path, "more than one 'vertex' element");
+}
+
 TEST(FuzzFindings, ElementAndPointCountsThatAreNotCountsAreErrors)
 {
   TempDir dir;

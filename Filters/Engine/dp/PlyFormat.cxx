@@ -403,7 +403,7 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
       {
         if (!reader.read(prop.countType, value))
           truncated(path, element, i);
-        for (std::size_t k = 0, len = static_cast<std::size_t>(value); k < len; ++k)
+        for (std::size_t k = 0, len = listLength(path, element, i, value, reader); k < len; ++k)
           if (!reader.read(prop.type, value))
             truncated(path, element, i);
         continue;
@@ -432,9 +432,11 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
         const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
         if (c < cloud.colorComponents)
         {
-          const double scaled = colorIsFloat ? value * 255.0 : value;
-          cloud.colors[cloud.colorComponents * i + c] = static_cast<std::uint8_t>(
-              std::clamp(scaled + (colorIsFloat ? 0.5 : 0.0), 0.0, 255.0));
+          // A NaN colour (float channels) is black: clamping keeps a NaN, and casting it is
+          // undefined.
+          const double scaled = colorIsFloat ? value * 255.0 + 0.5 : value;
+          cloud.colors[cloud.colorComponents * i + c] =
+              static_cast<std::uint8_t>(std::isnan(scaled) ? 0.0 : std::clamp(scaled, 0.0, 255.0));
         }
         break;
       }
@@ -578,6 +580,8 @@ PointCloud readPLY(const std::string& path)
     }
     if (element.name == "vertex")
     {
+      if (sawVertex) // a second one would overwrite the first's points but not its attributes
+        throw FileError(path, "PLY file has more than one 'vertex' element");
       readVertices(path, element, reader, cloud);
       sawVertex = true;
     }
