@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
-# Fuzzes the engine's point-cloud readers (libFuzzer, ASan + UBSan): builds Testing/Fuzz with
-# clang into build-fuzz/ (or $DP_FUZZ_BUILD) and runs each target for SECONDS (default 60) on a
-# copy of its seed corpus (Testing/Fuzz/corpus/FORMAT), which grows there from run to run.
+# Fuzzes the engine's point-cloud readers and .dpz decoder (libFuzzer, ASan + UBSan): builds
+# Testing/Fuzz with clang into build-fuzz/ (or $DP_FUZZ_BUILD) and runs each target for SECONDS
+# (default 60) on a
+# copy of its seed corpus (Testing/Fuzz/corpus/FORMAT, which also holds the inputs of past
+# findings, replayed first), which grows there from run to run.
 # Exits non-zero on the first finding; the input is left in the build's findings/.
-#   bash Utilities/fuzz.sh [SECONDS] [FORMAT ...]      (formats: ply pcd xyz obj)
+#   bash Utilities/fuzz.sh [SECONDS] [FORMAT ...]      (formats: ply pcd xyz obj dpz)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
 formats=("$@")
-[ ${#formats[@]} -gt 0 ] || formats=(ply pcd xyz obj)
+[ ${#formats[@]} -gt 0 ] || formats=(ply pcd xyz obj dpz)
 build="${DP_FUZZ_BUILD:-$root/build-fuzz}"
 scratch=/dev/shm; [ -w "$scratch" ] || scratch="${TMPDIR:-/tmp}" # the input file, rewritten per run
 command -v clang++ >/dev/null || apt-get install -y -qq --no-install-recommends clang >/dev/null

@@ -187,6 +187,19 @@ struct EarlierNeighbours
 // earlier mesh neighbours, falling back to order 1 for a vertex without any.
 constexpr int MeshOrder = 3;
 
+// Two's-complement sum and difference without overflow (a corrupt file may hold any integers; its
+// values are refused later by their range checks). Equal to + and - whenever those do not
+// overflow, so valid files decode bit for bit as before.
+std::int64_t wrappingSum(std::int64_t a, std::int64_t b)
+{
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(a) + static_cast<std::uint64_t>(b));
+}
+
+std::int64_t wrappingDifference(std::int64_t a, std::int64_t b)
+{
+  return static_cast<std::int64_t>(static_cast<std::uint64_t>(a) - static_cast<std::uint64_t>(b));
+}
+
 std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride, int order,
                        const EarlierNeighbours* mesh)
 {
@@ -198,7 +211,7 @@ std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride,
     {
       std::int64_t sum = 0;
       for (std::size_t n = first; n < last; ++n)
-        sum += v[mesh->index[n] * stride + c];
+        sum = wrappingSum(sum, v[mesh->index[n] * stride + c]);
       return std::llround(static_cast<double>(sum) / static_cast<double>(last - first));
     }
     order = 1;
@@ -207,7 +220,7 @@ std::int64_t predicted(const std::int64_t* v, std::size_t i, std::size_t stride,
     return 0;
   if (order == 1 || i < 2 * stride)
     return v[i - stride];
-  return 2 * v[i - stride] - v[i - 2 * stride];
+  return wrappingDifference(wrappingSum(v[i - stride], v[i - stride]), v[i - 2 * stride]);
 }
 
 // `mesh` is given for sequences of `stride` values per vertex, which may then use MeshOrder.
@@ -279,7 +292,7 @@ public:
     if (order > (mesh ? MeshOrder : 2))
       fail("unknown prediction order " + std::to_string(order));
     for (std::size_t i = 0; i < count; ++i)
-      v[i] = unzigzag(varint()) + predicted(v, i, stride, order, mesh);
+      v[i] = wrappingSum(unzigzag(varint()), predicted(v, i, stride, order, mesh));
   }
   std::size_t position() const { return Position; }
   std::size_t remaining() const { return Size - Position; }
@@ -745,6 +758,14 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
 namespace
 {
 
+// A fuzzing build (Testing/Fuzz) computes the checksums but does not enforce them, so mutated
+// inputs reach the decoder behind them.
+#ifdef DP_FUZZING_BUILD
+constexpr bool EnforceChecksums = false;
+#else
+constexpr bool EnforceChecksums = true;
+#endif
+
 std::uint32_t crc(const std::uint8_t* data, std::size_t size)
 {
   uLong c = crc32(0L, Z_NULL, 0);
@@ -778,8 +799,13 @@ std::vector<std::uint8_t> getSection(ByteReader& in, const std::uint8_t* bytes,
             std::to_string(packedSize) + " bytes)");
   if (rawSize > limit)
     in.fail(what + " claims " + std::to_string(rawSize) + " bytes, more than its counts allow");
+  // A zstd block holds at most 128 KiB and takes at least 4 bytes (an RLE block): no frame
+  // expands more than that, so a larger claim is refused before it is allocated.
+  if (rawSize > 32768 * packedSize + 131072)
+    in.fail(what + " claims " + std::to_string(rawSize) + " bytes from " +
+            std::to_string(packedSize) + " packed bytes, more than zstd can expand to");
   const std::uint8_t* packed = bytes + in.position();
-  if (crc(packed, packedSize) != expected)
+  if (crc(packed, packedSize) != expected && EnforceChecksums)
     in.fail(what + ": checksum mismatch (the file is corrupt)");
   std::vector<std::uint8_t> raw(rawSize);
   const std::size_t n = ZSTD_decompress(raw.data(), raw.size(), packed, packedSize);
@@ -845,7 +871,7 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   ByteReader header(headerBytes, headerSize, name + " (header)");
   for (std::uint64_t i = 0; i < headerSize; ++i)
     in.byte();
-  if (in.raw<std::uint32_t>() != crc(headerBytes, headerSize))
+  if (in.raw<std::uint32_t>() != crc(headerBytes, headerSize) && EnforceChecksums)
     in.fail("header checksum mismatch (the file is corrupt)");
 
   CompressedSequence s;
@@ -895,6 +921,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
     const std::vector<std::uint8_t> raw =
         getSection(in, bytes, "connectivity", 10 * 3 * nTriangles + 1);
     ByteReader c(raw.data(), raw.size(), name + " (connectivity)");
+    if (raw.size() < 3 * nTriangles) // every index takes at least a byte
+      c.fail("holds " + std::to_string(raw.size()) + " bytes for " +
+             std::to_string(3 * nTriangles) + " indices");
     s.triangles.resize(3 * nTriangles);
     c.sequence(s.triangles.data(), s.triangles.size(), 3);
     if (c.remaining() != 0)
@@ -908,6 +937,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
     const std::vector<std::uint8_t> raw =
         getSection(in, bytes, "geometry", 10 * numbers + 1 + 2 * k);
     ByteReader g(raw.data(), raw.size(), name + " (geometry)");
+    if (raw.size() < numbers) // every number takes at least a byte
+      g.fail("holds " + std::to_string(raw.size()) + " bytes for " + std::to_string(numbers) +
+             " numbers");
     const EarlierNeighbours mesh(s.triangles, nv);
     const bool shapes = m.layout == PcaLayout::Shapes;
     const EarlierNeighbours* perVertex = shapes ? &mesh : nullptr;
