@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
 # Fuzzes the engine's point-cloud readers and .dpz decoder (libFuzzer, ASan + UBSan): builds
 # Testing/Fuzz with clang into build-fuzz/ (or $DP_FUZZ_BUILD) and runs each target for SECONDS
-# (default 60) on a
-# copy of its seed corpus (Testing/Fuzz/corpus/FORMAT, which also holds the inputs of past
-# findings, replayed first), which grows there from run to run.
+# (default 60) on a copy of its seed corpus (Testing/Fuzz/corpus/FORMAT, which also holds the
+# inputs of past findings, replayed first), which grows there from run to run.
 # Exits non-zero on the first finding; the input is left in the build's findings/.
 #   bash Utilities/fuzz.sh [SECONDS] [FORMAT ...]      (formats: ply pcd xyz obj dpz)
 set -euo pipefail
