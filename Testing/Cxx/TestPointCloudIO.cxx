@@ -79,6 +79,20 @@ INSTANTIATE_TEST_SUITE_P(AllEncodings, PlyEncodings,
                                            dp::PlyEncoding::BinaryLittleEndian,
                                            dp::PlyEncoding::BinaryBigEndian));
 
+// Writes each (file text, expected message part) case to `path` and expects `read` to refuse it
+// with an error naming the file.
+template <std::size_t N>
+void expectEachRefused(const std::string& path,
+                       const std::pair<std::string, std::string> (&cases)[N],
+                       dp::PointCloud (*read)(const std::string&))
+{
+  for (const auto& [text, expected] : cases)
+  {
+    writeText(path, text);
+    expectFileError([&] { read(path); }, path, expected);
+  }
+}
+
 TEST(PLY, ReadsHandWrittenAsciiWithDoublesListsAndExtraElements)
 {
   TempDir dir;
@@ -148,11 +162,7 @@ TEST(PLY, MalformedFilesAreErrorsNamingTheFile)
        "end_header\n0 zero 0\n",
        "is not a number"},
   };
-  for (const auto& [text, expected] : cases)
-  {
-    writeText(path, text);
-    expectFileError([&] { dp::readPLY(path); }, path, expected);
-  }
+  expectEachRefused(path, cases, dp::readPLY);
 }
 
 // Inputs a coverage-guided fuzzer (issue 15) turned up: numbers whose conversion to an integer
@@ -232,11 +242,7 @@ TEST(FuzzFindings, PcdHeaderNumbersOutOfRangeAreErrors)
        "1000000000000000\nDATA ascii\n",
        "too large"},
   };
-  for (const auto& [text, expected] : cases)
-  {
-    writeText(path, text);
-    expectFileError([&] { dp::readPCD(path); }, path, expected);
-  }
+  expectEachRefused(path, cases, dp::readPCD);
 }
 
 TEST(FuzzFindings, ObjFaceIndexOutOfRangeIsAnError)

@@ -203,9 +203,9 @@ PointCloud readPCD(const std::string& path)
     else if (keyword == "width" || keyword == "height" || keyword == "points")
     {
       double v = -1;
-      // Whole and below 2^50 (a petabyte of points), so it can be counted and multiplied.
+      // Whole and at most LargestCount, so it can be counted and multiplied.
       if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0 ||
-          !detail::wholeNumberWithin(v, 1125899906842624.0))
+          !detail::wholeNumberWithin(v, detail::LargestCount))
         fail("bad " + std::string(written) + " value '" +
              (values.empty() ? std::string() : std::string(values[0])) + "'");
       const auto count = static_cast<std::size_t>(v);

@@ -227,7 +227,7 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
       element.name = std::string(detail::nextToken(rest));
       double count = -1;
       if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) ||
-          count < 0 || !detail::wholeNumberWithin(count, 1125899906842624.0))
+          count < 0 || !detail::wholeNumberWithin(count, detail::LargestCount))
       {
         fail("malformed element line '" + std::string(line) + "'");
       }

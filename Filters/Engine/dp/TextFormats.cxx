@@ -81,7 +81,7 @@ PointCloud readTextPoints(const std::string& path)
     // A PTS file starts with a line holding only the point count.
     if (!sawData && isPts && row.size() == 1 && declaredCount == 0)
     {
-      if (!(row[0] >= 0) || !detail::wholeNumberWithin(row[0], 1125899906842624.0))
+      if (!(row[0] >= 0) || !detail::wholeNumberWithin(row[0], detail::LargestCount))
         throw FileError(path, "line " + std::to_string(lineNumber) + ": the point count '" +
                                   std::string(line) + "' is not a count");
       declaredCount = static_cast<std::size_t>(row[0]);
@@ -271,7 +271,7 @@ PointCloud readOBJ(const std::string& path)
         const std::size_t slash = t.find('/');
         double v = 0;
         if (!detail::parseNumber(t.substr(0, slash), v) || v == 0 ||
-            !detail::wholeNumberWithin(v, 9e15))
+            !detail::wholeNumberWithin(v, detail::LargestCount))
           fail("bad face vertex '" + std::string(t) + "'");
         if (std::abs(v) > static_cast<double>(nv))
           fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +

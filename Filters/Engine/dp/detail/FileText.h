@@ -64,6 +64,9 @@ inline std::string_view nextToken(std::string_view& s, bool commaIsSeparator = f
   return token;
 }
 
+/** The largest element or point count a header may declare: 2^50, a petabyte of points. */
+constexpr double LargestCount = 1125899906842624.0;
+
 /** True for a whole number from -limit to limit: what may be cast to an integer type (casting
  *  a NaN, an infinity or anything out of range is undefined behaviour). */
 inline bool wholeNumberWithin(double value, double limit)
