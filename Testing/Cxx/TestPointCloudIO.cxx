@@ -216,6 +216,18 @@ TEST(FuzzFindings, PlyVertexListsNanColoursAndASecondVertexElement)
                   "nz\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n"
                   "end_header\n0 0 0 0 0 1\n1 1 1\n2 2 2\n");
   expectFileError([&] { dp::readPLY(path); }, path, "more than one 'vertex' element");
+  // A face index far out of range or NaN is refused (printing or casting it was undefined).
+  for (const char* index : {"8.9e113", "nan"})
+  {
+    writeText(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float "
+                    "y\nproperty float z\nelement face 1\nproperty list uchar double "
+                    "vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 " +
+                        std::string(index) + "\n");
+    expectFileError([&] { dp::readPLY(path); }, path, "uses vertex");
+  }
+  // An element without properties declaring 10^11 items reads at once (it used to hang).
+  writeText(path, xyz + "element empty 106010910371\nend_header\n1 2 3\n");
+  EXPECT_EQ(dp::readPLY(path).numberOfPoints(), 1u);
 }
 
 TEST(FuzzFindings, ElementAndPointCountsThatAreNotCountsAreErrors)
@@ -241,6 +253,9 @@ TEST(FuzzFindings, PcdHeaderNumbersOutOfRangeAreErrors)
       {"VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1000000000000000\nHEIGHT "
        "1000000000000000\nDATA ascii\n",
        "too large"},
+      {"VERSION 0.7\nFIELDS x y z rgb\nSIZE 8 4 4 2\nTYPE F F F U\nCOUNT 1 1 1 1\nPOINTS 1\n"
+       "DATA ascii\n0 0 0 1\n",
+       "a packed colour takes 4"},
   };
   expectEachRefused(path, cases, dp::readPCD);
 }

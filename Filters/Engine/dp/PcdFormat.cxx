@@ -251,7 +251,12 @@ PointCloud readPCD(const std::string& path)
     else if (n == "normal_x" || n == "normal_y" || n == "normal_z")
       normal[n.back() - 'x'] = i;
     else if (n == "rgb" || n == "rgba")
+    {
+      if (f.size != 4) // a packed colour is 4 bytes; copying 4 from a smaller field overflows
+        throw FileError(path, "PCD field '" + f.name + "' has SIZE " + std::to_string(f.size) +
+                                  "; a packed colour takes 4");
       rgb = i;
+    }
   }
   if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
     throw FileError(path, "PCD file lacks one of the fields x, y, z");

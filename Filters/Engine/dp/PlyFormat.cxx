@@ -493,10 +493,12 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
           truncated(path, element, f);
         if (static_cast<int>(p) == indexProperty)
         {
-          if (value < 0 || value >= numberOfPoints)
+          if (!(value >= 0 && value < numberOfPoints)) // NaN included
           {
+            const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
             throw FileError(path, "PLY face " + std::to_string(f) + " uses vertex " +
-                                      std::to_string(static_cast<long long>(value)) +
+                                      (whole ? std::to_string(static_cast<long long>(value))
+                                             : std::to_string(value)) +
                                       ", but there are only " +
                                       std::to_string(cloud.numberOfPoints()) + " vertices");
           }
@@ -537,6 +539,8 @@ std::size_t minimumBytes(const PlyElement& element, bool binary)
 
 void skipElement(const std::string& path, const PlyElement& element, BodyReader& reader)
 {
+  if (element.properties.empty())
+    return; // nothing to read, however many it declares (a loop of 10^11 empty steps otherwise)
   std::size_t record = 0;
   if (reader.isBinary() && fixedRecordSize(element, record))
   {
