@@ -612,3 +612,140 @@ TEST(Tracker, FlagsAFrameItCannotExplainAfterTryingAgain)
 }
 
 } // namespace
+
+// ---- Absurd input: a clear error naming what is wrong, or a flagged frame; never a crash, a
+// hang or NaN positions (the sanitizer build runs these too). ----
+
+std::string refusal(const std::function<void()>& f)
+{
+  try
+  {
+    f();
+  }
+  catch (const std::exception& e)
+  {
+    return e.what();
+  }
+  return "";
+}
+
+bool allFinite(const std::vector<double>& x)
+{
+  return std::all_of(x.begin(), x.end(), [](double v) { return std::isfinite(v); });
+}
+
+TEST(TrackerBadInput, ATemplateWithNaNOrInfIsRefusedNamingTheVertex)
+{
+  const MeshData m = tube();
+  for (double bad : {std::nan(""), HUGE_VAL, -HUGE_VAL})
+  {
+    std::vector<double> p = m.positions;
+    p[3 * 7 + 1] = bad;
+    const std::string message = refusal(
+        [&] { dp::Tracker(dp::TriangleMesh(m.triangles, p.size() / 3), p, dp::TrackerOptions{}); });
+    EXPECT_NE(message.find("vertex 7 has a NaN or infinite coordinate"), std::string::npos)
+        << message;
+  }
+}
+
+TEST(TrackerBadInput, IsolatedVerticesAndNonManifoldEdgesAreTrackedWithoutNaN)
+{
+  const Sequence s = makeSequence(3, 0.0, 0, 3000);
+  const std::size_t nv = s.animation.numberOfVertices();
+  std::vector<double> isolated = s.animation.positions(0);
+  isolated.insert(isolated.end(), {0.0, 0.0, 0.0}); // in no triangle
+  std::vector<std::int64_t> fin = s.animation.triangles();
+  std::vector<double> withFin = s.animation.positions(0);
+  // A third triangle on the edge (fin[0], fin[1]), sticking out of the surface.
+  withFin.insert(withFin.end(), {withFin[3 * fin[0]] + 0.1, withFin[3 * fin[0] + 1] + 0.1,
+                                 withFin[3 * fin[0] + 2]});
+  fin.insert(fin.end(), {fin[0], fin[1], static_cast<std::int64_t>(nv)});
+  for (const auto& [positions, triangles] :
+       {std::pair{isolated, s.animation.triangles()}, std::pair{withFin, fin}})
+  {
+    dp::Tracker tracker(dp::TriangleMesh(triangles, positions.size() / 3), positions,
+                        tubeOptions());
+    for (std::size_t f = 0; f < s.frames.size(); ++f)
+    {
+      const dp::PointCloud& c = s.frames[f];
+      const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), nullptr);
+      ASSERT_TRUE(allFinite(r.positions)) << "frame " << f;
+      // The tube itself (the first nv vertices) still follows its data.
+      const std::vector<double> tubePart(r.positions.begin(),
+                                         r.positions.begin() + static_cast<std::ptrdiff_t>(3 * nv));
+      EXPECT_LT(vertexRms(tubePart, s.animation.positions(f)), 0.05 * s.diagonal) << "frame " << f;
+    }
+  }
+}
+
+// Frames 0 and 2 are good; frame 1 is the bad one. Returns the three results.
+std::vector<dp::FrameResult> trackAround(const Sequence& s, const dp::PointCloud& bad)
+{
+  dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                      s.animation.positions(0), tubeOptions());
+  std::vector<dp::FrameResult> results;
+  for (const dp::PointCloud* c : {&s.frames[0], &bad, &s.frames[2]})
+    results.push_back(tracker.track(c->points.data(), c->numberOfPoints(), nullptr));
+  return results;
+}
+
+TEST(TrackerBadInput, AFrameOfOnePointOrOfCoincidentPointsIsFlaggedAndDoesNotCrushTheMesh)
+{
+  const Sequence s = makeSequence(3, 0.0, 0, 3000);
+  dp::PointCloud one, coincident;
+  one.points = {0.1, 0.2, 0.3};
+  for (int i = 0; i < 1000; ++i)
+    coincident.points.insert(coincident.points.end(), {0.1, 0.2, 0.3});
+  for (const dp::PointCloud* bad : {&one, &coincident})
+  {
+    const std::vector<dp::FrameResult> r = trackAround(s, *bad);
+    EXPECT_FALSE(r[0].failed);
+    EXPECT_TRUE(r[1].failed);
+    EXPECT_TRUE(r[1].emptyFrame);
+    EXPECT_FALSE(r[2].failed);
+    for (std::size_t f = 0; f < 3; ++f)
+    {
+      ASSERT_TRUE(allFinite(r[f].positions));
+      // Frame 1 continues the motion; frames 0 and 2 follow their data.
+      EXPECT_LT(vertexRms(r[f].positions, s.animation.positions(f)), 0.05 * s.diagonal)
+          << "frame " << f;
+    }
+  }
+}
+
+TEST(TrackerBadInput, AFrameAThousandTimesTooLargeIsFlaggedAndTheNextFrameRecovers)
+{
+  const Sequence s = makeSequence(3, 0.0, 0, 3000);
+  dp::PointCloud huge = s.frames[1];
+  for (double& v : huge.points)
+    v *= 1000;
+  const std::vector<dp::FrameResult> r = trackAround(s, huge);
+  EXPECT_TRUE(r[1].failed);
+  for (const dp::FrameResult& result : r)
+    ASSERT_TRUE(allFinite(result.positions));
+  EXPECT_LT(vertexRms(r[2].positions, s.animation.positions(2)), 0.05 * s.diagonal);
+}
+
+TEST(TrackerBadInput, AFrameFarAwayOrWithANaNPointIsRefusedByNameAndTheTakeGoesOn)
+{
+  const Sequence s = makeSequence(3, 0.0, 0, 3000);
+  dp::PointCloud far = s.frames[1], nan = s.frames[1];
+  for (double& v : far.points)
+    v += 1e6;
+  nan.points[3 * 5 + 2] = std::nan("");
+  for (const dp::PointCloud* bad : {&far, &nan})
+  {
+    dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                        s.animation.positions(0), tubeOptions());
+    tracker.track(s.frames[0].points.data(), s.frames[0].numberOfPoints(), nullptr);
+    const std::string message =
+        refusal([&] { tracker.track(bad->points.data(), bad->numberOfPoints(), nullptr); });
+    EXPECT_NE(message.find(bad == &nan ? "point 5 has a NaN" : "too small for coordinates"),
+              std::string::npos)
+        << message;
+    const dp::FrameResult r =
+        tracker.track(s.frames[2].points.data(), s.frames[2].numberOfPoints(), nullptr);
+    ASSERT_TRUE(allFinite(r.positions));
+    EXPECT_LT(vertexRms(r.positions, s.animation.positions(2)), 0.05 * s.diagonal);
+  }
+}

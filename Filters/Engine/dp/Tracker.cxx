@@ -116,7 +116,10 @@ struct Tracker::Parts
   std::unique_ptr<GraphRegistration> Registration;
   std::unique_ptr<GaussNewtonSolver> Newton;
   MotionPredictor Predictor;
-  std::vector<FrameQuality> RecentQuality; // of the last frames (the take's usual quality)
+  // Of the last frames that passed (the take's usual quality): a failed frame does not lower the
+  // bar for the next one, unless frames keep failing (then the take itself has changed).
+  std::vector<FrameQuality> RecentQuality;
+  int FailedInARow = 0;
   // The last frame that did not fail, while the frames after it fail: a retry starts there.
   std::vector<double> LastGood;
   DeformationGraph::State LastGoodState;
@@ -137,10 +140,40 @@ struct Tracker::Attempt
   double score() const { return quality.unexplained + quality.unsupported; }
 };
 
+namespace
+{
+// Checked before E_int measures the template (a NaN would only say "no area").
+std::vector<double> finiteTemplate(std::vector<double> positions)
+{
+  for (std::size_t i = 0; i < positions.size(); ++i)
+    if (!std::isfinite(positions[i]))
+      throw std::invalid_argument("the template mesh's vertex " + std::to_string(i / 3) +
+                                  " has a NaN or infinite coordinate");
+  return positions;
+}
+
+// Too little data to say where a surface is: fewer than a handful of points, or all of them
+// within a couple of voxels. (NaN coordinates are left for FrameData's error.)
+bool tooLittleData(const double* points, std::size_t count, double voxel)
+{
+  if (count < 10)
+    return true;
+  double lo[3] = {points[0], points[1], points[2]}, hi[3] = {lo[0], lo[1], lo[2]};
+  for (std::size_t i = 1; i < count; ++i)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], points[3 * i + k]);
+      hi[k] = std::max(hi[k], points[3 * i + k]);
+    }
+  const double extent = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
+  return extent < 2 * voxel;
+}
+} // namespace
+
 Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
                  const TrackerOptions& options)
-    : Mesh(std::move(mesh)), Template(std::move(templatePositions)), Options(options),
-      Cloth(Mesh, Template.data(), options.cloth), P(std::make_unique<Parts>())
+    : Mesh(std::move(mesh)), Template(finiteTemplate(std::move(templatePositions))),
+      Options(options), Cloth(Mesh, Template.data(), options.cloth), P(std::make_unique<Parts>())
 {
   validate(options);
   TemplateRest = Cloth.restState();
@@ -169,6 +202,7 @@ void Tracker::reset()
 {
   P->Predictor.clear();
   P->RecentQuality.clear();
+  P->FailedInARow = 0;
   P->LastGood.clear();
   P->LastFailed = false;
   if (P->Registration)
@@ -234,6 +268,10 @@ bool Tracker::failed(const Attempt& a) const
                      shares.begin() + static_cast<std::ptrdiff_t>(shares.size() / 2), shares.end());
     return shares[shares.size() / 2];
   };
+  // The first frame sets what is usual: with nothing to compare it to, sparse data or parts the
+  // template lacks are not a failure.
+  if (P->RecentQuality.empty())
+    return false;
   std::vector<double> unexplained, unsupported;
   for (const FrameQuality& q : P->RecentQuality)
   {
@@ -435,7 +473,9 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   }
   result.failed = Options.recovery.enabled && failed(best);
   result.kept = restarted ? 1 : 0;
-  P->RecentQuality.push_back(best.quality);
+  P->FailedInARow = result.failed ? P->FailedInARow + 1 : 0;
+  if (!result.failed || P->FailedInARow >= 3)
+    P->RecentQuality.push_back(best.quality);
   if (P->RecentQuality.size() > 9)
     P->RecentQuality.erase(P->RecentQuality.begin());
   return best;
@@ -508,15 +548,24 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   dataOptions.spreadCount = Options.coverage.weight > 0 || Options.recovery.enabled
                                 ? (Options.coverage.points > 0 ? Options.coverage.points : 4 * nv)
                                 : 0;
-  auto clock = std::chrono::steady_clock::now();
-  FrameData frame(points, count, normals, dataOptions);
-  orientData(frame);
-  result.timings.data = elapsed(clock);
-
-  if (frame.empty())
+  // A frame with too little data is kept like an empty one (the motion continued) and flagged:
+  // fitting the mesh to a point or two would crush it.
+  if (count > 0 && tooLittleData(points, count, Voxel))
+  {
     trackEmptyFrame(result);
+    result.failed = true;
+  }
   else
-    keep(solveWithRetries(frame, result), result);
+  {
+    auto clock = std::chrono::steady_clock::now();
+    FrameData frame(points, count, normals, dataOptions);
+    orientData(frame);
+    result.timings.data = elapsed(clock);
+    if (frame.empty())
+      trackEmptyFrame(result);
+    else
+      keep(solveWithRetries(frame, result), result);
+  }
   remember(result);
   result.seconds = elapsed(start);
   return result;

@@ -32,7 +32,10 @@
  * the start is the paper's MP (or the last frame) followed by a rigid alignment (RigidAlignment).
  *
  * Missing data: an empty frame continues the motion (linear extrapolation of the last two
- * frames), relaxed by E_int alone, and is flagged; holes are bridged by E_int and E_acc.
+ * frames), relaxed by E_int alone, and is flagged (emptyFrame); so is a frame with too little
+ * data to place a surface (under 10 points, or all within 2 voxels), which is also marked failed.
+ * Holes are bridged by E_int and E_acc.
+ * The first frame is never failed: it sets the take's usual quality.
  *
  * Limits: a local optimiser per frame (the coarse level widens its reach to ~24 voxels); data
  * the template lacks, or template parts fused together, cannot be tracked apart.
