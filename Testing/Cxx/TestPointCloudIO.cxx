@@ -335,6 +335,31 @@ TEST(PCD, ReadsPclStyleHeaderWithPackedRgbCountsAndPadding)
   EXPECT_EQ(c.attributes[0].values, (std::vector<float>{0.5f, 0.25f}));
 }
 
+TEST(PCD, ReadsBinaryCompressedFieldMajorWithLzfBackReferences)
+{
+  // PCL's layout: all x, then all y, z and rgb, LZF-compressed. The stream has literal runs and
+  // one back-reference that copies 8 bytes from 4 back (overlapping: the colour repeated).
+  const float xyz[9] = {0.0f, 0.5f, 1.0f, 0.1f, 0.2f, 0.3f, -1.0f, 0.0f, 1.0f};
+  const std::uint32_t rgb = 0x00ff8040;
+  std::string raw(reinterpret_cast<const char*>(xyz), sizeof xyz);
+  const std::string colour(reinterpret_cast<const char*>(&rgb), 4);
+  std::string lzf = std::string(1, '\x1f') + raw.substr(0, 32) + '\x03' + raw.substr(32, 4) +
+                    '\x03' + colour + '\xc0' + '\x03';
+  const std::uint32_t sizes[2] = {static_cast<std::uint32_t>(lzf.size()),
+                                  static_cast<std::uint32_t>(raw.size() + 3 * colour.size())};
+  TempDir dir;
+  const std::string path = dir.file("compressed.pcd");
+  writeText(path, "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nTYPE F F F U\nCOUNT 1 1 1 1\n"
+                  "WIDTH 3\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 3\nDATA binary_compressed\n" +
+                      std::string(reinterpret_cast<const char*>(sizes), 8) + lzf);
+  const dp::PointCloud c = dp::readPCD(path);
+  ASSERT_EQ(c.numberOfPoints(), 3u);
+  for (std::size_t i = 0; i < 3; ++i)
+    for (std::size_t k = 0; k < 3; ++k)
+      EXPECT_EQ(c.points[3 * i + k], static_cast<double>(xyz[3 * k + i])) << i << " " << k;
+  EXPECT_EQ(c.colors, (std::vector<std::uint8_t>{255, 128, 64, 255, 128, 64, 255, 128, 64}));
+}
+
 TEST(PCD, TruncatedAndMalformedFilesAreErrors)
 {
   TempDir dir;
