@@ -230,10 +230,15 @@ PointCloud sampleSurface(const std::vector<double>& positions,
 
 double boundingBoxDiagonal(const std::vector<double>& positions)
 {
-  if (positions.size() < 3)
+  return boundingBoxDiagonal(positions.data(), positions.size() / 3);
+}
+
+double boundingBoxDiagonal(const double* positions, std::size_t count)
+{
+  if (count == 0)
     return 0.0;
   double lo[3] = {positions[0], positions[1], positions[2]}, hi[3] = {lo[0], lo[1], lo[2]};
-  for (std::size_t i = 0; i < positions.size(); i += 3)
+  for (std::size_t i = 0; i < 3 * count; i += 3)
     for (int k = 0; k < 3; ++k)
     {
       lo[k] = std::min(lo[k], positions[i + k]);

@@ -156,17 +156,7 @@ std::vector<double> finiteTemplate(std::vector<double> positions)
 // within a couple of voxels. (NaN coordinates are left for FrameData's error.)
 bool tooLittleData(const double* points, std::size_t count, double voxel)
 {
-  if (count < 10)
-    return true;
-  double lo[3] = {points[0], points[1], points[2]}, hi[3] = {lo[0], lo[1], lo[2]};
-  for (std::size_t i = 1; i < count; ++i)
-    for (int k = 0; k < 3; ++k)
-    {
-      lo[k] = std::min(lo[k], points[3 * i + k]);
-      hi[k] = std::max(hi[k], points[3 * i + k]);
-    }
-  const double extent = std::hypot(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]);
-  return extent < 2 * voxel;
+  return count < 10 || boundingBoxDiagonal(points, count) < 2 * voxel;
 }
 } // namespace
 
