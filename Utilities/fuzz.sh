@@ -1,36 +1,47 @@
 #!/usr/bin/env bash
-# Fuzzes the engine's point-cloud readers and .dpz decoder (libFuzzer, ASan + UBSan): builds
-# Testing/Fuzz with clang into build-fuzz/ (or $DP_FUZZ_BUILD) and runs each target for SECONDS
-# (default 60) on a copy of its seed corpus (Testing/Fuzz/corpus/FORMAT, which also holds the
-# inputs of past findings, replayed first), which grows there from run to run.
-# Exits non-zero on the first finding; the input is left in the build's findings/.
-#   bash Utilities/fuzz.sh [SECONDS] [FORMAT ...]      (formats: ply pcd xyz obj dpz)
+# Fuzzes everything users feed files to (libFuzzer, ASan + UBSan): the point-cloud readers, .series
+# files, template meshes, a template tracked for a frame, the .dpz decoder. Builds Testing/Fuzz
+# with clang into build-fuzz/ (or $DP_FUZZ_BUILD) and runs each target for SECONDS (default 60),
+# or for DP_FUZZ_RUNS executions when that is set, on a copy of its seed corpus
+# (Testing/Fuzz/corpus/NAME, which also holds the inputs of past findings, replayed first); the
+# copy grows there from run to run. Exits non-zero on the first finding; the input is left in the
+# build's findings/.
+#   bash Utilities/fuzz.sh [SECONDS] [TARGET ...]
+#   targets: ply pcd xyz obj series template_ply template_obj track dpz (default: all)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
-formats=("$@")
-[ ${#formats[@]} -gt 0 ] || formats=(ply pcd xyz obj dpz)
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz obj series template_ply template_obj track dpz)
 build="${DP_FUZZ_BUILD:-$root/build-fuzz}"
 scratch=/dev/shm; [ -w "$scratch" ] || scratch="${TMPDIR:-/tmp}" # the input file, rewritten per run
+limit=(-max_total_time="$seconds") span="$seconds s"
+[ -z "${DP_FUZZ_RUNS:-}" ] || { limit=(-runs="$DP_FUZZ_RUNS"); span="$DP_FUZZ_RUNS executions"; }
 command -v clang++ >/dev/null || apt-get install -y -qq --no-install-recommends clang >/dev/null
 cmake -S "$root/Testing/Fuzz" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ >/dev/null
 cmake --build "$build" | tail -1
 mkdir -p "$build/findings"
-for format in "${formats[@]}"; do
-  corpus="$build/corpus/$format"
+for target in "${targets[@]}"; do
+  seeds="$root/Testing/Fuzz/corpus/$target"
+  [ "$target" != track ] || seeds="$root/Testing/Fuzz/corpus/template_ply"
+  corpus="$build/corpus/$target"
   mkdir -p "$corpus"
-  cp -n "$root/Testing/Fuzz/corpus/$format/"* "$corpus/"
-  echo "== fuzz_$format for ${seconds} s"
+  cp -n "$seeds/"* "$corpus/"
+  echo "== fuzz_$target for $span"
   status=0
-  TMPDIR="$scratch" "$build/fuzz_$format" "$corpus" -max_total_time="$seconds" \
+  start=$(date +%s)
+  TMPDIR="$scratch" "$build/fuzz_$target" "$corpus" "${limit[@]}" \
     -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-    -artifact_prefix="$build/findings/${format}-" >"$build/$format.log" 2>&1 ||
+    -artifact_prefix="$build/findings/${target}-" >"$build/$target.log" 2>&1 ||
     status=$?
   grep -E "^(stat::number_of_executed_units|stat::peak_rss|SUMMARY)|runtime error|ERROR:" \
-    "$build/$format.log" || true
+    "$build/$target.log" || true
+  echo "   $(($(date +%s) - start)) s; coverage: $(grep -oE 'cov: [0-9]+ ft: [0-9]+' \
+    "$build/$target.log" | tail -1); corpus: $(ls "$corpus" | wc -l) inputs"
   if [ "$status" -ne 0 ]; then
-    echo "fuzz_$format: finding (log $build/$format.log, input in $build/findings/)"
+    echo "fuzz_$target: finding (log $build/$target.log, input in $build/findings/)"
     exit 1
   fi
 done
+echo "no finding in ${#targets[@]} targets"

@@ -230,6 +230,19 @@ TEST(FuzzFindings, PlyVertexListsNanColoursAndASecondVertexElement)
   EXPECT_EQ(dp::readPLY(path).numberOfPoints(), 1u);
 }
 
+TEST(FuzzFindings, PlyWithASecondFaceElementIsAnError)
+{
+  // A second face element restarted the face offsets inside the connectivity; with a NaN point
+  // to drop, the renumbering then read far outside its table (found after 3.2 M executions).
+  TempDir dir;
+  const std::string path = dir.file("faces.ply");
+  writeText(path, "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                  "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n"
+                  "1 0 0\n0 1 0\nnan 0 1\n3 0 1 2\n3 1 2 0\n");
+  expectFileError([&] { dp::readPointCloud(path); }, path, "more than one 'face' element");
+}
+
 TEST(FuzzFindings, ElementAndPointCountsThatAreNotCountsAreErrors)
 {
   TempDir dir;

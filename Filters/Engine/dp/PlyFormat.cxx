@@ -572,7 +572,7 @@ PointCloud readPLY(const std::string& path)
   const PlyHeader header = parseHeader(path, bytes);
   BodyReader reader(path, bytes, header);
   PointCloud cloud;
-  bool sawVertex = false;
+  bool sawVertex = false, sawFace = false;
   for (const PlyElement& element : header.elements)
   {
     // Check the declared count against the bytes left before allocating anything, so a
@@ -591,7 +591,10 @@ PointCloud readPLY(const std::string& path)
     }
     else if (element.name == "face" && sawVertex)
     {
+      if (sawFace) // a second one would restart the face offsets inside the connectivity
+        throw FileError(path, "PLY file has more than one 'face' element");
       readFaces(path, element, reader, cloud);
+      sawFace = true;
     }
     else
     {

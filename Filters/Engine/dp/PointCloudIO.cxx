@@ -137,6 +137,15 @@ PointCloud readPointCloud(const std::string& path, ReadReport* report)
   default:
     throw FileError(path, "VTK formats are read by the VTK layer, not by the engine");
   }
+  // Every reader checks its own; this keeps a slip in one from reaching the renumbering below.
+  try
+  {
+    cloud.validate();
+  }
+  catch (const std::logic_error& e)
+  {
+    throw FileError(path, e.what());
+  }
   const std::size_t dropped = dropNonFinitePoints(cloud);
   if (report)
   {
