@@ -273,6 +273,22 @@ TEST(FuzzFindings, PcdHeaderNumbersOutOfRangeAreErrors)
   expectEachRefused(path, cases, dp::readPCD);
 }
 
+TEST(FuzzFindings, PcdAsciiRgbThatIsNotAPackedColourIsAnError)
+{
+  // An ASCII rgb value beyond its type's range was cast (undefined; found by the campaign after
+  // 7.7 M executions).
+  TempDir dir;
+  const std::string path = dir.file("rgb.pcd");
+  const std::string head = "VERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 4 4\nCOUNT 1 1 1 1\nPOINTS 1\n";
+  const std::pair<std::string, std::string> cases[] = {
+      {head + "TYPE F F F U\nDATA ascii\n0 0 0 4.4e80\n", "rgb value '4.4e80'"},
+      {head + "TYPE F F F U\nDATA ascii\n0 0 0 -1\n", "is not a packed colour"},
+      {head + "TYPE F F F I\nDATA ascii\n0 0 0 2.5\n", "is not a packed colour"},
+      {head + "TYPE F F F F\nDATA ascii\n0 0 0 1e39\n", "is not a packed colour"},
+  };
+  expectEachRefused(path, cases, dp::readPCD);
+}
+
 TEST(FuzzFindings, ObjFaceIndexOutOfRangeIsAnError)
 {
   TempDir dir;

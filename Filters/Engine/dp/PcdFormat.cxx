@@ -4,6 +4,7 @@
 #include "dp/PointCloudIO.h"
 #include "dp/detail/FileText.h"
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 
@@ -309,6 +310,13 @@ PointCloud readPCD(const std::string& path)
           if (static_cast<int>(k) == rgb && c == 0)
           {
             // PCL writes rgb as the float whose bits are 0x00RRGGBB (or as an integer).
+            const bool packable =
+                fields[k].type == 'F'
+                    ? !(std::abs(v) > std::numeric_limits<float>::max()) // NaN passes
+                    : v >= 0 && v <= 4294967295.0 && v == std::floor(v);
+            if (!packable)
+              throw FileError(path, "PCD point " + std::to_string(i) + ": rgb value '" +
+                                        std::string(token) + "' is not a packed colour");
             if (fields[k].type == 'F')
             {
               const float asFloat = static_cast<float>(v);
