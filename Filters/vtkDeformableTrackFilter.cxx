@@ -318,6 +318,14 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
       return 0;
     }
     const dp::FrameResult& done = in.Cache.back();
+    // Said once per run of thinned frames.
+    if (done.thinned && (frame == 0 || !in.Cache[frame - 1].thinned))
+    {
+      vtkWarningMacro(<< "frame " << frame << " has " << target3.ids.size()
+                      << " points: the tracker used " << done.pointsUsed
+                      << " of them, spread evenly (its frame point limit; the distance field "
+                         "resolves nothing finer)");
+    }
     if (done.emptyFrame)
     {
       vtkWarningMacro(<< "frame " << frame << " has no points: the mesh continues its motion");

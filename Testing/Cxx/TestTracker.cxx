@@ -749,3 +749,42 @@ TEST(TrackerBadInput, AFrameFarAwayOrWithANaNPointIsRefusedByNameAndTheTakeGoesO
     EXPECT_LT(vertexRms(r.positions, s.animation.positions(2)), 0.05 * s.diagonal);
   }
 }
+
+TEST(TrackerBadInput, ATenMillionPointFrameIsThinnedEvenlyAndTracked)
+{
+  // The memory guard: a frame far denser than the field resolves is thinned to the limit (here
+  // 20 000, to keep the test quick; 200 000 by default) before anything per point is built.
+  Sequence s = makeSequence(3, 0.0, 0, 3000);
+  dp::SamplerOptions dense;
+  dense.pointsPerFrame = 10'000'000;
+  s.frames[1] = dp::sampleSurface(s.animation.positions(1), s.animation.triangles(), dense, 1);
+  dp::TrackerOptions o = tubeOptions();
+  o.maxFramePoints = 20000;
+  dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                      s.animation.positions(0), o);
+  for (std::size_t f = 0; f < 3; ++f)
+  {
+    const dp::PointCloud& c = s.frames[f];
+    const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), nullptr);
+    EXPECT_EQ(r.thinned, f == 1);
+    if (f == 1)
+    {
+      EXPECT_LE(r.pointsUsed, o.maxFramePoints);
+      EXPECT_GE(r.pointsUsed, o.maxFramePoints / 2); // not far fewer than asked
+    }
+    else
+      EXPECT_EQ(r.pointsUsed, c.numberOfPoints());
+    EXPECT_FALSE(r.failed) << "frame " << f;
+    EXPECT_LT(vertexRms(r.positions, s.animation.positions(f)), 0.05 * s.diagonal) << "frame " << f;
+  }
+}
+
+TEST(TrackerBadInput, AnAbsurdFramePointLimitIsRefusedByName)
+{
+  const MeshData m = tube();
+  dp::TrackerOptions o;
+  o.maxFramePoints = 5;
+  const std::string message = refusal(
+      [&] { dp::Tracker(dp::TriangleMesh(m.triangles, m.positions.size() / 3), m.positions, o); });
+  EXPECT_NE(message.find("frame point limit"), std::string::npos) << message;
+}

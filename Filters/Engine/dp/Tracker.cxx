@@ -21,6 +21,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -48,6 +49,7 @@ void validate(const TrackerOptions& o)
   check(nonNegative(o.cloth.stretch) && nonNegative(o.cloth.shear) && nonNegative(o.cloth.bend),
         "cloth stiffnesses (>= 0)");
   check(o.maxIterations >= 1, "iteration limit (>= 1)");
+  check(o.maxFramePoints == 0 || o.maxFramePoints >= 100, "frame point limit (0 or >= 100)");
   check(o.tolerance > 0 && o.tolerance <= 1, "tolerance (in (0, 1])");
   check(nonNegative(o.voxelSize) && nonNegative(o.bandWidth), "voxel size and band (>= 0)");
   check(nonNegative(o.outlierDistance), "outlier distance (>= 0)");
@@ -538,6 +540,12 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   dataOptions.spreadCount = Options.coverage.weight > 0 || Options.recovery.enabled
                                 ? (Options.coverage.points > 0 ? Options.coverage.points : 4 * nv)
                                 : 0;
+  dataOptions.maxPoints = Options.maxFramePoints;
+  // Point indices are 32-bit: beyond that a frame must be thinned.
+  if (Options.maxFramePoints == 0 && count > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("a frame of " + std::to_string(count) +
+                                " points is more than the tracker can index (2^32 - 1): set a "
+                                "frame point limit (maxFramePoints) to thin it");
   // A frame with too little data is kept like an empty one (the motion continued) and flagged:
   // fitting the mesh to a point or two would crush it.
   if (count > 0 && tooLittleData(points, count, Voxel))
@@ -549,6 +557,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   {
     auto clock = std::chrono::steady_clock::now();
     FrameData frame(points, count, normals, dataOptions);
+    result.pointsUsed = frame.size();
+    result.thinned = frame.size() < frame.originalSize();
     orientData(frame);
     result.timings.data = elapsed(clock);
     if (frame.empty())

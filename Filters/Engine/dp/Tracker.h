@@ -81,6 +81,8 @@ struct FrameResult
   double seconds = 0;
   FrameTimings timings;
   bool emptyFrame = false;
+  std::size_t pointsUsed = 0; // the frame's points, or fewer when it was thinned (maxFramePoints)
+  bool thinned = false;
   // For diagnosis (BenchmarkTracker prints their errors): the kept attempt's start and the
   // coarse level's result.
   std::vector<double> startPositions, coarsePositions;

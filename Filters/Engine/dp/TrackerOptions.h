@@ -99,6 +99,10 @@ struct TrackerOptions
   bool squaredDistance = true;
   double voxelSize = 0.0; // world units; 0: template diagonal / 200
   double bandWidth = 0.0; // world units; 0: 4 voxels
+  // A frame of more points is thinned evenly to this many (FrameData): the field resolves
+  // nothing finer than a voxel, and a 10-million-point frame would otherwise take minutes and
+  // gigabytes. 0: no limit.
+  std::size_t maxFramePoints = 200000;
   TrackerSolver solver = TrackerSolver::GaussNewton;
   // Rest state of E_int for frame t: (1 - restUpdate) * template + restUpdate * frame t-1.
   // 0 is the paper (the template); a share of the last frame lets the rest state follow shapes

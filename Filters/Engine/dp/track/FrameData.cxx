@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameData.h"
 
+#include "dp/SurfaceSampler.h"
+
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -45,14 +47,60 @@ std::vector<std::uint32_t> spreadSubsample(const double* points, std::size_t cou
   std::sort(out.begin(), out.end());
   return out;
 }
+
+// Indices of at most `limit` points spread evenly over the frame (see the file comment).
+std::vector<std::size_t> thinnedFrame(const double* points, std::size_t count, double area,
+                                      std::size_t limit)
+{
+  // Every k-th point first, so the grid's map holds at most 8 x limit cells.
+  const std::size_t stride = (count + 8 * limit - 1) / (8 * limit);
+  std::vector<double> strided;
+  if (stride > 1)
+    for (std::size_t i = 0; i < count; i += stride)
+      strided.insert(strided.end(), points + 3 * i, points + 3 * i + 3);
+  const double* source = stride > 1 ? strided.data() : points;
+  const std::size_t n = stride > 1 ? strided.size() / 3 : count;
+  double cell = std::sqrt(area / static_cast<double>(limit));
+  std::vector<std::uint32_t> kept;
+  for (;;)
+  {
+    kept = spreadSubsample(source, n, cell);
+    if (kept.size() <= limit)
+      break;
+    cell *=
+        std::max(1.05, std::sqrt(static_cast<double>(kept.size()) / static_cast<double>(limit)));
+  }
+  std::vector<std::size_t> indices(kept.begin(), kept.end());
+  for (std::size_t& i : indices)
+    i *= stride;
+  return indices;
+}
 } // namespace
 
 FrameData::FrameData(const double* points, std::size_t count, const float* normals,
                      const FrameDataOptions& options)
-    : Count(count), Voxel(options.voxelSize)
+    : Count(count), OriginalCount(count), Voxel(options.voxelSize)
 {
   if (count == 0)
     return;
+  std::vector<double> thinPoints;
+  std::vector<float> thinNormals;
+  // (A frame with a NaN is not thinned: the field refuses it with its own message.)
+  if (options.maxPoints > 0 && count > options.maxPoints &&
+      std::all_of(points, points + 3 * count, [](double c) { return std::isfinite(c); }))
+  {
+    const double area = options.surfaceArea > 0 ? options.surfaceArea
+                                                : std::pow(boundingBoxDiagonal(points, count), 2);
+    for (const std::size_t i : thinnedFrame(points, count, area, options.maxPoints))
+    {
+      thinPoints.insert(thinPoints.end(), points + 3 * i, points + 3 * i + 3);
+      if (normals)
+        thinNormals.insert(thinNormals.end(), normals + 3 * i, normals + 3 * i + 3);
+    }
+    points = thinPoints.data();
+    normals = normals ? thinNormals.data() : nullptr;
+    count = Count = thinPoints.size() / 3;
+  }
   DistanceFieldOptions field;
   field.voxelSize = options.voxelSize;
   field.bandWidth = options.bandWidth > 0 ? options.bandWidth : 4 * options.voxelSize;

@@ -11,6 +11,12 @@
  * meet the surface, the point nearest the cell's centre: evenly spread over the data whatever
  * the scanner's density, deterministic (no random choice).
  *
+ * A frame of more than `maxPoints` points is thinned first, the same way (one point per cell,
+ * cells grown until few enough are left; above 8 x maxPoints every k-th point is taken before
+ * the grid, which bounds the memory): the field resolves nothing finer than its voxel, and a
+ * 10-million-point frame would otherwise spend minutes and gigabytes on normals. size() is then
+ * the thinned count and originalSize() the frame's.
+ *
  * Limits: normals are estimated by PCA over 16 neighbours and oriented along a spanning tree
  * (estimateNormals) when not given; orientation can flip on parts thinner than the point
  * spacing. An empty frame has no field: the data terms then contribute nothing.
@@ -31,6 +37,7 @@ struct FrameDataOptions
   double bandWidth = 0;        // of the distance field (world units; 0: 4 voxels)
   double surfaceArea = 0;      // the tracked surface's area (sets the subsample's cell size)
   std::size_t spreadCount = 0; // points wanted in the subsample (0: none)
+  std::size_t maxPoints = 0; // a larger frame is thinned evenly to at most this many (0: no limit)
 };
 
 class FrameData
@@ -42,6 +49,8 @@ public:
 
   bool empty() const { return Count == 0; }
   std::size_t size() const { return Count; }
+  /** The frame's own point count (size() is smaller when the frame was thinned). */
+  std::size_t originalSize() const { return OriginalCount; }
   const double* points() const { return Field.points(); }
   const double* point(std::size_t i) const { return Field.points() + 3 * i; }
   /** Unit normals, 3 per point. */
@@ -82,6 +91,7 @@ public:
 
 private:
   std::size_t Count = 0;
+  std::size_t OriginalCount = 0;
   double Voxel = 0;
   DistanceField Field;
   std::vector<float> Normals;
