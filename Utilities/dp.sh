@@ -4,6 +4,7 @@
 #   bash Utilities/dp.sh main [ARGS...]   the main job (no ARGS: the built-in sample sequence)
 #   bash Utilities/dp.sh test             the whole test suite (ctest)
 #   bash Utilities/dp.sh build            install and build only
+#   bash Utilities/dp.sh install          install the Debian packages only
 #
 # Idempotent: packages already installed are not fetched again, and an existing build
 # folder is only brought up to date. Environment: DP_BUILD_DIR (default: build).
@@ -92,8 +93,11 @@ case "$command" in
     install_packages
     build_project
     ;;
+  install)
+    install_packages
+    ;;
   *)
-    sed -n '2,9p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
+    sed -n '2,10p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
     [[ "$command" == "-h" || "$command" == "--help" ]] && exit 0
     exit 2
     ;;

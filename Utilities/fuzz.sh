@@ -18,7 +18,7 @@ build="${DP_FUZZ_BUILD:-$root/build-fuzz}"
 scratch=/dev/shm; [ -w "$scratch" ] || scratch="${TMPDIR:-/tmp}" # the input file, rewritten per run
 limit=(-max_total_time="$seconds") span="$seconds s"
 [ -z "${DP_FUZZ_RUNS:-}" ] || { limit=(-runs="$DP_FUZZ_RUNS"); span="$DP_FUZZ_RUNS executions"; }
-command -v clang++ >/dev/null || apt-get install -y -qq --no-install-recommends clang >/dev/null
+bash "$root/Utilities/dp.sh" install # clang and the engine's libraries, when missing
 cmake -S "$root/Testing/Fuzz" -B "$build" -G Ninja -DCMAKE_CXX_COMPILER=clang++ >/dev/null
 cmake --build "$build" | tail -1
 mkdir -p "$build/findings"
