@@ -72,6 +72,18 @@ def blender_report(path, frames=()):
     return json.loads(lines[-1][len("DP-REPORT "):])
 
 
+def blender_open_tracked(glb, blend):
+    """Runs Utilities/blender/open_tracked.py as a user would (batch mode), saving BLEND."""
+    result = subprocess.run(
+        [shutil.which("blender") or "blender", "-b", "--factory-startup", "--python-exit-code",
+         "1", "-P", os.path.join(UTILITIES, "blender", "open_tracked.py"), "--", glb, "--save",
+         blend], capture_output=True, text=True, timeout=300)
+    if result.returncode != 0 or not os.path.exists(blend):
+        raise AssertionError(f"open_tracked.py failed on {glb}:\n{result.stdout[-2000:]}\n"
+                             f"{result.stderr[-2000:]}")
+    return result.stdout
+
+
 class MessageRecorder:
     """Collects ErrorEvent / WarningEvent texts of a VTK object instead of printing them."""
 

@@ -1,26 +1,25 @@
-"""Imports a .glb into Blender (batch mode) and prints what Blender made of it as one JSON line
-after the marker "DP-REPORT ": the mesh objects, vertex count, morph targets (shape keys), the
-animation's frame range and frame rate, and the vertex positions Blender evaluates at the frames
-asked for, in glTF axes (Y up) so they compare directly with the file.
+"""Opens a .glb in Blender (batch mode; imported as a user would with smooth shading, see
+Utilities/blender/open_tracked.py) or a saved .blend, and prints what Blender made of it as one
+JSON line after the marker "DP-REPORT ": the mesh objects, vertex count, morph targets (shape
+keys), the animation's frame range, the scene's frame range and frame rate, and the vertex
+positions Blender evaluates at the frames asked for, in glTF axes (Y up) so they compare directly
+with the file.
 
-Usage: blender -b --factory-startup --python-exit-code 1 -P blender_glb_report.py -- FILE.glb
-           [FRAME ...]
+Usage: blender -b --factory-startup --python-exit-code 1 -P blender_glb_report.py --
+           FILE.glb|FILE.blend [FRAME ...]
 """
 import json
 import sys
 
-import numpy
-
-# Debian's Blender 3.4 glTF importer still uses numpy.bool, which numpy 1.24 removed.
-if not hasattr(numpy, "bool"):
-    numpy.bool = bool
-
-import bpy  # noqa: E402  (only inside Blender)
+import bpy  # only inside Blender
 
 args = sys.argv[sys.argv.index("--") + 1:]
 path, frames = args[0], [int(a) for a in args[1:]]
-bpy.ops.wm.read_factory_settings(use_empty=True)
-bpy.ops.import_scene.gltf(filepath=path)
+if path.endswith(".blend"):
+    bpy.ops.wm.open_mainfile(filepath=path)
+else:
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    bpy.ops.import_scene.gltf(filepath=path, import_shading="SMOOTH")
 scene = bpy.context.scene
 meshes = [o for o in scene.objects if o.type == "MESH"]
 report = {"file": path, "mesh_objects": len(meshes)}
@@ -31,6 +30,7 @@ if meshes:
     report["vertices"] = len(obj.data.vertices)
     report["morph_targets"] = len(keys.key_blocks) - 1 if keys else 0  # minus the basis
     report["fps"] = scene.render.fps / scene.render.fps_base
+    report["scene_frames"] = [scene.frame_start, scene.frame_end]
     if action:
         first, last = action.frame_range
         report["frame_range"] = [first, last]
