@@ -11,6 +11,8 @@
 #include "vtkPCACompressFilter.h"
 #include "vtkPolyData.h"
 
+#include <vtksys/SystemTools.hxx>
+
 #include <string>
 
 vtkStandardNewMacro(vtkCompressedSequenceWriter);
@@ -34,13 +36,23 @@ namespace
 struct Relay
 {
   vtkCompressedSequenceWriter* Writer;
+  std::string File; // as users see it in the progress text
   std::string Errors;
 };
-void relay(vtkObject*, unsigned long event, void* clientData, void* callData)
+void relay(vtkObject* caller, unsigned long event, void* clientData, void* callData)
 {
   auto* r = static_cast<Relay*>(clientData);
   if (event == vtkCommand::ProgressEvent)
+  {
+    // "Saving tracked.dpz: PCA Compress: frame 3 of 30", not the class names.
+    auto* codec = vtkAlgorithm::SafeDownCast(caller);
+    const std::string text =
+        "Saving " + r->File +
+        (codec && codec->GetProgressText() ? std::string(": ") + codec->GetProgressText()
+                                           : std::string());
+    r->Writer->SetProgressText(text.c_str());
     r->Writer->UpdateProgress(*static_cast<double*>(callData));
+  }
   else if (event == vtkCommand::ErrorEvent && callData)
   {
     std::string text = static_cast<const char*>(callData);
@@ -74,7 +86,7 @@ void vtkCompressedSequenceWriter::WriteData()
     codec->SetGLBFileName(name.c_str());
   else
     codec->SetFileName(name.c_str());
-  Relay state{this, {}};
+  Relay state{this, vtksys::SystemTools::GetFilenameName(name), {}};
   vtkNew<vtkCallbackCommand> callback;
   callback->SetCallback(relay);
   callback->SetClientData(&state);

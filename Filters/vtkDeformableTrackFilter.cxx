@@ -337,6 +337,9 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
                       << "the mesh and " << 100 * done.unsupported
                       << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
     }
+    const std::string progress = "Deformable Track: frame " + std::to_string(frame + 1) + " of " +
+                                 std::to_string(target + 1);
+    this->SetProgressText(progress.c_str());
     this->UpdateProgress(static_cast<double>(in.Cache.size()) / static_cast<double>(target + 1));
     if (in.Cache.size() <= target && !this->GetAbortExecute())
       request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);

@@ -186,6 +186,7 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
       grid.spacing[k] = diagonal / 200.0;
   }
   const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+  this->SetProgressText("Point Distance Field");
   this->UpdateProgress(0.05);
   dp::DistanceImage field;
   try

@@ -152,6 +152,9 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
       in.Positions.insert(in.Positions.end(), p, p + 3);
     }
     const std::size_t frames = in.frameCount();
+    const std::string progress =
+        "PCA Compress: frame " + std::to_string(in.collected()) + " of " + std::to_string(frames);
+    this->SetProgressText(progress.c_str());
     this->UpdateProgress(0.5 * static_cast<double>(in.collected()) / static_cast<double>(frames));
     if (this->GetAbortExecute())
       return fail("aborted while reading frame " + std::to_string(frame));
@@ -172,6 +175,7 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
     std::vector<double> times = in.TimeSteps;
     if (times.empty())
       times.push_back(0.0);
+    this->SetProgressText("PCA Compress: compressing");
     try
     {
       in.Result = std::make_unique<dp::CompressedSequence>(

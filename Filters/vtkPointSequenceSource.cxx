@@ -406,6 +406,9 @@ int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
   }
   const dp::Frame& frame = sequence[index];
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frame.time);
+  const std::string progress = "Point Sequence Reader: frame " + std::to_string(index + 1) +
+                               " of " + std::to_string(sequence.size());
+  this->SetProgressText(progress.c_str());
 
   const dp::PointFileFormat format = dp::formatFromFileName(frame.path);
   try

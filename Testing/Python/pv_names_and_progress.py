@@ -1,0 +1,108 @@
+"""pvpython: the plugin's proxies carry ParaView-style labels and Python names, a fresh
+filter's trace records nothing the user did not set (beyond what ParaView traces for every
+filter: its inputs and file names), and long work reports progress in the user's words."""
+import os
+import re
+import subprocess
+import tempfile
+
+from paraview import servermanager, smtrace
+from paraview.simple import LoadPlugin, OpenDataFile, Sphere
+
+# Names as ParaView's own readers and writers read (PLYReader, glTFReader): simple.py makes
+# them from the labels, so a label in Title Case gives a readable name.
+FILTERS = ("PointSequenceReader", "PointSequenceFolder", "PointDistanceField",
+           "DeformableTrack", "PCACompress", "CompressedSequenceReader")
+WRITERS = ("CompressedSequenceWriter", "glTFMorphAnimationWriter")
+
+
+def check_labels(proxy):
+    """Every property label reads as words: no acronym split by ParaView's automatic labelling
+    of CamelCase names ("G LBFile Name" from GLBFileName)."""
+    for name in proxy.ListProperties():
+        label = proxy.GetProperty(name).SMProperty.GetXMLLabel()
+        assert not re.search(r"(^|\s)[A-Z] [A-Z]", label), (proxy.GetXMLLabel(), name, label)
+    return {name: proxy.GetProperty(name).SMProperty.GetXMLLabel()
+            for name in proxy.ListProperties()}
+
+
+def check_names_and_labels(ns):
+    for name in FILTERS:
+        assert name in ns, (name, sorted(k for k in ns if not k.startswith("_")))
+    for name in WRITERS:
+        assert name in dir(servermanager.writers), (name, dir(servermanager.writers))
+    sphere = Sphere()
+    compress = ns["PCACompress"](Input=ns["DeformableTrack"](Input=sphere))
+    labels = check_labels(compress)
+    assert labels["GLBFileName"] == "GLB File Name", labels
+    assert labels["GLBMeshoptCompression"] == "GLB Meshopt Compression", labels
+    check_labels(ns["PointDistanceField"](Input=sphere))
+    for name in WRITERS:
+        writer = getattr(servermanager.writers, name)()
+        assert writer.GetXMLLabel() in ("Compressed Sequence Writer",
+                                        "glTF Morph Animation Writer"), writer.GetXMLLabel()
+        check_labels(writer)
+
+
+def check_creation_trace(ns):
+    smtrace.start_trace()
+    sphere = Sphere()
+    ns["PointDistanceField"](Input=sphere)
+    compress = ns["PCACompress"](Input=ns["DeformableTrack"](Input=sphere))
+    del compress
+    trace = smtrace.stop_trace()
+    created = trace.split("# addendum")[0]
+    # Nothing assigned after creation: every property still holds its default.
+    assigned = re.findall(r"^\w+\.(\w+) = .*$", created, re.MULTILINE)
+    assert not assigned, (assigned, created)
+    # In the constructors only what ParaView traces for every filter (inputs, file names).
+    arguments = set(re.findall(r"(\w+)=", created))
+    assert arguments <= {"registrationName", "Input", "Template", "FileName", "GLBFileName"}, \
+        (arguments, created)
+
+
+def observe_progress(proxy):
+    """The progress texts the VTK algorithm behind `proxy` reports (as ParaView shows them)."""
+    texts = []
+    algorithm = proxy.GetClientSideObject()
+
+    def record(caller, _event):
+        texts.append(caller.GetProgressText())
+    algorithm.AddObserver("ProgressEvent", record)
+    return texts
+
+
+def check_progress(ns, bin_dir):
+    with tempfile.TemporaryDirectory(prefix="dp-pv-progress-") as tmp:
+        subprocess.run([os.path.join(bin_dir, "dynamicpoints-sample"), "--frames", "4",
+                        "--points", "3000", tmp], check=True, capture_output=True)
+        reader = OpenDataFile(os.path.join(tmp, "points.series"))
+        track = ns["DeformableTrack"](Input=reader, TemplateVertices=200)
+        read_texts = observe_progress(reader)
+        track_texts = observe_progress(track)
+        track.UpdatePipeline(3.0)
+        assert "Point Sequence Reader: frame 4 of 4" in read_texts, read_texts
+        # (The executive's own start and end events repeat the text around them.)
+        said = list(dict.fromkeys(t for t in track_texts if t))
+        assert said == [f"Deformable Track: frame {k} of 4" for k in range(1, 5)], track_texts
+
+        path = os.path.join(tmp, "tracked.dpz")
+        writer = servermanager.writers.CompressedSequenceWriter(Input=track, FileName=path)
+        write_texts = observe_progress(writer)
+        writer.UpdatePipeline()
+        assert os.path.getsize(path) > 0
+        for k in range(1, 5):
+            assert f"Saving tracked.dpz: PCA Compress: frame {k} of 4" in write_texts, write_texts
+        assert "Saving tracked.dpz: PCA Compress: compressing" in write_texts, write_texts
+
+
+def main():
+    ns = {"__name__": "dp_plugin_proxies"}  # LoadPlugin fills a non-empty namespace only
+    LoadPlugin(os.environ["DP_PLUGIN"], remote=False, ns=ns)
+    check_names_and_labels(ns)
+    check_creation_trace(ns)
+    check_progress(ns, os.environ["DP_BIN_DIR"])
+    print("names, labels, creation trace and progress texts as expected")
+
+
+main()
