@@ -27,7 +27,9 @@ std::vector<std::uint32_t> spreadSubsample(const double* points, std::size_t cou
     double d2 = 0;
     for (int k = 0; k < 3; ++k)
     {
-      const double u = points[3 * i + k] / cell;
+      // Clamped so the cast below is defined for any finite coordinate (cells this far out
+      // only ever share a key with each other).
+      const double u = std::clamp(points[3 * i + k] / cell, -1e18, 1e18);
       c[k] = static_cast<std::int64_t>(std::floor(u));
       const double offset = u - (static_cast<double>(c[k]) + 0.5);
       d2 += offset * offset;
