@@ -314,6 +314,7 @@ const char* Usage =
     "RATE] [--coverage-weight "
     "W] "
     "[--coverage-points N] [--point-to-point SHARE] [--temporal-weight W] [--no-recovery]\n"
+    "             [--no-stiff-retry]\n"
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
@@ -430,6 +431,8 @@ int main(int argc, char** argv)
         options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--no-recovery")
         options.recovery.enabled = false;
+      else if (arg == "--no-stiff-retry")
+        options.recovery.stiffRetry = false;
       else if (arg == "--fail-margin")
         options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--penalty")

@@ -35,6 +35,9 @@ constexpr double SettledStep = 0.1;
 // The fine level's points -> mesh term: robust scale and reach, in voxels (defaults).
 constexpr double FineCoverageScale = 3.0;
 constexpr double FineCoverageReach = 8.0;
+// A frame whose edges grew beyond their template length by more than this many mean edge lengths
+// has a torn limb: its retries start with the coarse level held stiffer.
+constexpr double TearGrowth = 2.0;
 
 // Throws std::invalid_argument naming the first option out of its range (NaN included).
 void validate(const TrackerOptions& o)
@@ -82,6 +85,28 @@ std::vector<std::array<std::int64_t, 2>> finePairs(const TriangleMesh& mesh)
   for (const auto& h : mesh.hinges())
     pairs.push_back({h[2], h[3]});
   return pairs;
+}
+
+// The most any edge has grown beyond its template length, in mean template edge lengths. A
+// limb caught by another's data as it passes stretches a few edges by several edge lengths; the
+// surfaces tracked here (bodies, cloth, a collapse) stay well under two.
+double largestEdgeGrowth(const TriangleMesh& mesh, const std::vector<double>& rest,
+                         const std::vector<double>& x)
+{
+  auto length = [](const std::vector<double>& p, std::int64_t a, std::int64_t b)
+  {
+    const double d[3] = {p[3 * a] - p[3 * b], p[3 * a + 1] - p[3 * b + 1],
+                         p[3 * a + 2] - p[3 * b + 2]};
+    return std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  };
+  double largest = 0, sum = 0;
+  for (const auto& e : mesh.edges())
+  {
+    const double before = length(rest, e[0], e[1]);
+    sum += before;
+    largest = std::max(largest, length(x, e[0], e[1]) - before);
+  }
+  return mesh.edges().empty() ? 0.0 : largest * static_cast<double>(mesh.edges().size()) / sum;
 }
 
 // The rigid motion (R, t) that moves `from` closest to `to` (Kabsch, weights `mass`).
@@ -282,7 +307,7 @@ void Tracker::startState(Start start, Attempt& a) const
   state = graph.identity();
   if (predictor.empty())
     return;
-  if (start == Start::Predicted)
+  if (start == Start::Predicted || start == Start::Stiff)
     predictor.predictState(graph, Options.motionPrediction ? 1.0 : 0.0, state);
   else if (start == Start::Still)
     state = *predictor.lastState();
@@ -352,9 +377,12 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   clock = std::chrono::steady_clock::now();
   if (P->Graph)
   {
-    a.coarseIterations =
-        P->Registration->registerFrame(a.state, distance, coverage.get(), Options.graph.rigidity,
-                                       Options.graph.robustScale * Voxel, Options.graph.iterations);
+    const double stiffer = start == Start::Stiff ? 2.0 : 1.0;
+    P->Registration->setStretchWeight(stiffer * stiffer * Options.graph.stretchWeight);
+    a.coarseIterations = P->Registration->registerFrame(
+        a.state, distance, coverage.get(), stiffer * Options.graph.rigidity,
+        Options.graph.robustScale * Voxel, Options.graph.iterations);
+    P->Registration->setStretchWeight(Options.graph.stretchWeight);
     P->Graph->deform(a.state, x.data());
   }
   a.timings.coarse = elapsed(clock);
@@ -441,12 +469,17 @@ void Tracker::trackEmptyFrame(FrameResult& result)
 Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& result)
 {
   Attempt best = attempt(frame, Start::Predicted);
-  bool restarted = false;
+  int kept = 0;
   if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
   {
-    for (Start retry : {Start::Still, Start::LastGood, Start::Template})
+    // Held stiffer only where a limb tore: elsewhere (a collapse, a body whose skin stretches)
+    // a stiffer coarse level fits the data worse.
+    const bool torn = Options.recovery.stiffRetry &&
+                      largestEdgeGrowth(Mesh, Template, best.positions) > TearGrowth;
+    for (Start retry : {Start::Stiff, Start::Still, Start::LastGood, Start::Template})
     {
-      if ((!P->Graph && retry == Start::Template) ||
+      if ((!P->Graph && (retry == Start::Template || retry == Start::Stiff)) ||
+          (retry == Start::Stiff && !torn) ||
           (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
         continue;
       Attempt other = attempt(frame, retry);
@@ -457,14 +490,14 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
           other.score() < best.score() - 0.5 * Options.recovery.margin)
       {
         best = std::move(other);
-        restarted = true;
+        kept = retry == Start::Stiff ? 2 : 1;
       }
       if (!failed(best))
         break;
     }
   }
   result.failed = Options.recovery.enabled && failed(best);
-  result.kept = restarted ? 1 : 0;
+  result.kept = kept;
   P->FailedInARow = result.failed ? P->FailedInARow + 1 : 0;
   if (!result.failed || P->FailedInARow >= 3)
     P->RecentQuality.push_back(best.quality);
@@ -499,7 +532,7 @@ void Tracker::remember(const FrameResult& result)
   {
     const DeformationGraph::State state = P->Graph->fit(result.positions.data());
     // After a retry from another start, the motion before it says nothing about the motion after.
-    if (result.retries > 0 && result.kept > 0)
+    if (result.kept == 1)
       P->Predictor.restartFrom(result.positions, &state);
     else
       P->Predictor.push(result.positions, &state);
@@ -508,7 +541,7 @@ void Tracker::remember(const FrameResult& result)
     if (!result.failed)
       P->LastGoodState = state;
   }
-  else if (result.retries > 0 && result.kept > 0)
+  else if (result.kept == 1)
     P->Predictor.restartFrom(result.positions);
   else
     P->Predictor.push(result.positions);

@@ -24,7 +24,11 @@
  * then the frame's quality from both directions (FrameQuality). A frame whose quality fails
  * is tried again from the last frame without extrapolation, from the last frame that did not
  * fail (when the last one failed), and from the template re-registered rigidly to the last
- * frame; the best attempt is kept, and the frame is flagged if it still fails.
+ * frame; the best attempt is kept, and the frame is flagged if it still fails. When a limb tore
+ * (an edge grew beyond its template length by more than two mean edge lengths), the first
+ * retry keeps the predicted start but holds the coarse level's limbs stiffer (stretch weight
+ * x4, rigidity x2): a fast limb that passes another is pulled along with the other's data by
+ * stretching, which the default stiffness, tuned for non-rigid takes, allows.
  *
  * Solvers of the fine level (Solvers.h): Gauss-Newton (default), L-BFGS, and the paper's
  * steepest descent with h = 1.9 / k_max, motion prediction (MP: the best of the extrapolations
@@ -76,8 +80,9 @@ struct FrameResult
   double unexplained = 0; // share of the data farther than 3 voxels from the mesh (FrameQuality)
   double unsupported = 0; // share of the mesh farther than 3 voxels from the data
   int retries = 0;        // attempts after the first (the frame's quality failed)
-  int kept = 0;           // which attempt was kept: 0 the first, 1 a retry
-  bool failed = false;    // the quality still failed after the retries: do not trust this frame
+  // Which attempt was kept: 0 the first, 1 a retry from another start, 2 the stiff retry.
+  int kept = 0;
+  bool failed = false; // the quality still failed after the retries: do not trust this frame
   double seconds = 0;
   FrameTimings timings;
   bool emptyFrame = false;
@@ -124,6 +129,7 @@ private:
   enum class Start
   {
     Predicted, // the motion of the last frames continued
+    Stiff,     // the same, with the coarse level's limbs held stiffer (a limb caught by another)
     Still,     // the last frame, no extrapolation
     LastGood,  // the last frame that did not fail (while the frames since fail)
     Template   // the template, moved rigidly onto the last frame

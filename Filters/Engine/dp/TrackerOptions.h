@@ -85,6 +85,9 @@ struct RecoveryOptions
   bool enabled = true;
   double reach = 3.0;
   double margin = 0.003;
+  // A failed frame with a torn limb (an edge grown beyond its template length by more than two
+  // mean edge lengths) is first tried again with the coarse level's limbs held stiffer.
+  bool stiffRetry = true;
 };
 
 struct TrackerOptions
