@@ -1,6 +1,8 @@
 """pvpython: the plugin's proxies carry ParaView-style labels and Python names, a fresh
 filter's trace records nothing the user did not set (beyond what ParaView traces for every
-filter: its inputs and file names), and long work reports progress in the user's words."""
+filter: its inputs and file names), Deformable Track's panel is grouped with the rarely needed
+properties advanced and those of other modes shown only in their mode, numeric fields whose
+range is too wide for a slider get none, and long work reports progress in the user's words."""
 import os
 import re
 import subprocess
@@ -61,6 +63,50 @@ def check_creation_trace(ns):
         (arguments, created)
 
 
+def check_panel(ns):
+    track = ns["DeformableTrack"](Input=Sphere())
+    groups = {}
+    for i in range(track.SMProxy.GetNumberOfPropertyGroups()):
+        group = track.SMProxy.GetPropertyGroup(i)
+        groups[group.GetXMLLabel()] = [group.GetProperty(k).GetXMLName()
+                                       for k in range(group.GetNumberOfProperties())]
+    assert list(groups) == ["Template", "Tracking", "Failed frames", "The paper's energy",
+                            "Solver", "Distance field"], groups
+    grouped = [name for members in groups.values() for name in members]
+    shown = [name for name in track.ListProperties()
+             if track.GetProperty(name).SMProperty.GetPanelVisibility() == "default"]
+    # Every property the panel shows sits in a group (the inputs excepted), and the default
+    # view is short: the rest is behind the panel's advanced (gear) button.
+    assert set(shown) - {"Input", "Template"} <= set(grouped), (shown, groups)
+    assert len(shown) <= 12, shown
+    assert "TemplateVertices" in shown and "Recovery" in shown, shown
+    for name in ("ProvisionalDetermination", "Tolerance", "VoxelSize", "FailureMargin"):
+        assert name not in shown, name
+
+    def shown_when(name):
+        hints = track.GetProperty(name).SMProperty.GetHints()
+        decorator = hints.FindNestedElementByName("PropertyWidgetDecorator") if hints else None
+        assert decorator is not None, name
+        assert decorator.GetAttribute("mode") == "visibility", name
+        return decorator.GetAttribute("property"), decorator.GetAttribute("value")
+    solvers = track.GetProperty("Solver").SMProperty.GetDomain("enum")
+    steepest = [solvers.GetEntryValue(i) for i in range(solvers.GetNumberOfEntries())
+                if solvers.GetEntryText(i).startswith("Steepest")]
+    assert shown_when("ProvisionalDetermination") == ("Solver", str(steepest[0]))
+    assert shown_when("RigidAlignment") == ("CoarseLevel", "0")
+    for name in ("GraphNodes", "GraphRigidity", "Plasticity"):
+        assert shown_when(name) == ("CoarseLevel", "1"), name
+    assert shown_when("FailureMargin") == ("Recovery", "1")
+
+    # A slider over 20 .. 10 000 000 cannot be used: such fields are plain numbers.
+    vertices = track.GetProperty("TemplateVertices").SMProperty.GetDomain("range")
+    assert vertices.GetMinimumExists(0) and not vertices.GetMaximumExists(0)
+    for name in WRITERS:
+        writer = getattr(servermanager.writers, name)()
+        target = writer.GetProperty("ErrorTarget").SMProperty.GetDomain("range")
+        assert target.GetMinimumExists(0) and not target.GetMaximumExists(0), name
+
+
 def observe_progress(proxy):
     """The progress texts the VTK algorithm behind `proxy` reports (as ParaView shows them)."""
     texts = []
@@ -101,8 +147,9 @@ def main():
     LoadPlugin(os.environ["DP_PLUGIN"], remote=False, ns=ns)
     check_names_and_labels(ns)
     check_creation_trace(ns)
+    check_panel(ns)
     check_progress(ns, os.environ["DP_BIN_DIR"])
-    print("names, labels, creation trace and progress texts as expected")
+    print("names, labels, creation trace, panel and progress texts as expected")
 
 
 main()
