@@ -492,10 +492,15 @@ private:
       return;
     }
     vtkPolyData* result = compressor->GetOutput();
-    for (const char* name :
-         {"Components", "KGError", "MaxError", "MaxErrorRelative", "BitsPerVertexFrame",
-          "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1", "PaperRatio"})
+    for (const char* name : {"Components", "KGError", "MaxError", "MaxErrorRelative",
+                             "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
+                             "PaperD1", "PaperRatio", "ComponentsPerFrame"})
       Compression[name] = fieldValue(result, name);
+    const bool weak = Written.size() >= 8 && fieldValue(result, "ComponentsPerFrame") > 0.5;
+    Compression["weak"] = weak;
+    if (weak)
+      Compression["note"] = "most of the frames' worth of components were kept: the motion is "
+                            "not low-rank, or the tracking shakes";
     Compression["ErrorTargetKG"] = S.errorTarget;
     Compression["Bytes"] = fs::file_size(Dpz);
     std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame (%.1fx "
@@ -503,6 +508,10 @@ private:
                 Dpz.string().c_str(), fieldValue(result, "Components"),
                 fieldValue(result, "BitsPerVertexFrame"),
                 96.0 / fieldValue(result, "BitsPerVertexFrame"), fieldValue(result, "KGError"));
+    if (weak)
+      std::printf("Compression is weak: %.0f components for %zu frames (the motion is not "
+                  "low-rank, or the tracking shakes)\n",
+                  fieldValue(result, "Components"), Written.size());
     std::printf("glTF: %s\n", Glb.string().c_str());
   }
 

@@ -134,6 +134,14 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
         return fail(std::string("frame 0: ") + why);
       in.Vertices = input->GetNumberOfPoints();
       in.Polys = input->GetPolys();
+      if (input->GetNumberOfPolys() == 0)
+      {
+        // A raw point sequence has the same count each frame but not the same points.
+        vtkWarningMacro(<< "frame 0 has no polygons: PCA Compress expects one mesh moving (point "
+                           "i the same surface point in every frame); the points of a scanned "
+                           "sequence are not, and compress poorly. Track them first "
+                           "(Deformable Track)");
+      }
     }
     else if (input->GetNumberOfPoints() != in.Vertices ||
              input->GetNumberOfPolys() != in.Polys->GetNumberOfCells())
@@ -191,6 +199,7 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
     {
       return fail(std::string("cannot compress: ") + e.what());
     }
+    this->WarnIfWeak(frames);
     // Files: written beside and renamed, so a failure never leaves a broken file behind.
     try
     {
@@ -250,11 +259,27 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
   addValue(output, "KGError", r.kgError);
   addValue(output, "MaxError", r.maxError);
   addValue(output, "MaxErrorRelative", r.maxErrorRelative);
+  addValue(output, "ComponentsPerFrame",
+           static_cast<double>(r.components) / static_cast<double>(in.frameCount()));
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
     output->GetInformation()->Set(
         vtkDataObject::DATA_TIME_STEP(),
         outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
   return 1;
+}
+
+void vtkPCACompressFilter::WarnIfWeak(std::size_t frames)
+{
+  // PCA pays off when a few shapes explain the take; keeping most of the frames' worth of
+  // components means the motion is not low-rank, or the tracking shakes.
+  const dp::PcaReport& r = this->Internal->Result->report;
+  if (frames >= 8 && 2 * r.components > frames)
+  {
+    vtkWarningMacro(<< "kept " << r.components << " of " << frames
+                    << " components for the error target: the motion is not low-rank, or the "
+                       "tracking shakes; the compression is weak ("
+                    << r.bitsPerVertexFrame << " bits per vertex per frame)");
+  }
 }
 
 void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)

@@ -18,7 +18,9 @@
  * polygons, point array "CompressionError" (distance of each vertex to its input position).
  * Field data: "Components", "PaperD0", "PaperD1", "PaperRatio" (the paper's counts of
  * numbers), "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "KGError" (percent),
- * "MaxError" (world units), "MaxErrorRelative" (of the diagonal).
+ * "MaxError" (world units), "MaxErrorRelative" (of the diagonal), "ComponentsPerFrame"
+ * (components kept over frames: above 1/2 the compression is weak, and a warning says so; so
+ * does an input without polygons, which is unlikely to be one mesh moving).
  *
  * With FileName set, the compressed sequence is also written there (.dpz, read back by
  * vtkCompressedSequenceReader); with GLBFileName set, as a glTF 2.0 binary with morph targets
@@ -120,6 +122,9 @@ protected:
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;
   void operator=(const vtkPCACompressFilter&) = delete;
+
+  /** Warns when most of the frames' worth of components were kept (weak compression). */
+  void WarnIfWeak(std::size_t frames);
 
   struct Internals;
   Internals* Internal;

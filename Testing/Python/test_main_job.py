@@ -177,6 +177,12 @@ class TestDefaultRun(TempDirTestCase):
             self.assertFalse(frame["failed"], frame)
         self.assertEqual(report["framesFailed"], [])
         self.assertLessEqual(report["compression"]["KGError"], 0.2)
+        # The tube's motion is low-rank: a handful of shapes, not one per frame.
+        compression = report["compression"]
+        self.assertAlmostEqual(compression["ComponentsPerFrame"],
+                               compression["Components"] / report["framesTracked"])
+        self.assertFalse(compression["weak"])
+        self.assertNotIn("note", compression)
         self.assertEqual(report["compression"]["Bytes"],
                          os.path.getsize(self.output("tracked.dpz")))
         for path in report["outputs"].values():
