@@ -184,6 +184,9 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
     output->Initialize();
     return 1;
   }
+  // A new request (not this filter's own continuation): an abort of an earlier run is over.
+  if (!request->Has(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING()))
+    this->SetAbortExecute(0);
   const std::size_t target = vtkDP::requestedFrame(in.TimeSteps, outInfo);
   const double requestedTime =
       outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
@@ -193,6 +196,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
   if (in.Cache.size() <= target)
   {
     const std::size_t frame = in.Cache.size();
+    this->ShowProgressOf(frame, target);
     vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
 
     if (!in.Tracker)
@@ -337,10 +341,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
                       << "the mesh and " << 100 * done.unsupported
                       << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
     }
-    const std::string progress = "Deformable Track: frame " + std::to_string(frame + 1) + " of " +
-                                 std::to_string(target + 1);
-    this->SetProgressText(progress.c_str());
-    this->UpdateProgress(static_cast<double>(in.Cache.size()) / static_cast<double>(target + 1));
+    this->UpdateProgress(1.0); // of this frame: the whole work's (frame + 1) / needed
     if (in.Cache.size() <= target && !this->GetAbortExecute())
       request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
     else
@@ -348,14 +349,39 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
   }
   else
   {
+    // Answered from the cache: the last frame's progress scale stays, so a consumer's walk
+    // does not flash 100 % each time it asks again for a frame already done.
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
   }
 
   const std::size_t shown = std::min(target, in.Cache.size() - 1);
   output->Initialize();
   fillOutput(output, in.Polys, in.Cache[shown], in.Tracker->templatePositions(), shown);
-  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), requestedTime);
+  // Stopped short of the request (aborted): the output says which frame it is. The executive
+  // does not run a request for the same time twice; a request for another time goes on from
+  // the frames kept (a change of properties starts the take over).
+  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(),
+                                shown == target ? requestedTime : in.timeOf(shown));
   return 1;
+}
+
+void vtkDeformableTrackFilter::SetAbortExecute(vtkTypeBool abort)
+{
+  this->AbortExecute = abort;
+}
+
+void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, std::size_t target)
+{
+  // Progress over what the work needs: up to the requested frame, or, when a consumer walks the
+  // take one new frame per request (a writer, the compressor, playing), over the whole take.
+  // The shift and scale map this frame's own 0..1 (and the executive's, around each request)
+  // onto that whole, so the bar rises instead of reading 100 % after every frame.
+  const std::size_t needed = target == frame ? this->Internal->frameCount() : target + 1;
+  const std::string text =
+      "Deformable Track: frame " + std::to_string(frame + 1) + " of " + std::to_string(needed);
+  this->SetProgressText(text.c_str());
+  const double share = 1.0 / static_cast<double>(needed);
+  this->SetProgressShiftScale(static_cast<double>(frame) * share, share);
 }
 
 void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)

@@ -207,6 +207,14 @@ public:
   vtkGetMacro(TemplateVertices, int);
   ///@}
 
+  /**
+   * An abort (ParaView's abort button, or SetAbortExecute(1) from a progress observer) stops
+   * the run after the frame being tracked and keeps the frames done. Unlike the settings, it
+   * does not change what is computed, so it does not mark the filter modified (which would
+   * drop the cached frames).
+   */
+  void SetAbortExecute(vtkTypeBool abort) override;
+
   /** Number of frames computed and cached so far. */
   int GetNumberOfCachedFrames();
 
@@ -247,6 +255,8 @@ protected:
   double FailureMargin = 0.003;
 
 private:
+  /** Progress text and scale for computing `frame` of a request for `target`. */
+  void ShowProgressOf(std::size_t frame, std::size_t target);
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;
   void operator=(const vtkDeformableTrackFilter&) = delete;
 

@@ -107,13 +107,15 @@ def check_panel(ns):
         assert target.GetMinimumExists(0) and not target.GetMaximumExists(0), name
 
 
-def observe_progress(proxy):
-    """The progress texts the VTK algorithm behind `proxy` reports (as ParaView shows them)."""
+def observe_progress(proxy, values=False):
+    """The progress texts (with values: (text, progress) pairs) the VTK algorithm behind `proxy`
+    reports, as ParaView shows them."""
     texts = []
     algorithm = proxy.GetClientSideObject()
 
     def record(caller, _event):
-        texts.append(caller.GetProgressText())
+        text = caller.GetProgressText()
+        texts.append((text, caller.GetProgress()) if values else text)
     algorithm.AddObserver("ProgressEvent", record)
     return texts
 
@@ -131,6 +133,22 @@ def check_progress(ns, bin_dir):
         # (The executive's own start and end events repeat the text around them.)
         said = list(dict.fromkeys(t for t in track_texts if t))
         assert said == [f"Deformable Track: frame {k} of 4" for k in range(1, 5)], track_texts
+
+        # Save Data on a fresh track: the writer walks the take one frame per request, and the
+        # tracker's progress rises over the whole take instead of reading 100 % every frame.
+        fresh = ns["DeformableTrack"](Input=reader, TemplateVertices=200)
+        walked = observe_progress(fresh, values=True)
+        saver = servermanager.writers.CompressedSequenceWriter(
+            Input=fresh, FileName=os.path.join(tmp, "walked.dpz"))
+        saver.UpdatePipeline()
+        said = list(dict.fromkeys(text for text, _ in walked if text))
+        assert said == [f"Deformable Track: frame {k} of 4" for k in range(1, 5)], walked
+        # Frame k's events stay within its quarter of the bar; 100 % only at the end.
+        for text, value in walked:
+            if text:
+                k = int(text.split()[3])
+                assert (k - 1) / 4 - 0.25 <= value <= k / 4, (text, value, walked)
+        assert walked[-1][1] == 1.0, walked
 
         path = os.path.join(tmp, "tracked.dpz")
         writer = servermanager.writers.CompressedSequenceWriter(Input=track, FileName=path)

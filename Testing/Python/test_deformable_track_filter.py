@@ -5,7 +5,7 @@ import unittest
 
 import numpy as np
 from vtkmodules.numpy_interface import dataset_adapter as dsa
-from vtkmodules.vtkCommonDataModel import vtkPolyData
+from vtkmodules.vtkCommonDataModel import vtkDataObject, vtkPolyData
 
 import dynamicpoints
 from dp_testing import MessageRecorder, TempDirTestCase, run_tool
@@ -64,6 +64,38 @@ class TestDeformableTrackFilter(TempDirTestCase):
                                        np.asarray(out.Points) - truth0, atol=1e-5)
             self.assertGreaterEqual(out.PointData["Residual"].min(), 0)
         self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
+
+    def test_abort_stops_between_frames_keeping_the_frames_done(self):
+        # An abort raised while frame 2 is tracked (as a GUI's abort button does, through the
+        # algorithm's abort flag) stops the run after that frame; the frames done stay cached,
+        # the output says which frame it holds, and the next run goes on from there.
+        f = self.tracker()
+        texts = []
+
+        def on_progress(caller, _event):
+            texts.append(caller.GetProgressText())
+            if caller.GetProgressText() == f"Deformable Track: frame 3 of {FRAMES}":
+                caller.SetAbortExecute(1)
+        f.AddObserver("ProgressEvent", on_progress)
+        f.UpdateTimeStep(FRAMES - 1)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 3)
+        self.assertNotIn(f"Deformable Track: frame 4 of {FRAMES}", texts)
+        self.assertEqual(f.GetOutput().GetFieldData().GetArray("FrameIndex").GetValue(0), 2)
+        self.assertEqual(f.GetOutput().GetInformation().Get(vtkDataObject.DATA_TIME_STEP()), 2)
+        texts.clear()
+        f.RemoveAllObservers()
+        f.AddObserver("ProgressEvent", lambda caller, _e: texts.append(caller.GetProgressText()))
+        # Another time goes on from the frames kept (the executive does not run a request for
+        # the same time twice; a change of properties, Apply, starts the take over).
+        f.UpdateTimeStep(FRAMES - 2)
+        self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES - 1)
+        # Frames 0-2 are not tracked again (the first event repeats the last text shown).
+        self.assertIn(f"Deformable Track: frame 4 of {FRAMES - 1}", texts)
+        for k in (1, 2):
+            again = [t for t in texts if t and t.startswith(f"Deformable Track: frame {k} ")]
+            self.assertFalse(again, texts)
+        self.assertEqual(f.GetOutput().GetFieldData().GetArray("FrameIndex").GetValue(0),
+                         FRAMES - 2)
 
     def test_the_cache_answers_earlier_times_and_parameter_changes_clear_it(self):
         f = self.tracker()
