@@ -205,9 +205,14 @@ class TestInterruptions(TempDirTestCase):
     def start_and_stop_at_frame(self, sig, frame=3):
         process = subprocess.Popen([tool("dynamicpoints"), "--output", self.path("out")],
                                    stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        marker = self.path("out", "tracked", f"frame_{frame:04d}.vtp")
+        # Stopped once the collection lists frame `frame` (its .vtp is written before the .pvd
+        # names it: waiting for the .vtp alone raced with the .pvd's update).
+        pvd = self.path("out", "tracked.pvd")
+
+        def listed():
+            return len(pvd_files(pvd)) if os.path.exists(pvd) else 0
         deadline = time.time() + 120
-        while not os.path.exists(marker) and process.poll() is None and time.time() < deadline:
+        while listed() <= frame and process.poll() is None and time.time() < deadline:
             time.sleep(0.02)
         process.send_signal(sig)
         stdout, stderr = process.communicate(timeout=120)
