@@ -481,12 +481,12 @@ TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)
   }
 }
 
-// Two legs: capped tubes side by side, one standing, the other swinging about its base away
-// from it in the x-z plane, faster every frame (angle = rate t^2).
-class SwingingLeg : public dp::AnimatedMesh
+// Two tubes of radius 0.08 along z from 0 to 1, the second moved by (dx, dy): the legs of the
+// scenes below, which say in positions() how the second one moves.
+class TwoLegs : public dp::AnimatedMesh
 {
 public:
-  SwingingLeg(double rate, std::size_t frames) : Rate(rate), Frames(frames)
+  TwoLegs(double dx, double dy, std::size_t frames) : Frames(frames)
   {
     dp::BendingTube::Options o;
     o.rings = 20;
@@ -496,7 +496,7 @@ public:
     const std::vector<double> one = tube.positions(0);
     Rest = one;
     for (std::size_t i = 0; i < one.size(); i += 3)
-      Rest.insert(Rest.end(), {one[i] + Gap, one[i + 1], one[i + 2]});
+      Rest.insert(Rest.end(), {one[i] + dx, one[i + 1] + dy, one[i + 2]});
     Triangles = tube.triangles();
     const auto offset = static_cast<std::int64_t>(one.size() / 3);
     for (std::int64_t t : tube.triangles())
@@ -505,6 +505,19 @@ public:
   std::size_t numberOfFrames() const override { return Frames; }
   std::size_t numberOfVertices() const override { return Rest.size() / 3; }
   const std::vector<std::int64_t>& triangles() const override { return Triangles; }
+
+protected:
+  std::size_t Frames;
+  std::vector<double> Rest;
+  std::vector<std::int64_t> Triangles;
+};
+
+// Two legs: capped tubes side by side, one standing, the other swinging about its base away
+// from it in the x-z plane, faster every frame (angle = rate t^2).
+class SwingingLeg : public TwoLegs
+{
+public:
+  SwingingLeg(double rate, std::size_t frames) : TwoLegs(Gap, 0.0, frames), Rate(rate) {}
   std::vector<double> positions(std::size_t frame) const override
   {
     const double angle = Rate * static_cast<double>(frame * frame);
@@ -521,36 +534,16 @@ public:
 private:
   static constexpr double Gap = 0.22;
   double Rate;
-  std::size_t Frames;
-  std::vector<double> Rest;
-  std::vector<std::int64_t> Triangles;
 };
 
 // Two legs (tubes of radius 0.08) hanging from hips 0.5 apart, 2 cm apart sideways; the hind
 // one stands, the front one swings back past it, its foot moving about `step` a frame: as a
 // galloping horse's hoof passes another.
-class PassingLegs : public dp::AnimatedMesh
+class PassingLegs : public TwoLegs
 {
 public:
-  PassingLegs(double step, std::size_t frames) : Step(step), Frames(frames)
-  {
-    dp::BendingTube::Options o;
-    o.rings = 20;
-    o.segments = 12;
-    o.radius = 0.08;
-    const dp::BendingTube tube(o);
-    const std::vector<double> one = tube.positions(0); // along z, from 0 (foot) to 1 (hip)
-    Rest = one;
-    for (std::size_t i = 0; i < one.size(); i += 3)
-      Rest.insert(Rest.end(), {one[i] + HipApart, one[i + 1] + Side, one[i + 2]});
-    Triangles = tube.triangles();
-    const auto offset = static_cast<std::int64_t>(one.size() / 3);
-    for (std::int64_t t : tube.triangles())
-      Triangles.push_back(t + offset);
-  }
-  std::size_t numberOfFrames() const override { return Frames; }
-  std::size_t numberOfVertices() const override { return Rest.size() / 3; }
-  const std::vector<std::int64_t>& triangles() const override { return Triangles; }
+  // The legs run along z from 0 (foot) to 1 (hip).
+  PassingLegs(double step, std::size_t frames) : TwoLegs(HipApart, Side, frames), Step(step) {}
   std::vector<double> positions(std::size_t frame) const override
   {
     // The front leg turns about its hip (x = HipApart, z = 1), foot from ahead to behind.
@@ -572,9 +565,6 @@ private:
   }
   static constexpr double HipApart = 0.5, Side = 0.18;
   double Step;
-  std::size_t Frames;
-  std::vector<double> Rest;
-  std::vector<std::int64_t> Triangles;
 };
 
 // The share of the true surface (area-uniform samples) farther than `limit` from the mesh.
