@@ -2,9 +2,9 @@
 # DynamicPoints: install what the build needs (Debian bookworm, as root), build, and run.
 #
 #   bash Utilities/dp.sh main [ARGS...]   the main job (no ARGS: the built-in sample sequence)
-#   bash Utilities/dp.sh test             the whole test suite (ctest)
-#   bash Utilities/dp.sh build            install and build only
-#   bash Utilities/dp.sh install          install the Debian packages only
+#   bash Utilities/dp.sh test             the whole test suite (ctest), with the tools it uses
+#   bash Utilities/dp.sh build            install what the build needs and build only
+#   bash Utilities/dp.sh install          install every Debian package (build and tests) only
 #
 # Idempotent: packages already installed are not fetched again, and an existing build
 # folder is only brought up to date. Environment: DP_BUILD_DIR (default: build).
@@ -13,10 +13,11 @@ set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${DP_BUILD_DIR:-$root/build}"
 
-# The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev libraries are the ones its CMake
-# package looks for. Debian's libvtk9-dev cannot be installed beside it (see README).
-packages=(
-  cmake ninja-build g++ pkg-config clang
+# What the build and the main job need. The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev
+# libraries are the ones its CMake package looks for. Debian's libvtk9-dev cannot be installed
+# beside it (see README).
+build_packages=(
+  cmake ninja-build g++ pkg-config
   paraview paraview-dev python3-paraview python3-dev python3-numpy python3-mpi4py
   qtbase5-dev qttools5-dev libqt5svg5-dev libqt5x11extras5-dev libqt5opengl5-dev
   qtxmlpatterns5-dev-tools libopenmpi-dev openmpi-bin
@@ -27,16 +28,20 @@ packages=(
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
   liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev
-  python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri
-  nodejs blender
+)
+# What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the
+# X server for the ParaView GUI and rendering tests, Node.js for the glTF tools, Blender.
+test_packages=(
+  clang python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri nodejs blender
 )
 # From the npm registry, for the tests of the .glb export: the Khronos glTF validator and
 # meshoptimizer's reference decoder (the version of Debian's libmeshoptimizer).
 node_tools=(gltf-validator@2.0.0-dev.3.10 meshoptimizer@0.18.1)
 
+# install_packages PACKAGE...: installs those not installed yet (one apt run).
 install_packages() {
   local missing=()
-  for p in "${packages[@]}"; do
+  for p in "$@"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
   done
   if ((${#missing[@]})); then
@@ -49,6 +54,10 @@ install_packages() {
     apt-get update -qq
     apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
   fi
+}
+
+install_test_tools() {
+  install_packages "${build_packages[@]}" "${test_packages[@]}"
   # npm comes with some nodejs builds and is Debian's package npm with others.
   if ! command -v npm >/dev/null; then
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends npm >/dev/null
@@ -72,29 +81,29 @@ build_project() {
   fi
   echo "== building"
   cmake --build "$build" -j "$(nproc)" -- --quiet
-  install_node_tools
 }
 
 command="${1:-}"
 shift || true
 case "$command" in
   main)
-    install_packages
+    install_packages "${build_packages[@]}"
     build_project
     exec "$build/bin/dynamicpoints" "$@"
     ;;
   test)
-    install_packages
+    install_test_tools
     build_project
+    install_node_tools
     cd "$build"
     exec ctest --output-on-failure -j "$(nproc)" "$@"
     ;;
   build)
-    install_packages
+    install_packages "${build_packages[@]}"
     build_project
     ;;
   install)
-    install_packages
+    install_test_tools
     ;;
   *)
     sed -n '2,10p' "${BASH_SOURCE[0]}" | sed 's/^# \{0,1\}//'
