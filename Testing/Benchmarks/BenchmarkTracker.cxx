@@ -53,8 +53,9 @@ struct Settings
   bool verbose = false;
   std::string
       oracle; // "previous": start each frame at the true previous frame; "same": at the truth
-  std::string dumpFolder; // write the tracked frames (PLY) here
-  std::string csvFile;    // per-frame figures
+  std::string dumpFolder;                   // write the tracked frames (PLY) here
+  std::string csvFile;                      // per-frame figures
+  dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
 };
 Settings S;
 
@@ -306,6 +307,7 @@ const char* Usage =
     "  data:      [--height M (0: as stored)] [--points N] [--seed S] [--condition clean,noisy]\n"
     "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
+    "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--solver gn|lbfgs|sd] [--distance-weight W] [--normal-test DEGREES]\n"
     "             [--stiffness ST,SH,BE] [--tolerance T] [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
@@ -437,6 +439,10 @@ int main(int argc, char** argv)
         options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--penalty")
         options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
+      else if (arg == "--reconstruction-voxel")
+        S.reconstruction.voxelSize = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+      else if (arg == "--hole-reach")
+        S.reconstruction.holeReach = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--oracle")
         S.oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
       else if (arg == "--verbose")
@@ -511,7 +517,7 @@ int main(int argc, char** argv)
           const TemplateKind k = size == 0 ? TemplateKind::Full : kind;
           const dp::PointCloud frame0 = dp::sampleSurface(mesh.positions(0), mesh.triangles(),
                                                           samplingFor(condition, S.points), 0);
-          const Template t = makeTemplate(mesh, k, size, frame0);
+          const Template t = makeTemplate(mesh, k, size, frame0, S.reconstruction);
           const std::string label = name + "-" + templateName(k) + "-" +
                                     std::to_string(t.vertices()) + "-" + condition.name;
           if (S.verbose)

@@ -159,11 +159,13 @@ inline vtkSmartPointer<vtkPolyData> decimated(vtkPolyData* input, std::size_t ve
 /**
  * A template of about `vertices` vertices of the kind asked for; `frame0Samples` are the points
  * a reconstruction starts from (the data of frame 0, with its noise and holes; their normals
- * are estimated, as the filter does without normals). The ground truth of a template vertex is
+ * are estimated, as the filter does without normals), `reconstruction` how (its target count is
+ * `vertices`). The ground truth of a template vertex is
  * the barycentric position of its closest point on the frame-0 mesh, carried through the frames.
  */
 inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, std::size_t vertices,
-                             const dp::PointCloud& frame0Samples)
+                             const dp::PointCloud& frame0Samples,
+                             dp::ReconstructionOptions reconstruction = {})
 {
   Template t;
   const std::vector<double> frame0 = mesh.positions(0);
@@ -182,10 +184,10 @@ inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, st
         frame0Samples.hasNormals()
             ? frame0Samples.normals
             : dp::estimateNormals(frame0Samples.points.data(), frame0Samples.numberOfPoints());
-    dp::ReconstructionOptions o;
-    o.targetVertices = vertices;
-    const dp::ReconstructedMesh r = dp::reconstructSurface(
-        frame0Samples.points.data(), normals.data(), frame0Samples.numberOfPoints(), o);
+    reconstruction.targetVertices = vertices;
+    const dp::ReconstructedMesh r =
+        dp::reconstructSurface(frame0Samples.points.data(), normals.data(),
+                               frame0Samples.numberOfPoints(), reconstruction);
     coarse = toPolyData(r.positions, r.triangles);
   }
   else
