@@ -17,7 +17,16 @@
 
 vtkStandardNewMacro(vtkCompressedSequenceWriter);
 
-vtkCompressedSequenceWriter::vtkCompressedSequenceWriter() = default;
+vtkCompressedSequenceWriter::vtkCompressedSequenceWriter()
+{
+  // The codec's defaults (the engine's), not a copy of them.
+  vtkNew<vtkPCACompressFilter> codec;
+  this->Layout = codec->GetLayout();
+  this->ErrorMeasure = codec->GetErrorMeasure();
+  this->ErrorTarget = codec->GetErrorTarget();
+  this->NumberOfComponents = codec->GetNumberOfComponents();
+  this->MeshoptCompression = codec->GetGLBMeshoptCompression();
+}
 
 vtkCompressedSequenceWriter::~vtkCompressedSequenceWriter()
 {

@@ -66,11 +66,12 @@ protected:
   void WriteData() override;
 
   char* FileName = nullptr;
-  int Layout = 1;
-  int ErrorMeasure = 0;
-  double ErrorTarget = 0.2;
-  int NumberOfComponents = 0;
-  vtkTypeBool MeshoptCompression = false;
+  // The codec's options; their defaults are the engine's, set by the constructor.
+  int Layout;
+  int ErrorMeasure;
+  double ErrorTarget;
+  int NumberOfComponents;
+  vtkTypeBool MeshoptCompression;
 
 private:
   vtkCompressedSequenceWriter(const vtkCompressedSequenceWriter&) = delete;

@@ -45,11 +45,80 @@ struct vtkDeformableTrackFilter::Internals
     Polys = nullptr;
     Cache.clear();
   }
+
+  // The properties are the engine's options under the names ParaView shows; their defaults are
+  // the engine's (one source: the plugin's XML is checked against them by a test).
+  static void takeDefaults(vtkDeformableTrackFilter& f)
+  {
+    const dp::TrackerOptions o;
+    f.Solver = o.solver == dp::TrackerSolver::LBFGS             ? LBFGS
+               : o.solver == dp::TrackerSolver::SteepestDescent ? STEEPEST_DESCENT
+                                                                : GAUSS_NEWTON;
+    f.DistanceWeight = o.distanceWeight;
+    f.DistanceMeasure =
+        o.distanceMeasure == dp::DistanceMeasure::Points ? DISTANCE_TO_POINTS : DISTANCE_TO_PLANES;
+    f.SquaredDistance = o.squaredDistance;
+    f.RestUpdate = o.restUpdate;
+    f.StretchStiffness = o.cloth.stretch;
+    f.ShearStiffness = o.cloth.shear;
+    f.BendStiffness = o.cloth.bend;
+    f.NormalTestAngle = o.normalTestDegrees;
+    f.OutlierDistance = o.outlierDistance;
+    f.VoxelSize = o.voxelSize;
+    f.BandWidth = o.bandWidth;
+    f.MotionPrediction = o.motionPrediction;
+    f.RigidAlignment = o.rigidAlignment;
+    f.ProvisionalDetermination = o.provisionalDetermination;
+    f.MaximumIterations = o.maxIterations;
+    f.Tolerance = o.tolerance;
+    f.TemplateVertices = static_cast<int>(dp::ReconstructionOptions().targetVertices);
+    f.CoverageWeight = o.coverage.weight;
+    f.CoarseLevel = o.graph.enabled;
+    f.GraphNodes = static_cast<int>(o.graph.nodes);
+    f.GraphRigidity = o.graph.rigidity;
+    f.Plasticity = o.graph.yieldRate;
+    f.TemporalWeight = o.temporalWeight;
+    f.Recovery = o.recovery.enabled;
+    f.FailureMargin = o.recovery.margin;
+  }
+
+  static dp::TrackerOptions optionsOf(const vtkDeformableTrackFilter& f)
+  {
+    dp::TrackerOptions o;
+    o.solver = f.Solver == LBFGS              ? dp::TrackerSolver::LBFGS
+               : f.Solver == STEEPEST_DESCENT ? dp::TrackerSolver::SteepestDescent
+                                              : dp::TrackerSolver::GaussNewton;
+    o.distanceWeight = f.DistanceWeight;
+    o.distanceMeasure = f.DistanceMeasure == DISTANCE_TO_POINTS ? dp::DistanceMeasure::Points
+                                                                : dp::DistanceMeasure::Planes;
+    o.squaredDistance = f.SquaredDistance;
+    o.restUpdate = f.RestUpdate;
+    o.cloth = {f.StretchStiffness, f.ShearStiffness, f.BendStiffness};
+    o.normalTestDegrees = f.NormalTestAngle;
+    o.outlierDistance = f.OutlierDistance;
+    o.voxelSize = f.VoxelSize;
+    o.bandWidth = f.BandWidth;
+    o.motionPrediction = f.MotionPrediction;
+    o.rigidAlignment = f.RigidAlignment;
+    o.provisionalDetermination = f.ProvisionalDetermination;
+    o.maxIterations = f.MaximumIterations;
+    o.tolerance = f.Tolerance;
+    o.coverage.weight = f.CoverageWeight;
+    o.graph.enabled = f.CoarseLevel;
+    o.graph.nodes = static_cast<std::size_t>(f.GraphNodes);
+    o.graph.rigidity = f.GraphRigidity;
+    o.graph.yieldRate = f.Plasticity;
+    o.temporalWeight = f.TemporalWeight;
+    o.recovery.enabled = f.Recovery;
+    o.recovery.margin = f.FailureMargin;
+    return o;
+  }
 };
 
 vtkDeformableTrackFilter::vtkDeformableTrackFilter() : Internal(new Internals)
 {
   this->SetNumberOfInputPorts(2);
+  Internals::takeDefaults(*this);
 }
 
 vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
@@ -245,34 +314,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
           return 0;
         }
       }
-      dp::TrackerOptions options;
-      options.cloth = {this->StretchStiffness, this->ShearStiffness, this->BendStiffness};
-      options.distanceWeight = this->DistanceWeight;
-      options.distanceMeasure = this->DistanceMeasure == DISTANCE_TO_POINTS
-                                    ? dp::DistanceMeasure::Points
-                                    : dp::DistanceMeasure::Planes;
-      options.squaredDistance = this->SquaredDistance;
-      options.restUpdate = this->RestUpdate;
-      options.normalTestDegrees = this->NormalTestAngle;
-      options.outlierDistance = this->OutlierDistance;
-      options.voxelSize = this->VoxelSize;
-      options.bandWidth = this->BandWidth;
-      options.solver = this->Solver == LBFGS              ? dp::TrackerSolver::LBFGS
-                       : this->Solver == STEEPEST_DESCENT ? dp::TrackerSolver::SteepestDescent
-                                                          : dp::TrackerSolver::GaussNewton;
-      options.motionPrediction = this->MotionPrediction;
-      options.rigidAlignment = this->RigidAlignment;
-      options.provisionalDetermination = this->ProvisionalDetermination;
-      options.maxIterations = this->MaximumIterations;
-      options.tolerance = this->Tolerance;
-      options.coverage.weight = this->CoverageWeight;
-      options.graph.enabled = this->CoarseLevel;
-      options.graph.nodes = static_cast<std::size_t>(this->GraphNodes);
-      options.graph.rigidity = this->GraphRigidity;
-      options.graph.yieldRate = this->Plasticity;
-      options.temporalWeight = this->TemporalWeight;
-      options.recovery.enabled = this->Recovery;
-      options.recovery.margin = this->FailureMargin;
+      const dp::TrackerOptions options = Internals::optionsOf(*this);
       try
       {
         const std::size_t vertices = positions.size() / 3;

@@ -227,32 +227,33 @@ protected:
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  int Solver = GAUSS_NEWTON;
-  double DistanceWeight = 50.0;
-  int DistanceMeasure = DISTANCE_TO_PLANES;
-  vtkTypeBool SquaredDistance = true;
-  double RestUpdate = 0.3;
-  double StretchStiffness = 1.0;
-  double ShearStiffness = 0.0;
-  double BendStiffness = 0.5;
-  double NormalTestAngle = 90.0;
-  double OutlierDistance = 0.0;
-  double VoxelSize = 0.0;
-  double BandWidth = 0.0;
-  vtkTypeBool MotionPrediction = true;
-  vtkTypeBool RigidAlignment = true;
-  vtkTypeBool ProvisionalDetermination = true;
-  int MaximumIterations = 300;
-  double Tolerance = 1e-3;
-  int TemplateVertices = 1000;
-  double CoverageWeight = 50.0;
-  vtkTypeBool CoarseLevel = true;
-  int GraphNodes = 0;
-  double GraphRigidity = 1.0;
-  double Plasticity = 0.3;
-  double TemporalWeight = 0.0;
-  vtkTypeBool Recovery = true;
-  double FailureMargin = 0.003;
+  // The properties; their defaults are the engine's (dp::TrackerOptions), set by the constructor.
+  int Solver;
+  double DistanceWeight;
+  int DistanceMeasure;
+  vtkTypeBool SquaredDistance;
+  double RestUpdate;
+  double StretchStiffness;
+  double ShearStiffness;
+  double BendStiffness;
+  double NormalTestAngle;
+  double OutlierDistance;
+  double VoxelSize;
+  double BandWidth;
+  vtkTypeBool MotionPrediction;
+  vtkTypeBool RigidAlignment;
+  vtkTypeBool ProvisionalDetermination;
+  int MaximumIterations;
+  double Tolerance;
+  int TemplateVertices;
+  double CoverageWeight;
+  vtkTypeBool CoarseLevel;
+  int GraphNodes;
+  double GraphRigidity;
+  double Plasticity;
+  double TemporalWeight;
+  vtkTypeBool Recovery;
+  double FailureMargin;
 
 private:
   /** Progress text and scale for computing `frame` of a request for `target`. */

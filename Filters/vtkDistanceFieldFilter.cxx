@@ -27,7 +27,13 @@
 
 vtkStandardNewMacro(vtkDistanceFieldFilter);
 
-vtkDistanceFieldFilter::vtkDistanceFieldFilter() = default;
+vtkDistanceFieldFilter::vtkDistanceFieldFilter()
+{
+  // The engine's defaults, not a copy of them.
+  const dp::DistanceFieldOptions engine;
+  this->BandWidth = engine.bandWidth;
+  this->MaximumNumberOfVoxels = static_cast<vtkIdType>(engine.maxActiveVoxels);
+}
 
 int vtkDistanceFieldFilter::FillInputPortInformation(int, vtkInformation* info)
 {

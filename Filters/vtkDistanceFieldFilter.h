@@ -93,13 +93,13 @@ protected:
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  double BandWidth = 0.0;
+  double BandWidth; // the engine's default (dp::DistanceFieldOptions), set by the constructor
   int Dimensions[3] = {128, 128, 128};
   double Bounds[6] = {-1.0, 1.0, -1.0, 1.0, -1.0, 1.0};
   vtkTypeBool AdjustBounds = true;
   double AdjustDistance = 0.05;
   vtkTypeBool ComputeNormals = true;
-  vtkIdType MaximumNumberOfVoxels = 200000000;
+  vtkIdType MaximumNumberOfVoxels; // the engine's default, set by the constructor
 
 private:
   vtkDistanceFieldFilter(const vtkDistanceFieldFilter&) = delete;

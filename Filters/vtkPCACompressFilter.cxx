@@ -50,9 +50,37 @@ struct vtkPCACompressFilter::Internals
     Triangles.clear();
     Result.reset();
   }
+
+  // The properties' defaults are the engine's (one source: the plugin's XML is checked against
+  // them by a test).
+  static void takeDefaults(vtkPCACompressFilter& f)
+  {
+    const dp::PcaOptions o;
+    f.Layout = o.layout == dp::PcaLayout::Shapes ? SHAPES : TRAJECTORIES;
+    f.ErrorMeasure = o.measure == dp::PcaErrorMeasure::MaxVertexError ? MAX_VERTEX : KARNI_GOTSMAN;
+    f.ErrorTarget = o.target;
+    f.NumberOfComponents = static_cast<int>(o.components);
+    f.Quantize = o.quantise;
+    f.GLBMeshoptCompression = dp::GlbOptions().meshopt;
+  }
+
+  static dp::PcaOptions optionsOf(const vtkPCACompressFilter& f)
+  {
+    dp::PcaOptions o;
+    o.layout = f.Layout == SHAPES ? dp::PcaLayout::Shapes : dp::PcaLayout::Trajectories;
+    o.measure = f.ErrorMeasure == MAX_VERTEX ? dp::PcaErrorMeasure::MaxVertexError
+                                             : dp::PcaErrorMeasure::KarniGotsman;
+    o.target = f.ErrorTarget;
+    o.components = static_cast<std::size_t>(f.NumberOfComponents);
+    o.quantise = f.Quantize;
+    return o;
+  }
 };
 
-vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals) {}
+vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals)
+{
+  Internals::takeDefaults(*this);
+}
 
 vtkPCACompressFilter::~vtkPCACompressFilter()
 {
@@ -173,13 +201,7 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
     }
     request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
 
-    dp::PcaOptions options;
-    options.layout = this->Layout == SHAPES ? dp::PcaLayout::Shapes : dp::PcaLayout::Trajectories;
-    options.measure = this->ErrorMeasure == MAX_VERTEX ? dp::PcaErrorMeasure::MaxVertexError
-                                                       : dp::PcaErrorMeasure::KarniGotsman;
-    options.target = this->ErrorTarget;
-    options.components = static_cast<std::size_t>(this->NumberOfComponents);
-    options.quantise = this->Quantize;
+    const dp::PcaOptions options = Internals::optionsOf(*this);
     std::vector<double> times = in.TimeSteps;
     if (times.empty())
       times.push_back(0.0);

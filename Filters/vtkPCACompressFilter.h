@@ -110,14 +110,15 @@ protected:
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  int Layout = SHAPES;
-  int ErrorMeasure = KARNI_GOTSMAN;
-  double ErrorTarget = 0.2;
-  int NumberOfComponents = 0;
-  vtkTypeBool Quantize = true;
+  // The properties; their defaults are the engine's (dp::PcaOptions), set by the constructor.
+  int Layout;
+  int ErrorMeasure;
+  double ErrorTarget;
+  int NumberOfComponents;
+  vtkTypeBool Quantize;
   char* FileName = nullptr;
   char* GLBFileName = nullptr;
-  vtkTypeBool GLBMeshoptCompression = false;
+  vtkTypeBool GLBMeshoptCompression;
 
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;

@@ -1,0 +1,77 @@
+"""The ParaView plugin's XML says the same defaults as the classes it drives.
+
+Each filter takes its defaults from the engine's option structs (its constructor); the XML's
+default_values are a second statement of them that ParaView shows and traces. A property whose
+XML default differs from a fresh object's value would make the GUI and a Python script track
+differently with "the defaults"."""
+import os
+import unittest
+import xml.etree.ElementTree as ET
+
+import dynamicpoints
+
+PLUGIN_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "ParaViewPlugin")
+
+
+def plugin_properties():
+    """(class name, property name, setter, default values) of every property of the plugin's
+    proxies that has a default and a setter."""
+    found = []
+    for name in sorted(os.listdir(PLUGIN_DIR)):
+        if not name.endswith(".xml"):
+            continue
+        root = ET.parse(os.path.join(PLUGIN_DIR, name)).getroot()
+        for proxy in root.iter():
+            cls = proxy.get("class")
+            if not cls:
+                continue
+            for prop in proxy:
+                command, default = prop.get("command"), prop.get("default_values")
+                if command and default is not None and not prop.get("information_only"):
+                    found.append((cls, prop.get("name"), command, default.split()))
+    return found
+
+
+def same(xml_values, value):
+    if value is None or value == "":  # an unset string property: the XML's default is empty
+        return xml_values == []
+    values = value if isinstance(value, (tuple, list)) else [value]
+    if len(values) != len(xml_values):
+        return False
+    for text, actual in zip(xml_values, values):
+        if isinstance(actual, str):
+            if actual != text:
+                return False
+        elif abs(float(text) - float(actual)) > 1e-12 * max(1.0, abs(float(actual))):
+            return False
+    return True
+
+
+class PluginDefaults(unittest.TestCase):
+    def test_every_xml_default_is_the_class_default(self):
+        properties = plugin_properties()
+        classes = {cls for cls, *_ in properties}
+        # Every proxy of the plugin, not an empty walk.
+        self.assertTrue({"vtkDeformableTrackFilter", "vtkPCACompressFilter", "vtkDistanceFieldFilter",
+                         "vtkPointSequenceSource", "vtkCompressedSequenceWriter"} <= classes, classes)
+        self.assertGreaterEqual(len(properties), 50)
+        for cls, name, command, xml_values in properties:
+            with self.subTest(cls=cls, property=name):
+                obj = getattr(dynamicpoints, cls)()
+                self.assertTrue(command.startswith("Set"), command)
+                getter = getattr(obj, "Get" + command[3:])
+                self.assertTrue(same(xml_values, getter()),
+                                f"{cls}.{name}: XML default {xml_values}, class default {getter()}")
+
+    def test_a_changed_default_is_caught(self):
+        # The comparison itself: a value off by a little, or of another length, is not the same.
+        self.assertTrue(same(["0.3"], 0.3))
+        self.assertFalse(same(["0.3"], 0.30001))
+        self.assertFalse(same(["1", "2"], (1,)))
+        self.assertTrue(same([], None))
+        self.assertFalse(same([], "out.dpz"))
+        self.assertFalse(same(["out.dpz"], None))
+
+
+if __name__ == "__main__":
+    unittest.main()
