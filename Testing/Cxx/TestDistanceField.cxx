@@ -424,6 +424,9 @@ TEST(DistanceField, LazyModeGivesTheSameFieldAsTheGrid)
   o.lazy = true;
   lazy.build(c.points.data(), c.points.size() / 3, o);
   EXPECT_EQ(lazy.activeVoxelCount(), 0u);
+  // Lazy mode has no grid: its memory is the kd-tree and points until voxels are filled.
+  const std::size_t bytesBefore = lazy.memoryBytes();
+  EXPECT_GE(bytesBefore, c.points.size() * sizeof(double));
   const std::vector<double> q = queriesNear(c.points, 0.1, 3000, 12);
   std::vector<dp::DistanceSample> many(q.size() / 3);
   lazy.sampleMany(q.data(), many.size(), many.data()); // concurrent first uses
@@ -440,6 +443,7 @@ TEST(DistanceField, LazyModeGivesTheSameFieldAsTheGrid)
   EXPECT_GT(lazy.activeVoxelCount(), 100u);
   EXPECT_LT(lazy.activeVoxelCount(), eager.activeVoxelCount() * 2);
   EXPECT_EQ(lazy.voxelNearest(0, 0, 0), eager.voxelNearest(0, 0, 0));
+  EXPECT_GE(lazy.memoryBytes(), bytesBefore + 8 * lazy.activeVoxelCount());
 }
 
 TEST(DistanceField, ParallelSamplingEqualsSerialSampling)

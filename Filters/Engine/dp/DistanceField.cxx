@@ -285,8 +285,11 @@ std::size_t DistanceField::memoryBytes() const
 {
   if (empty())
     return 0;
-  return static_cast<std::size_t>(P->Grid->memUsage()) + P->Tree->memoryBytes() +
-         P->Points.capacity() * sizeof(double);
+  // Lazy mode has no grid: the voxels filled so far are map entries (key, index and the
+  // map's node and bucket pointers, about 40 bytes each).
+  const std::size_t voxels = P->Grid ? static_cast<std::size_t>(P->Grid->memUsage())
+                                     : P->Visited.size() * (sizeof(std::uint64_t) + 32);
+  return voxels + P->Tree->memoryBytes() + P->Points.capacity() * sizeof(double);
 }
 
 std::int64_t DistanceField::nearestPoint(const double x[3], double* squaredDistance) const

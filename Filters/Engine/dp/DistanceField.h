@@ -114,7 +114,8 @@ public:
   std::size_t numberOfPoints() const;
   const double* points() const;
   std::size_t activeVoxelCount() const;
-  /** Bytes held by the grid and the kd-tree (approximate). */
+  /** Bytes held by the grid (lazy mode: the voxels filled so far) and the kd-tree
+   *  (approximate). */
   std::size_t memoryBytes() const;
 
   /** Distance, gradient and nearest point at x. Thread-safe (with a `cell` per thread). */
