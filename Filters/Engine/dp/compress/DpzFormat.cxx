@@ -1,0 +1,314 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The .dpz file (declared in PcaCompression.h): a magic number and format version, a header of
+// counts, steps and times with its CRC-32, then two zstd sections (connectivity, geometry), each
+// with its sizes and CRC-32. Every count is checked against what the bytes can hold before
+// anything is allocated, so a corrupt or hostile file is refused with its name and the reason.
+#include "dp/PcaCompression.h"
+#include "dp/compress/IntegerCodec.h"
+
+#include <zlib.h>
+#include <zstd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+
+namespace dp
+{
+using compress::BasisStride;
+using compress::ByteReader;
+using compress::EarlierNeighbours;
+using compress::MeanStride;
+using compress::putRaw;
+using compress::WeightStride;
+
+namespace
+{
+
+constexpr char Magic[8] = {'\x89', 'D', 'P', 'Z', '\r', '\n', '\x1a', '\n'};
+constexpr std::uint32_t FormatVersion = 1;
+
+// A fuzzing build (Testing/Fuzz) computes the checksums but does not enforce them, so mutated
+// inputs reach the decoder behind them.
+#ifdef DP_FUZZING_BUILD
+constexpr bool EnforceChecksums = false;
+#else
+constexpr bool EnforceChecksums = true;
+#endif
+
+std::uint32_t crc(const std::uint8_t* data, std::size_t size)
+{
+  uLong c = crc32(0L, Z_NULL, 0);
+  while (size > 0)
+  {
+    const uInt chunk = static_cast<uInt>(std::min<std::size_t>(size, 1u << 30));
+    c = crc32(c, data, chunk);
+    data += chunk;
+    size -= chunk;
+  }
+  return static_cast<std::uint32_t>(c);
+}
+
+void putSection(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>& raw)
+{
+  const std::vector<std::uint8_t> packed = compress::zstdCompress(raw);
+  putRaw<std::uint64_t>(out, raw.size());
+  putRaw<std::uint64_t>(out, packed.size());
+  putRaw<std::uint32_t>(out, crc(packed.data(), packed.size()));
+  out.insert(out.end(), packed.begin(), packed.end());
+}
+
+std::vector<std::uint8_t> getSection(ByteReader& in, const std::uint8_t* bytes,
+                                     const std::string& what, std::uint64_t limit)
+{
+  const auto rawSize = in.raw<std::uint64_t>();
+  const auto packedSize = in.raw<std::uint64_t>();
+  const auto expected = in.raw<std::uint32_t>();
+  if (packedSize > in.remaining())
+    in.fail(what + " is truncated (" + std::to_string(in.remaining()) + " of " +
+            std::to_string(packedSize) + " bytes)");
+  if (rawSize > limit)
+    in.fail(what + " claims " + std::to_string(rawSize) + " bytes, more than its counts allow");
+  // A zstd block holds at most 128 KiB and takes at least 4 bytes (an RLE block): no frame
+  // expands more than that, so a larger claim is refused before it is allocated.
+  if (rawSize > 32768 * packedSize + 131072)
+    in.fail(what + " claims " + std::to_string(rawSize) + " bytes from " +
+            std::to_string(packedSize) + " packed bytes, more than zstd can expand to");
+  const std::uint8_t* packed = bytes + in.position();
+  if (crc(packed, packedSize) != expected && EnforceChecksums)
+    in.fail(what + ": checksum mismatch (the file is corrupt)");
+  std::vector<std::uint8_t> raw(rawSize);
+  const std::size_t n = ZSTD_decompress(raw.data(), raw.size(), packed, packedSize);
+  if (ZSTD_isError(n) || n != rawSize)
+    in.fail(what + ": cannot be decompressed");
+  for (std::uint64_t i = 0; i < packedSize; ++i)
+    in.byte();
+  return raw;
+}
+
+// The counts the header gives.
+struct Counts
+{
+  std::uint64_t vertices = 0, frames = 0, components = 0, triangles = 0;
+  std::uint64_t meanCount() const { return 3 * (shapes ? vertices : frames); }
+  std::uint64_t basisRows() const { return 3 * (shapes ? vertices : frames); }
+  std::uint64_t weightRows() const { return shapes ? frames : vertices; }
+  bool shapes = true;
+};
+
+// The header: layout, counts, quantisation steps, times.
+Counts readHeader(ByteReader& header, CompressedSequence& s)
+{
+  QuantisedPca& q = s.pca;
+  PcaModel& m = q.model;
+  const auto layout = header.raw<std::uint8_t>();
+  if (layout > 1)
+    header.fail("unknown layout " + std::to_string(layout));
+  m.layout = static_cast<PcaLayout>(layout);
+  Counts n;
+  n.shapes = m.layout == PcaLayout::Shapes;
+  n.vertices = header.raw<std::uint64_t>();
+  n.frames = header.raw<std::uint64_t>();
+  n.components = header.raw<std::uint64_t>();
+  n.triangles = header.raw<std::uint64_t>();
+  const std::uint64_t nv = n.vertices, nt = n.frames, k = n.components;
+  const std::uint64_t limit = std::uint64_t{1} << 40;
+  if (nv == 0 || nt == 0 || nv > limit || nt > limit || nv * nt > limit || k > 3 * nt ||
+      k > 3 * nv || n.triangles > limit)
+    header.fail("implausible counts (vertices " + std::to_string(nv) + ", frames " +
+                std::to_string(nt) + ", components " + std::to_string(k) + ")");
+  if (header.remaining() != 8 * (2 + k + nt))
+    header.fail("header length does not match its counts");
+  m.vertices = nv;
+  m.frames = nt;
+  q.step = header.raw<double>();
+  q.meanStep = header.raw<double>();
+  if (!(q.step > 0) || !(q.meanStep > 0) || !std::isfinite(q.step) || !std::isfinite(q.meanStep))
+    header.fail("invalid quantisation step");
+  q.basisSteps.resize(k);
+  for (double& v : q.basisSteps)
+  {
+    v = header.raw<double>();
+    if (!(v > 0) || !std::isfinite(v))
+      header.fail("invalid basis step");
+  }
+  s.times.resize(nt);
+  for (double& v : s.times)
+  {
+    v = header.raw<double>();
+    if (!std::isfinite(v))
+      header.fail("a time value is not finite");
+  }
+  return n;
+}
+
+// Each varint takes at most 10 bytes, each sequence one more for its order.
+void readConnectivity(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                      const Counts& n, CompressedSequence& s)
+{
+  const std::vector<std::uint8_t> raw =
+      getSection(in, bytes, "connectivity", 10 * 3 * n.triangles + 1);
+  ByteReader c(raw.data(), raw.size(), name + " (connectivity)");
+  if (raw.size() < 3 * n.triangles) // every index takes at least a byte
+    c.fail("holds " + std::to_string(raw.size()) + " bytes for " + std::to_string(3 * n.triangles) +
+           " indices");
+  s.triangles.resize(3 * n.triangles);
+  c.sequence(s.triangles.data(), s.triangles.size(), 3);
+  if (c.remaining() != 0)
+    c.fail("unexpected bytes after the triangles");
+  for (std::int64_t v : s.triangles)
+    if (v < 0 || static_cast<std::uint64_t>(v) >= n.vertices)
+      c.fail("triangle index " + std::to_string(v) + " out of range");
+}
+
+// The integers of the mean, the basis and the weights, in putGeometry's order.
+void readGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                  const Counts& n, CompressedSequence& s)
+{
+  QuantisedPca& q = s.pca;
+  const std::uint64_t k = n.components, meanCount = n.meanCount(), basisRows = n.basisRows(),
+                      weightRows = n.weightRows();
+  const std::uint64_t numbers = meanCount + k * (basisRows + weightRows);
+  const std::vector<std::uint8_t> raw = getSection(in, bytes, "geometry", 10 * numbers + 1 + 2 * k);
+  ByteReader g(raw.data(), raw.size(), name + " (geometry)");
+  if (raw.size() < numbers) // every number takes at least a byte
+    g.fail("holds " + std::to_string(raw.size()) + " bytes for " + std::to_string(numbers) +
+           " numbers");
+  const EarlierNeighbours mesh(s.triangles, n.vertices);
+  const EarlierNeighbours* perVertex = n.shapes ? &mesh : nullptr;
+  q.meanIntegers.resize(meanCount);
+  g.sequence(q.meanIntegers.data(), meanCount, MeanStride, perVertex);
+  q.basisIntegers.resize(k * basisRows);
+  for (std::uint64_t j = 0; j < k; ++j)
+    g.sequence(q.basisIntegers.data() + j * basisRows, basisRows, BasisStride, perVertex);
+  q.weightIntegers.resize(k * weightRows);
+  for (std::uint64_t j = 0; j < k; ++j)
+    g.sequence(q.weightIntegers.data() + j * weightRows, weightRows, WeightStride,
+               n.shapes ? nullptr : &mesh);
+  if (g.remaining() != 0)
+    g.fail("unexpected bytes after the weights");
+}
+
+// The model's values from its integers and steps.
+void dequantise(const Counts& n, QuantisedPca& q)
+{
+  PcaModel& m = q.model;
+  const std::uint64_t k = n.components, meanCount = n.meanCount(), basisRows = n.basisRows(),
+                      weightRows = n.weightRows();
+  m.mean.resize(static_cast<Eigen::Index>(meanCount));
+  for (std::uint64_t i = 0; i < meanCount; ++i)
+    m.mean[i] = static_cast<double>(q.meanIntegers[i]) * q.meanStep;
+  m.basis.resize(basisRows, k);
+  for (std::uint64_t j = 0; j < k; ++j)
+    for (std::uint64_t i = 0; i < basisRows; ++i)
+      m.basis(i, j) = static_cast<double>(q.basisIntegers[j * basisRows + i]) * q.basisSteps[j];
+  m.weights.resize(weightRows, k);
+  for (std::uint64_t i = 0; i < k * weightRows; ++i)
+    m.weights.data()[i] = static_cast<double>(q.weightIntegers[i]) * q.step;
+}
+
+} // namespace
+
+std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
+{
+  const QuantisedPca& q = s.pca;
+  const PcaModel& m = q.model;
+  if (q.step <= 0)
+    throw std::invalid_argument("only a quantised sequence can be written (quantise = true)");
+  std::vector<std::uint8_t> header;
+  putRaw<std::uint8_t>(header, static_cast<std::uint8_t>(m.layout));
+  putRaw<std::uint64_t>(header, m.vertices);
+  putRaw<std::uint64_t>(header, m.frames);
+  putRaw<std::uint64_t>(header, m.components());
+  putRaw<std::uint64_t>(header, s.triangles.size() / 3);
+  putRaw<double>(header, q.step);
+  putRaw<double>(header, q.meanStep);
+  for (double v : q.basisSteps)
+    putRaw<double>(header, v);
+  for (std::size_t t = 0; t < m.frames; ++t)
+    putRaw<double>(header, t < s.times.size() ? s.times[t] : static_cast<double>(t));
+
+  std::vector<std::uint8_t> out(Magic, Magic + sizeof(Magic));
+  putRaw<std::uint32_t>(out, FormatVersion);
+  putRaw<std::uint64_t>(out, header.size());
+  out.insert(out.end(), header.begin(), header.end());
+  putRaw<std::uint32_t>(out, crc(header.data(), header.size()));
+
+  std::vector<std::uint8_t> connectivity;
+  compress::putSequence(connectivity, s.triangles.data(), s.triangles.size(), 3);
+  putSection(out, connectivity);
+  std::vector<std::uint8_t> geometry;
+  compress::putGeometry(geometry, q, EarlierNeighbours(s.triangles, m.vertices));
+  putSection(out, geometry);
+  return out;
+}
+
+CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size_t size,
+                                            const std::string& name)
+{
+  ByteReader in(bytes, size, name);
+  if (size < sizeof(Magic) || std::memcmp(bytes, Magic, sizeof(Magic)) != 0)
+    in.fail("not a DynamicPoints compressed sequence (.dpz)");
+  for (std::size_t i = 0; i < sizeof(Magic); ++i)
+    in.byte();
+  const auto version = in.raw<std::uint32_t>();
+  if (version != FormatVersion)
+    in.fail("format version " + std::to_string(version) +
+            " is not supported (this reader: " + std::to_string(FormatVersion) + ")");
+  const auto headerSize = in.raw<std::uint64_t>();
+  if (headerSize > in.remaining())
+    in.fail("header truncated");
+  const std::uint8_t* headerBytes = bytes + in.position();
+  ByteReader header(headerBytes, headerSize, name + " (header)");
+  for (std::uint64_t i = 0; i < headerSize; ++i)
+    in.byte();
+  if (in.raw<std::uint32_t>() != crc(headerBytes, headerSize) && EnforceChecksums)
+    in.fail("header checksum mismatch (the file is corrupt)");
+
+  CompressedSequence s;
+  const Counts n = readHeader(header, s);
+  readConnectivity(in, bytes, name, n, s);
+  readGeometry(in, bytes, name, n, s);
+  if (in.remaining() != 0)
+    in.fail("unexpected bytes after the last section");
+  dequantise(n, s.pca);
+  const PcaModel& m = s.pca.model;
+  if (!m.mean.allFinite() || !m.basis.allFinite() || !m.weights.allFinite())
+    in.fail("values out of range");
+  s.report.components = n.components;
+  return s;
+}
+
+void writeCompressedSequence(const std::string& path, const CompressedSequence& sequence)
+{
+  const std::vector<std::uint8_t> bytes = encodeCompressedSequence(sequence);
+  // Write beside and rename, so a failed write never leaves a half file under the name.
+  const std::string partial = path + ".partial";
+  {
+    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+    if (!out)
+      throw std::runtime_error(path + ": cannot open for writing");
+    out.write(reinterpret_cast<const char*>(bytes.data()),
+              static_cast<std::streamsize>(bytes.size()));
+    if (!out)
+      throw std::runtime_error(path + ": write failed");
+  }
+  if (std::rename(partial.c_str(), path.c_str()) != 0)
+    throw std::runtime_error(path + ": cannot rename " + partial + " into place");
+}
+
+CompressedSequence readCompressedSequence(const std::string& path)
+{
+  std::ifstream in(path, std::ios::binary);
+  if (!in)
+    throw std::runtime_error(path + ": cannot open");
+  const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
+                                        std::istreambuf_iterator<char>());
+  return decodeCompressedSequence(bytes.data(), bytes.size(), path);
+}
+
+} // namespace dp
