@@ -31,14 +31,10 @@ vtkStandardNewMacro(vtkDeformableTrackFilter);
 
 struct vtkDeformableTrackFilter::Internals
 {
-  std::vector<double> TimeSteps;        // the input's; empty for a static input
   std::unique_ptr<dp::Tracker> Tracker; // made at the first frame
   vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
   std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
-  double LastInputTime = 0;
 
-  std::size_t frameCount() const { return TimeSteps.empty() ? 1 : TimeSteps.size(); }
-  double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
   void clear()
   {
     Tracker.reset();
@@ -145,35 +141,18 @@ int vtkDeformableTrackFilter::FillInputPortInformation(int port, vtkInformation*
   return 1;
 }
 
-int vtkDeformableTrackFilter::RequestInformation(vtkInformation*,
-                                                 vtkInformationVector** inputVector,
-                                                 vtkInformationVector* outputVector)
+void vtkDeformableTrackFilter::ClearTemporalState()
 {
-  // Called again whenever this filter, the template or anything upstream changed: the cached
-  // frames are then stale.
+  // Called whenever this filter, the template or anything upstream changed: the cached frames
+  // are then stale.
   this->Internal->clear();
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  this->Internal->TimeSteps = vtkDP::forwardTimeSteps(inInfo, outInfo);
-  return 1;
 }
 
-int vtkDeformableTrackFilter::RequestUpdateExtent(vtkInformation*,
-                                                  vtkInformationVector** inputVector,
-                                                  vtkInformationVector* outputVector)
+long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 {
-  Internals& in = *this->Internal;
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  const std::size_t target =
-      vtkDP::requestedFrame(in.TimeSteps, outputVector->GetInformationObject(0));
-  if (in.TimeSteps.empty() || vtkDP::isSecondaryPiece(outputVector->GetInformationObject(0)))
-    return 1;
-  // Computing: ask for the next frame. Answering from the cache: ask for what upstream already
-  // has, so that nothing re-executes.
-  const double time = in.Cache.size() <= target ? in.timeOf(in.Cache.size()) : in.LastInputTime;
-  inInfo->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(), time);
-  in.LastInputTime = time;
-  return 1;
+  // Computing: the next frame. Answering from the cache: none, so nothing upstream re-executes.
+  const std::size_t done = this->Internal->Cache.size();
+  return done <= requestedFrame ? static_cast<long long>(done) : -1;
 }
 
 namespace
@@ -219,12 +198,7 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   pd->AddArray(rejected);
 
   auto addValue = [output](const char* name, double value)
-  {
-    vtkNew<vtkDoubleArray> a;
-    a->SetName(name);
-    a->InsertNextValue(value);
-    output->GetFieldData()->AddArray(a);
-  };
+  { vtkDP::addFieldValue(output, name, value); };
   addValue("FrameIndex", static_cast<double>(frame));
   addValue("Iterations", r.iterations);
   addValue("CoarseIterations", r.coarseIterations);
@@ -239,161 +213,161 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
 }
 } // namespace
 
-int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
-                                          vtkInformationVector** inputVector,
-                                          vtkInformationVector* outputVector)
+bool vtkDeformableTrackFilter::TemplateOf(vtkInformationVector** inputVector, vtkPointSet* frame0,
+                                          std::vector<std::int64_t>& triangles,
+                                          std::vector<double>& positions)
+{
+  // Input 1; else frame 0's own polygons; else a surface reconstructed from frame 0's points.
+  vtkPolyData* mesh = vtkPolyData::GetData(inputVector[1], 0);
+  const bool fromInput = mesh != nullptr;
+  if (!mesh)
+    mesh = vtkPolyData::SafeDownCast(frame0);
+  if (fromInput || (mesh && mesh->GetNumberOfPolys() > 0))
+  {
+    const char* why = "";
+    if (vtkDP::triangleMesh(mesh, triangles, positions, why))
+      return true;
+    vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
+                                : "frame 0's polygons cannot be used as the template: ")
+                  << why);
+    return false;
+  }
+  const vtkDP::TargetPoints first = vtkDP::finitePoints(frame0);
+  try
+  {
+    const std::vector<float> normals = first.normals.empty()
+                                           ? dp::estimateNormals(first.xyz.data(), first.ids.size())
+                                           : first.normals;
+    dp::ReconstructionOptions reconstruction;
+    reconstruction.targetVertices = static_cast<std::size_t>(this->TemplateVertices);
+    dp::ReconstructedMesh surface =
+        dp::reconstructSurface(first.xyz.data(), normals.data(), first.ids.size(), reconstruction);
+    triangles = std::move(surface.triangles);
+    positions = std::move(surface.positions);
+    return true;
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< "no template: connect a template mesh to input 1, or give frame 0 "
+                     "polygons; a surface could not be reconstructed from frame 0's "
+                  << first.ids.size() << " points: " << e.what());
+    return false;
+  }
+}
+
+bool vtkDeformableTrackFilter::MakeTracker(vtkInformationVector** inputVector, vtkPointSet* frame0)
+{
+  Internals& in = *this->Internal;
+  std::vector<std::int64_t> triangles;
+  std::vector<double> positions;
+  if (!this->TemplateOf(inputVector, frame0, triangles, positions))
+    return false;
+  try
+  {
+    const std::size_t vertices = positions.size() / 3;
+    in.Tracker = std::make_unique<dp::Tracker>(dp::TriangleMesh(triangles, vertices), positions,
+                                               Internals::optionsOf(*this));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< "cannot track: " << e.what());
+    return false;
+  }
+  // Slivers slide flat without the shear terms: say so once, with the remedy.
+  const double slivers = in.Tracker->mesh().poorlyShapedShare(positions.data());
+  if (this->ShearStiffness == 0 && slivers > 0.002)
+  {
+    vtkWarningMacro(<< 100 * slivers
+                    << "% of the template's triangles are slivers (nearly flat): with "
+                       "ShearStiffness 0 they can fold; set ShearStiffness to about 0.05, "
+                       "or give a better-shaped template (e.g. leave the template input "
+                       "empty to reconstruct one from frame 0's points)");
+  }
+  in.Polys = vtkSmartPointer<vtkCellArray>::New();
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
+    in.Polys->InsertNextCell(3, ids);
+  }
+  return true;
+}
+
+bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, vtkPointSet* input)
+{
+  Internals& in = *this->Internal;
+  const vtkDP::TargetPoints points = vtkDP::finitePoints(input);
+  if (points.dropped > 0)
+  {
+    vtkWarningMacro(<< "frame " << frame << ": dropped " << points.dropped
+                    << " point(s) with NaN or infinite coordinates");
+  }
+  try
+  {
+    in.Cache.push_back(in.Tracker->track(points.xyz.data(), points.ids.size(),
+                                         points.normals.empty() ? nullptr : points.normals.data()));
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< "frame " << frame << ": " << e.what());
+    return false;
+  }
+  const dp::FrameResult& done = in.Cache.back();
+  // Said once per run of thinned frames.
+  if (done.thinned && (frame == 0 || !in.Cache[frame - 1].thinned))
+  {
+    vtkWarningMacro(<< "frame " << frame << " has " << points.ids.size()
+                    << " points: the tracker used " << done.pointsUsed
+                    << " of them, spread evenly (its frame point limit; the distance field "
+                       "resolves nothing finer)");
+  }
+  if (done.emptyFrame)
+  {
+    vtkWarningMacro(<< "frame " << frame << " has no points: the mesh continues its motion");
+  }
+  else if (done.failed)
+  {
+    vtkWarningMacro(<< "frame " << frame << " failed after " << done.retries
+                    << " retries: " << 100 * done.unexplained << "% of its points are far from "
+                    << "the mesh and " << 100 * done.unsupported
+                    << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
+  }
+  return true;
+}
+
+int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
+                                               vtkInformationVector** inputVector,
+                                               vtkInformationVector* outputVector)
 {
   Internals& in = *this->Internal;
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
-  if (vtkDP::isSecondaryPiece(outInfo))
-  {
-    // Under MPI the whole sequence is on process 0 (see vtkDP::isSecondaryPiece).
-    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-    output->Initialize();
-    return 1;
-  }
   // A new request (not this filter's own continuation): an abort of an earlier run is over.
   if (!request->Has(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING()))
     this->SetAbortExecute(0);
-  const std::size_t target = vtkDP::requestedFrame(in.TimeSteps, outInfo);
+  const std::size_t target = this->GetRequestedFrame(outInfo);
   const double requestedTime =
       outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
           ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-          : in.timeOf(target);
+          : this->GetInputFrameTime(target);
 
   if (in.Cache.size() <= target)
   {
     const std::size_t frame = in.Cache.size();
     this->ShowProgressOf(frame, target);
     vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
-
-    if (!in.Tracker)
+    if ((!in.Tracker && !this->MakeTracker(inputVector, input)) || !this->TrackFrame(frame, input))
     {
-      // The template: input 1; else frame 0's own polygons; else a surface reconstructed from
-      // frame 0's points.
-      vtkPolyData* mesh = vtkPolyData::GetData(inputVector[1], 0);
-      const bool fromInput = mesh != nullptr;
-      if (!mesh)
-        mesh = vtkPolyData::SafeDownCast(input);
-      std::vector<std::int64_t> triangles;
-      std::vector<double> positions;
-      const char* why = "";
-      if (fromInput || (mesh && mesh->GetNumberOfPolys() > 0))
-      {
-        if (!vtkDP::triangleMesh(mesh, triangles, positions, why))
-        {
-          request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-          vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
-                                      : "frame 0's polygons cannot be used as the template: ")
-                        << why);
-          return 0;
-        }
-      }
-      else
-      {
-        const vtkDP::TargetPoints first = vtkDP::finitePoints(input);
-        try
-        {
-          const std::vector<float> normals =
-              first.normals.empty() ? dp::estimateNormals(first.xyz.data(), first.ids.size())
-                                    : first.normals;
-          dp::ReconstructionOptions reconstruction;
-          reconstruction.targetVertices = static_cast<std::size_t>(this->TemplateVertices);
-          dp::ReconstructedMesh surface = dp::reconstructSurface(first.xyz.data(), normals.data(),
-                                                                 first.ids.size(), reconstruction);
-          triangles = std::move(surface.triangles);
-          positions = std::move(surface.positions);
-        }
-        catch (const std::exception& e)
-        {
-          request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-          vtkErrorMacro(<< "no template: connect a template mesh to input 1, or give frame 0 "
-                           "polygons; a surface could not be reconstructed from frame 0's "
-                        << first.ids.size() << " points: " << e.what());
-          return 0;
-        }
-      }
-      const dp::TrackerOptions options = Internals::optionsOf(*this);
-      try
-      {
-        const std::size_t vertices = positions.size() / 3;
-        in.Tracker = std::make_unique<dp::Tracker>(dp::TriangleMesh(triangles, vertices), positions,
-                                                   options);
-      }
-      catch (const std::exception& e)
-      {
-        request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-        vtkErrorMacro(<< "cannot track: " << e.what());
-        return 0;
-      }
-      // Slivers slide flat without the shear terms: say so once, with the remedy.
-      const double slivers = in.Tracker->mesh().poorlyShapedShare(positions.data());
-      if (this->ShearStiffness == 0 && slivers > 0.002)
-      {
-        vtkWarningMacro(<< 100 * slivers
-                        << "% of the template's triangles are slivers (nearly flat): with "
-                           "ShearStiffness 0 they can fold; set ShearStiffness to about 0.05, "
-                           "or give a better-shaped template (e.g. leave the template input "
-                           "empty to reconstruct one from frame 0's points)");
-      }
-      in.Polys = vtkSmartPointer<vtkCellArray>::New();
-      for (std::size_t t = 0; t < triangles.size(); t += 3)
-      {
-        const vtkIdType ids[3] = {triangles[t], triangles[t + 1], triangles[t + 2]};
-        in.Polys->InsertNextCell(3, ids);
-      }
-    }
-
-    const vtkDP::TargetPoints target3 = vtkDP::finitePoints(input);
-    if (target3.dropped > 0)
-    {
-      vtkWarningMacro(<< "frame " << frame << ": dropped " << target3.dropped
-                      << " point(s) with NaN or infinite coordinates");
-    }
-    try
-    {
-      in.Cache.push_back(
-          in.Tracker->track(target3.xyz.data(), target3.ids.size(),
-                            target3.normals.empty() ? nullptr : target3.normals.data()));
-    }
-    catch (const std::exception& e)
-    {
-      request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-      vtkErrorMacro(<< "frame " << frame << ": " << e.what());
+      ContinueExecuting(request, false);
       return 0;
     }
-    const dp::FrameResult& done = in.Cache.back();
-    // Said once per run of thinned frames.
-    if (done.thinned && (frame == 0 || !in.Cache[frame - 1].thinned))
-    {
-      vtkWarningMacro(<< "frame " << frame << " has " << target3.ids.size()
-                      << " points: the tracker used " << done.pointsUsed
-                      << " of them, spread evenly (its frame point limit; the distance field "
-                         "resolves nothing finer)");
-    }
-    if (done.emptyFrame)
-    {
-      vtkWarningMacro(<< "frame " << frame << " has no points: the mesh continues its motion");
-    }
-    else if (done.failed)
-    {
-      vtkWarningMacro(<< "frame " << frame << " failed after " << done.retries
-                      << " retries: " << 100 * done.unexplained << "% of its points are far from "
-                      << "the mesh and " << 100 * done.unsupported
-                      << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
-    }
     this->UpdateProgress(1.0); // of this frame: the whole work's (frame + 1) / needed
-    if (in.Cache.size() <= target && !this->GetAbortExecute())
-      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
-    else
-      request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    ContinueExecuting(request, in.Cache.size() <= target && !this->GetAbortExecute());
   }
   else
   {
     // Answered from the cache: the last frame's progress scale stays, so a consumer's walk
     // does not flash 100 % each time it asks again for a frame already done.
-    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    ContinueExecuting(request, false);
   }
 
   const std::size_t shown = std::min(target, in.Cache.size() - 1);
@@ -403,7 +377,7 @@ int vtkDeformableTrackFilter::RequestData(vtkInformation* request,
   // does not run a request for the same time twice; a request for another time goes on from
   // the frames kept (a change of properties starts the take over).
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(),
-                                shown == target ? requestedTime : in.timeOf(shown));
+                                shown == target ? requestedTime : this->GetInputFrameTime(shown));
   return 1;
 }
 
@@ -418,7 +392,7 @@ void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, std::size_t tar
   // take one new frame per request (a writer, the compressor, playing), over the whole take.
   // The shift and scale map this frame's own 0..1 (and the executive's, around each request)
   // onto that whole, so the bar rises instead of reading 100 % after every frame.
-  const std::size_t needed = target == frame ? this->Internal->frameCount() : target + 1;
+  const std::size_t needed = target == frame ? this->GetNumberOfInputFrames() : target + 1;
   const std::string text =
       "Deformable Track: frame " + std::to_string(frame + 1) + " of " + std::to_string(needed);
   this->SetProgressText(text.c_str());

@@ -38,13 +38,16 @@
 #define vtkDeformableTrackFilter_h
 
 #include "DynamicPointsFiltersModule.h" // for export macro
-#include "vtkPolyDataAlgorithm.h"
+#include "vtkDPTemporalFilter.h"
 
-class DYNAMICPOINTSFILTERS_EXPORT vtkDeformableTrackFilter : public vtkPolyDataAlgorithm
+#include <cstdint> // for std::int64_t
+#include <vector>  // for std::vector
+
+class DYNAMICPOINTSFILTERS_EXPORT vtkDeformableTrackFilter : public vtkDPTemporalFilter
 {
 public:
   static vtkDeformableTrackFilter* New();
-  vtkTypeMacro(vtkDeformableTrackFilter, vtkPolyDataAlgorithm);
+  vtkTypeMacro(vtkDeformableTrackFilter, vtkDPTemporalFilter);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   /** The template mesh (optional input 1). */
@@ -223,9 +226,9 @@ protected:
   ~vtkDeformableTrackFilter() override;
 
   int FillInputPortInformation(int port, vtkInformation* info) override;
-  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  void ClearTemporalState() override;
+  long long NextInputFrame(std::size_t requestedFrame) override;
+  int RequestFrameData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   // The properties; their defaults are the engine's (dp::TrackerOptions), set by the constructor.
   int Solver;
@@ -256,6 +259,13 @@ protected:
   double FailureMargin;
 
 private:
+  // RequestFrameData's steps; each reports its own errors and returns false on one.
+  /** The template: input 1, else frame 0's polygons, else reconstructed from frame 0. */
+  bool TemplateOf(vtkInformationVector** inputVector, vtkPointSet* frame0,
+                  std::vector<std::int64_t>& triangles, std::vector<double>& positions);
+  bool MakeTracker(vtkInformationVector** inputVector, vtkPointSet* frame0);
+  /** Tracks the next frame into the cache, with its warnings. */
+  bool TrackFrame(std::size_t frame, vtkPointSet* input);
   /** Progress text and scale for computing `frame` of a request for `target`. */
   void ShowProgressOf(std::size_t frame, std::size_t target);
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

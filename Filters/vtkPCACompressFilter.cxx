@@ -28,20 +28,16 @@ vtkStandardNewMacro(vtkPCACompressFilter);
 
 struct vtkPCACompressFilter::Internals
 {
-  std::vector<double> TimeSteps;       // the input's; empty for a static input
   std::vector<double> Positions;       // frames collected so far, frame-major
   vtkIdType Vertices = -1;             // of frame 0
   vtkSmartPointer<vtkCellArray> Polys; // frame 0's
   std::vector<std::int64_t> Triangles; // frame 0's, for the file
   std::unique_ptr<dp::CompressedSequence> Result;
-  double LastInputTime = 0;
 
-  std::size_t frameCount() const { return TimeSteps.empty() ? 1 : TimeSteps.size(); }
   std::size_t collected() const
   {
     return Vertices <= 0 ? 0 : Positions.size() / (3 * static_cast<std::size_t>(Vertices));
   }
-  double timeOf(std::size_t frame) const { return TimeSteps.empty() ? 0.0 : TimeSteps[frame]; }
   void clear()
   {
     Positions.clear();
@@ -89,58 +85,28 @@ vtkPCACompressFilter::~vtkPCACompressFilter()
   this->SetGLBFileName(nullptr);
 }
 
-int vtkPCACompressFilter::RequestInformation(vtkInformation*, vtkInformationVector** inputVector,
-                                             vtkInformationVector* outputVector)
+void vtkPCACompressFilter::ClearTemporalState()
 {
-  // Called again whenever a parameter or anything upstream changed: start over.
   this->Internal->clear();
-  vtkInformation* inInfo = inputVector[0]->GetInformationObject(0);
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  this->Internal->TimeSteps = vtkDP::forwardTimeSteps(inInfo, outInfo);
-  return 1;
 }
 
-int vtkPCACompressFilter::RequestUpdateExtent(vtkInformation*, vtkInformationVector** inputVector,
-                                              vtkInformationVector* outputVector)
+long long vtkPCACompressFilter::NextInputFrame(std::size_t)
 {
-  Internals& in = *this->Internal;
-  if (in.TimeSteps.empty() || vtkDP::isSecondaryPiece(outputVector->GetInformationObject(0)))
-    return 1;
-  // Collecting: ask for the next frame; done: ask for what upstream already has.
-  const double time = in.Result ? in.LastInputTime : in.timeOf(in.collected());
-  inputVector[0]->GetInformationObject(0)->Set(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP(),
-                                               time);
-  in.LastInputTime = time;
-  return 1;
+  // Collecting: the next frame; done: none (any time is answered from the result).
+  const Internals& in = *this->Internal;
+  return in.Result ? -1 : static_cast<long long>(in.collected());
 }
 
-namespace
-{
-void addValue(vtkPolyData* output, const char* name, double value)
-{
-  vtkNew<vtkDoubleArray> a;
-  a->SetName(name);
-  a->InsertNextValue(value);
-  output->GetFieldData()->AddArray(a);
-}
-} // namespace
-
-int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVector** inputVector,
-                                      vtkInformationVector* outputVector)
+int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,
+                                           vtkInformationVector** inputVector,
+                                           vtkInformationVector* outputVector)
 {
   Internals& in = *this->Internal;
   vtkInformation* outInfo = outputVector->GetInformationObject(0);
   vtkPolyData* output = vtkPolyData::GetData(outInfo);
-  if (vtkDP::isSecondaryPiece(outInfo))
-  {
-    // Under MPI the whole sequence is on process 0 (see vtkDP::isSecondaryPiece).
-    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
-    output->Initialize();
-    return 1;
-  }
   auto fail = [&](const std::string& message)
   {
-    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    ContinueExecuting(request, false);
     vtkErrorMacro(<< message);
     in.clear();
     return 0;
@@ -187,7 +153,7 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
                     " is not finite");
       in.Positions.insert(in.Positions.end(), p, p + 3);
     }
-    const std::size_t frames = in.frameCount();
+    const std::size_t frames = this->GetNumberOfInputFrames();
     const std::string progress =
         "PCA Compress: frame " + std::to_string(in.collected()) + " of " + std::to_string(frames);
     this->SetProgressText(progress.c_str());
@@ -196,15 +162,15 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
       return fail("aborted while reading frame " + std::to_string(frame));
     if (in.collected() < frames)
     {
-      request->Set(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING(), 1);
+      ContinueExecuting(request, true);
       return 1;
     }
-    request->Remove(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING());
+    ContinueExecuting(request, false);
 
     const dp::PcaOptions options = Internals::optionsOf(*this);
-    std::vector<double> times = in.TimeSteps;
-    if (times.empty())
-      times.push_back(0.0);
+    std::vector<double> times(frames);
+    for (std::size_t t = 0; t < frames; ++t)
+      times[t] = this->GetInputFrameTime(t);
     this->SetProgressText("PCA Compress: compressing");
     try
     {
@@ -248,7 +214,7 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
   }
 
   const std::size_t frame =
-      std::min(vtkDP::requestedFrame(in.TimeSteps, outInfo), in.frameCount() - 1);
+      std::min(this->GetRequestedFrame(outInfo), this->GetNumberOfInputFrames() - 1);
   const dp::CompressedSequence& result = *in.Result;
   const auto n = in.Vertices;
   vtkNew<vtkDoubleArray> coordinates;
@@ -272,17 +238,18 @@ int vtkPCACompressFilter::RequestData(vtkInformation* request, vtkInformationVec
   output->SetPolys(in.Polys);
   output->GetPointData()->SetScalars(error);
   const dp::PcaReport& r = result.report;
-  addValue(output, "Components", static_cast<double>(r.components));
-  addValue(output, "PaperD0", r.paperD0);
-  addValue(output, "PaperD1", r.paperD1);
-  addValue(output, "PaperRatio", r.paperRatio);
-  addValue(output, "BitsPerVertexFrame", r.bitsPerVertexFrame);
-  addValue(output, "QuantizedPlainBitsPerVertexFrame", r.quantisedPlainBits);
-  addValue(output, "KGError", r.kgError);
-  addValue(output, "MaxError", r.maxError);
-  addValue(output, "MaxErrorRelative", r.maxErrorRelative);
-  addValue(output, "ComponentsPerFrame",
-           static_cast<double>(r.components) / static_cast<double>(in.frameCount()));
+  vtkDP::addFieldValue(output, "Components", static_cast<double>(r.components));
+  vtkDP::addFieldValue(output, "PaperD0", r.paperD0);
+  vtkDP::addFieldValue(output, "PaperD1", r.paperD1);
+  vtkDP::addFieldValue(output, "PaperRatio", r.paperRatio);
+  vtkDP::addFieldValue(output, "BitsPerVertexFrame", r.bitsPerVertexFrame);
+  vtkDP::addFieldValue(output, "QuantizedPlainBitsPerVertexFrame", r.quantisedPlainBits);
+  vtkDP::addFieldValue(output, "KGError", r.kgError);
+  vtkDP::addFieldValue(output, "MaxError", r.maxError);
+  vtkDP::addFieldValue(output, "MaxErrorRelative", r.maxErrorRelative);
+  vtkDP::addFieldValue(output, "ComponentsPerFrame",
+                       static_cast<double>(r.components) /
+                           static_cast<double>(this->GetNumberOfInputFrames()));
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
     output->GetInformation()->Set(
         vtkDataObject::DATA_TIME_STEP(),

@@ -34,13 +34,13 @@
 #define vtkPCACompressFilter_h
 
 #include "DynamicPointsFiltersModule.h" // for export macro
-#include "vtkPolyDataAlgorithm.h"
+#include "vtkDPTemporalFilter.h"
 
-class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkPolyDataAlgorithm
+class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkDPTemporalFilter
 {
 public:
   static vtkPCACompressFilter* New();
-  vtkTypeMacro(vtkPCACompressFilter, vtkPolyDataAlgorithm);
+  vtkTypeMacro(vtkPCACompressFilter, vtkDPTemporalFilter);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   enum LayoutType
@@ -106,9 +106,9 @@ protected:
   vtkPCACompressFilter();
   ~vtkPCACompressFilter() override;
 
-  int RequestInformation(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-  int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
-  int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
+  void ClearTemporalState() override;
+  long long NextInputFrame(std::size_t requestedFrame) override;
+  int RequestFrameData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   // The properties; their defaults are the engine's (dp::PcaOptions), set by the constructor.
   int Layout;

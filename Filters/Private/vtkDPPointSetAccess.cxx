@@ -4,7 +4,11 @@
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkDataArray.h"
+#include "vtkDataObject.h"
+#include "vtkDoubleArray.h"
+#include "vtkFieldData.h"
 #include "vtkInformation.h"
+#include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPointSet.h"
 #include "vtkPolyData.h"
@@ -121,6 +125,14 @@ std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* out
   if (steps.empty() || !outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
     return 0;
   return frameAtTime(steps, outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+}
+
+void addFieldValue(vtkDataObject* data, const char* name, double value)
+{
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  a->InsertNextValue(value);
+  data->GetFieldData()->AddArray(a);
 }
 
 bool isSecondaryPiece(vtkInformation* outInfo)

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+class vtkDataObject;
 class vtkInformation;
 class vtkPointSet;
 class vtkPolyData;
@@ -40,6 +41,9 @@ std::size_t frameAtTime(const std::vector<double>& steps, double t);
 /** The frame an output request asks for: frameAtTime of its UPDATE_TIME_STEP; 0 for a static
  *  input (no steps) or a request without a time. */
 std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* outInfo);
+
+/** Adds a one-value double array `name` to `data`'s field data (per-frame figures). */
+void addFieldValue(vtkDataObject* data, const char* name, double value);
 
 /** True when the output request is for a piece other than 0. The sources hand the whole frame
  *  to piece 0 (they do not split), so under MPI the tracker and the compressor run on process 0
