@@ -129,23 +129,27 @@ bool lzfDecompress(const unsigned char* in, std::size_t inSize, unsigned char* o
   return op == outSize;
 }
 
-} // namespace
-
-PointCloud readPCD(const std::string& path)
+// What the header says.
+struct PcdHeader
 {
-  const std::string bytes = detail::readWholeFile(path);
-  std::string_view text(bytes);
-  std::string_view line;
   std::vector<PcdField> fields;
   std::size_t points = 0;
+  std::string data; // ascii, binary or binary_compressed (lower case)
+};
+
+// Reads the header lines off the front of `text`, which is left at the data.
+PcdHeader parseHeader(const std::string& path, std::string_view& text)
+{
+  PcdHeader h;
+  std::vector<PcdField>& fields = h.fields;
   bool havePoints = false, haveWidth = false;
   std::size_t width = 0, height = 1;
-  std::string data;
+  std::string_view line;
   int lineNumber = 0;
   auto fail = [&](const std::string& why)
   { throw FileError(path, "PCD header line " + std::to_string(lineNumber) + ": " + why); };
 
-  while (data.empty())
+  while (h.data.empty())
   {
     if (!detail::nextLine(text, line))
     {
@@ -215,11 +219,11 @@ PointCloud readPCD(const std::string& path)
       else if (keyword == "height")
         height = count;
       else
-        points = count, havePoints = true;
+        h.points = count, havePoints = true;
     }
     else if (keyword == "data")
     {
-      data = values.empty() ? "?" : detail::toLower(values[0]);
+      h.data = values.empty() ? "?" : detail::toLower(values[0]);
     }
     else
       fail("unknown keyword '" + std::string(written) + "'");
@@ -230,187 +234,193 @@ PointCloud readPCD(const std::string& path)
       throw FileError(path, "PCD header has neither POINTS nor WIDTH");
     if (height > 0 && width > std::numeric_limits<std::size_t>::max() / height)
       throw FileError(path, "PCD header's WIDTH x HEIGHT is too large to be a point count");
-    points = width * height;
+    h.points = width * height;
   }
   if (fields.empty())
     throw FileError(path, "PCD header has no FIELDS");
+  return h;
+}
 
-  std::size_t recordSize = 0;
+// Where each field's values are: in a binary record (offsets, record size), among a point's
+// values (firstValue), and which fields are the coordinates, the normal and the colour.
+struct PcdLayout
+{
+  std::size_t recordSize = 0, valuesPerPoint = 0;
+  std::vector<std::size_t> firstValue; // per field
   int xyz[3] = {-1, -1, -1}, normal[3] = {-1, -1, -1}, rgb = -1;
+  bool hasNormals() const { return normal[0] >= 0 && normal[1] >= 0 && normal[2] >= 0; }
+};
+
+PcdLayout layoutOf(const std::string& path, std::vector<PcdField>& fields)
+{
+  PcdLayout l;
   for (std::size_t k = 0; k < fields.size(); ++k)
   {
     PcdField& f = fields[k];
     if (f.type == 'F' && f.size != 4 && f.size != 8)
       throw FileError(path,
                       "PCD field '" + f.name + "' is a float of size " + std::to_string(f.size));
-    f.offset = recordSize;
-    recordSize += static_cast<std::size_t>(f.size) * f.count;
+    f.offset = l.recordSize;
+    l.recordSize += static_cast<std::size_t>(f.size) * f.count;
     const std::string& n = f.name;
     const int i = static_cast<int>(k);
     if (n == "x" || n == "y" || n == "z")
-      xyz[n[0] - 'x'] = i;
+      l.xyz[n[0] - 'x'] = i;
     else if (n == "normal_x" || n == "normal_y" || n == "normal_z")
-      normal[n.back() - 'x'] = i;
+      l.normal[n.back() - 'x'] = i;
     else if (n == "rgb" || n == "rgba")
     {
       if (f.size != 4) // a packed colour is 4 bytes; copying 4 from a smaller field overflows
         throw FileError(path, "PCD field '" + f.name + "' has SIZE " + std::to_string(f.size) +
                                   "; a packed colour takes 4");
-      rgb = i;
+      l.rgb = i;
     }
   }
-  if (xyz[0] < 0 || xyz[1] < 0 || xyz[2] < 0)
+  if (l.xyz[0] < 0 || l.xyz[1] < 0 || l.xyz[2] < 0)
     throw FileError(path, "PCD file lacks one of the fields x, y, z");
-
-  // Gather every value as double in point-major order (value v of field k of point i).
-  std::vector<std::size_t> firstValue(fields.size());
-  std::size_t valuesPerPoint = 0;
+  l.firstValue.resize(fields.size());
   for (std::size_t k = 0; k < fields.size(); ++k)
   {
-    firstValue[k] = valuesPerPoint;
-    valuesPerPoint += fields[k].count;
+    l.firstValue[k] = l.valuesPerPoint;
+    l.valuesPerPoint += fields[k].count;
   }
-  // A header may claim more points than the file can hold: check before allocating. LZF
-  // expands at most 264 bytes from a 3-byte back-reference, hence the bound for compressed data.
-  const std::size_t leastBytesPerPoint = data == "ascii" ? 2 * valuesPerPoint : recordSize;
-  const std::size_t capacity = data == "binary_compressed" ? text.size() * 88 : text.size();
-  if (leastBytesPerPoint > 0 && points > capacity / leastBytesPerPoint)
-  {
-    throw FileError(path, "PCD data ends early (truncated file): the header declares " +
-                              std::to_string(points) + " points but the data holds at most " +
-                              std::to_string(text.size() / leastBytesPerPoint));
-  }
-  std::vector<double> values(points * valuesPerPoint);
-  const std::string_view body = text;
-  auto truncatedError = [&](std::size_t got)
-  {
-    throw FileError(path, "PCD data ends early (truncated file): the header declares " +
-                              std::to_string(points) + " points but the data holds " +
-                              std::to_string(got));
-  };
-  std::vector<std::uint32_t> packedColor(rgb >= 0 ? points : 0);
+  return l;
+}
 
-  if (data == "ascii")
-  {
-    std::string_view cursor = body;
-    for (std::size_t i = 0; i < points; ++i)
-    {
-      for (std::size_t k = 0; k < fields.size(); ++k)
+// Every value as double in point-major order (value v of field k of point i), and the packed
+// colours as stored.
+struct PcdValues
+{
+  std::vector<double> values;
+  std::vector<std::uint32_t> packedColor;
+};
+
+[[noreturn]] void dataEndsEarly(const std::string& path, std::size_t declared, std::size_t got)
+{
+  throw FileError(path, "PCD data ends early (truncated file): the header declares " +
+                            std::to_string(declared) + " points but the data holds " +
+                            std::to_string(got));
+}
+
+// PCL writes rgb as the float whose bits are 0x00RRGGBB (or as an integer).
+std::uint32_t packedColourOf(const std::string& path, std::size_t point, std::string_view token,
+                             double v, const PcdField& f)
+{
+  const bool packable = f.type == 'F' ? !(std::abs(v) > std::numeric_limits<float>::max()) // NaN
+                                      : v >= 0 && v <= 4294967295.0 && v == std::floor(v);
+  if (!packable)
+    throw FileError(path, "PCD point " + std::to_string(point) + ": rgb value '" +
+                              std::string(token) + "' is not a packed colour");
+  if (f.type != 'F')
+    return static_cast<std::uint32_t>(v);
+  const float asFloat = static_cast<float>(v);
+  std::uint32_t packed;
+  std::memcpy(&packed, &asFloat, 4);
+  return packed;
+}
+
+void readAscii(const std::string& path, std::string_view cursor, const PcdHeader& h,
+               const PcdLayout& l, PcdValues& out)
+{
+  for (std::size_t i = 0; i < h.points; ++i)
+    for (std::size_t k = 0; k < h.fields.size(); ++k)
+      for (int c = 0; c < h.fields[k].count; ++c)
       {
-        for (int c = 0; c < fields[k].count; ++c)
-        {
-          const std::string_view token = detail::nextToken(cursor);
-          if (token.empty())
-            truncatedError(i);
-          double v = 0;
-          if (!detail::parseNumber(token, v))
-            throw FileError(path, "PCD point " + std::to_string(i) + ": '" + std::string(token) +
-                                      "' is not a number");
-          values[i * valuesPerPoint + firstValue[k] + c] = v;
-          if (static_cast<int>(k) == rgb && c == 0)
-          {
-            // PCL writes rgb as the float whose bits are 0x00RRGGBB (or as an integer).
-            const bool packable =
-                fields[k].type == 'F'
-                    ? !(std::abs(v) > std::numeric_limits<float>::max()) // NaN passes
-                    : v >= 0 && v <= 4294967295.0 && v == std::floor(v);
-            if (!packable)
-              throw FileError(path, "PCD point " + std::to_string(i) + ": rgb value '" +
-                                        std::string(token) + "' is not a packed colour");
-            if (fields[k].type == 'F')
-            {
-              const float asFloat = static_cast<float>(v);
-              std::memcpy(&packedColor[i], &asFloat, 4);
-            }
-            else
-              packedColor[i] = static_cast<std::uint32_t>(v);
-          }
-        }
+        const std::string_view token = detail::nextToken(cursor);
+        if (token.empty())
+          dataEndsEarly(path, h.points, i);
+        double v = 0;
+        if (!detail::parseNumber(token, v))
+          throw FileError(path, "PCD point " + std::to_string(i) + ": '" + std::string(token) +
+                                    "' is not a number");
+        out.values[i * l.valuesPerPoint + l.firstValue[k] + c] = v;
+        if (static_cast<int>(k) == l.rgb && c == 0)
+          out.packedColor[i] = packedColourOf(path, i, token, v, h.fields[k]);
       }
-    }
-  }
-  else if (data == "binary" || data == "binary_compressed")
+}
+
+// binary: records one after the other; binary_compressed: two sizes, then an LZF stream of all
+// values of field 0, then field 1, ...
+void readBinary(const std::string& path, std::string_view body, const PcdHeader& h,
+                const PcdLayout& l, PcdValues& out)
+{
+  std::string decompressed;
+  const char* raw = body.data();
+  const bool fieldMajor = h.data == "binary_compressed";
+  if (!fieldMajor)
   {
-    std::string decompressed;
-    const char* raw = body.data();
-    bool fieldMajor = false;
-    if (data == "binary")
-    {
-      if (body.size() < points * recordSize)
-        truncatedError(recordSize ? body.size() / recordSize : 0);
-    }
-    else
-    {
-      std::uint32_t sizes[2];
-      if (body.size() < 8)
-        throw FileError(path, "PCD binary_compressed data ends before its size fields");
-      std::memcpy(sizes, body.data(), 8);
-      if (sizes[1] != points * recordSize)
-        throw FileError(path, "PCD binary_compressed: uncompressed size " +
-                                  std::to_string(sizes[1]) + " does not match " +
-                                  std::to_string(points) + " points of " +
-                                  std::to_string(recordSize) + " bytes");
-      if (body.size() - 8 < sizes[0])
-        throw FileError(path, "PCD binary_compressed data ends early (truncated file)");
-      decompressed.resize(sizes[1]);
-      if (!lzfDecompress(reinterpret_cast<const unsigned char*>(body.data()) + 8, sizes[0],
-                         reinterpret_cast<unsigned char*>(decompressed.data()), sizes[1]))
-        throw FileError(path, "PCD binary_compressed data is corrupt (LZF stream invalid)");
-      raw = decompressed.data();
-      fieldMajor = true; // compressed PCD stores all values of field 0, then field 1, ...
-    }
-    std::size_t fieldStart = 0;
-    for (std::size_t k = 0; k < fields.size(); ++k)
-    {
-      const PcdField& f = fields[k];
-      for (std::size_t i = 0; i < points; ++i)
-      {
-        const char* base =
-            fieldMajor ? raw + fieldStart + i * f.size * f.count : raw + i * recordSize + f.offset;
-        for (int c = 0; c < f.count; ++c)
-        {
-          values[i * valuesPerPoint + firstValue[k] + c] = decodeField(base + c * f.size, f);
-        }
-        if (static_cast<int>(k) == rgb)
-          std::memcpy(&packedColor[i], base, 4);
-      }
-      fieldStart += points * f.size * f.count;
-    }
+    if (body.size() < h.points * l.recordSize)
+      dataEndsEarly(path, h.points, l.recordSize ? body.size() / l.recordSize : 0);
   }
   else
   {
-    throw FileError(path, "PCD DATA '" + data + "' is not ascii, binary or binary_compressed");
+    std::uint32_t sizes[2];
+    if (body.size() < 8)
+      throw FileError(path, "PCD binary_compressed data ends before its size fields");
+    std::memcpy(sizes, body.data(), 8);
+    if (sizes[1] != h.points * l.recordSize)
+      throw FileError(path, "PCD binary_compressed: uncompressed size " + std::to_string(sizes[1]) +
+                                " does not match " + std::to_string(h.points) + " points of " +
+                                std::to_string(l.recordSize) + " bytes");
+    if (body.size() - 8 < sizes[0])
+      throw FileError(path, "PCD binary_compressed data ends early (truncated file)");
+    decompressed.resize(sizes[1]);
+    if (!lzfDecompress(reinterpret_cast<const unsigned char*>(body.data()) + 8, sizes[0],
+                       reinterpret_cast<unsigned char*>(decompressed.data()), sizes[1]))
+      throw FileError(path, "PCD binary_compressed data is corrupt (LZF stream invalid)");
+    raw = decompressed.data();
   }
+  std::size_t fieldStart = 0;
+  for (std::size_t k = 0; k < h.fields.size(); ++k)
+  {
+    const PcdField& f = h.fields[k];
+    for (std::size_t i = 0; i < h.points; ++i)
+    {
+      const char* base =
+          fieldMajor ? raw + fieldStart + i * f.size * f.count : raw + i * l.recordSize + f.offset;
+      for (int c = 0; c < f.count; ++c)
+        out.values[i * l.valuesPerPoint + l.firstValue[k] + c] = decodeField(base + c * f.size, f);
+      if (static_cast<int>(k) == l.rgb)
+        std::memcpy(&out.packedColor[i], base, 4);
+    }
+    fieldStart += h.points * f.size * f.count;
+  }
+}
 
+// The cloud: coordinates, normals, colours, and every other named field as an attribute.
+PointCloud assemble(const PcdHeader& h, const PcdLayout& l, const PcdValues& in)
+{
+  const std::vector<PcdField>& fields = h.fields;
+  const std::size_t points = h.points;
   PointCloud cloud;
   cloud.points.resize(3 * points);
-  const bool hasNormals = normal[0] >= 0 && normal[1] >= 0 && normal[2] >= 0;
+  const bool hasNormals = l.hasNormals();
   if (hasNormals)
     cloud.normals.resize(3 * points);
-  if (rgb >= 0)
+  if (l.rgb >= 0)
   {
-    cloud.colorComponents = fields[rgb].name == "rgba" ? 4 : 3;
+    cloud.colorComponents = fields[l.rgb].name == "rgba" ? 4 : 3;
     cloud.colors.resize(cloud.colorComponents * points);
   }
   for (std::size_t k = 0; k < fields.size(); ++k)
   {
     const int i = static_cast<int>(k);
-    const bool known = i == xyz[0] || i == xyz[1] || i == xyz[2] || i == rgb ||
-                       (hasNormals && (i == normal[0] || i == normal[1] || i == normal[2]));
+    const bool known = i == l.xyz[0] || i == l.xyz[1] || i == l.xyz[2] || i == l.rgb ||
+                       (hasNormals && (i == l.normal[0] || i == l.normal[1] || i == l.normal[2]));
     if (!known && fields[k].name != "_")
       cloud.attributes.push_back({fields[k].name, fields[k].count, {}});
   }
   for (std::size_t i = 0; i < points; ++i)
   {
-    const double* v = &values[i * valuesPerPoint];
+    const double* v = &in.values[i * l.valuesPerPoint];
     for (int c = 0; c < 3; ++c)
-      cloud.points[3 * i + c] = v[firstValue[xyz[c]]];
+      cloud.points[3 * i + c] = v[l.firstValue[l.xyz[c]]];
     if (hasNormals)
       for (int c = 0; c < 3; ++c)
-        cloud.normals[3 * i + c] = static_cast<float>(v[firstValue[normal[c]]]);
-    if (rgb >= 0)
+        cloud.normals[3 * i + c] = static_cast<float>(v[l.firstValue[l.normal[c]]]);
+    if (l.rgb >= 0)
     {
-      const std::uint32_t packed = packedColor[i];
+      const std::uint32_t packed = in.packedColor[i];
       std::uint8_t* out = &cloud.colors[cloud.colorComponents * i];
       out[0] = static_cast<std::uint8_t>((packed >> 16) & 0xff);
       out[1] = static_cast<std::uint8_t>((packed >> 8) & 0xff);
@@ -428,9 +438,42 @@ PointCloud readPCD(const std::string& path)
     for (std::size_t i = 0; i < points; ++i)
       for (int c = 0; c < a.components; ++c)
         a.values[i * a.components + c] =
-            static_cast<float>(values[i * valuesPerPoint + firstValue[k] + c]);
+            static_cast<float>(in.values[i * l.valuesPerPoint + l.firstValue[k] + c]);
   }
   return cloud;
+}
+
+} // namespace
+
+PointCloud readPCD(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  std::string_view text(bytes);
+  PcdHeader header = parseHeader(path, text);
+  const PcdLayout layout = layoutOf(path, header.fields);
+  if (header.data != "ascii" && header.data != "binary" && header.data != "binary_compressed")
+    throw FileError(path,
+                    "PCD DATA '" + header.data + "' is not ascii, binary or binary_compressed");
+  // A header may claim more points than the file can hold: check before allocating. LZF
+  // expands at most 264 bytes from a 3-byte back-reference, hence the bound for compressed data.
+  const std::size_t leastBytesPerPoint =
+      header.data == "ascii" ? 2 * layout.valuesPerPoint : layout.recordSize;
+  const std::size_t capacity = header.data == "binary_compressed" ? text.size() * 88 : text.size();
+  if (leastBytesPerPoint > 0 && header.points > capacity / leastBytesPerPoint)
+  {
+    throw FileError(path, "PCD data ends early (truncated file): the header declares " +
+                              std::to_string(header.points) +
+                              " points but the data holds at most " +
+                              std::to_string(text.size() / leastBytesPerPoint));
+  }
+  PcdValues values;
+  values.values.resize(header.points * layout.valuesPerPoint);
+  values.packedColor.resize(layout.rgb >= 0 ? header.points : 0);
+  if (header.data == "ascii")
+    readAscii(path, text, header, layout, values);
+  else
+    readBinary(path, text, header, layout, values);
+  return assemble(header, layout, values);
 }
 
 void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
