@@ -31,22 +31,23 @@ int columnRole(const std::string& name)
   return -1;
 }
 
-} // namespace
-
-PointCloud readTextPoints(const std::string& path)
+// The rows of numbers of a text file, with the column names of a header line if there is one.
+struct TextTable
 {
-  const std::string bytes = detail::readWholeFile(path);
-  const bool isPts = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
-  std::string_view text(bytes);
-  std::string_view line;
-  std::vector<std::string> header;
-  std::size_t columns = 0;
-  std::size_t lineNumber = 0;
-  std::size_t declaredCount = 0;
-  bool sawData = false;
-  std::vector<double> values;
-  std::vector<double> row;
+  std::vector<std::string> header; // lower case; empty without a header line
+  std::size_t columns = 0;         // 0: no data rows
+  std::size_t declaredCount = 0;   // PTS: the count on the first line (0: none)
+  std::vector<double> values;      // row-major
+  std::size_t rows() const { return columns ? values.size() / columns : 0; }
+};
 
+TextTable readTable(const std::string& path, std::string_view text, bool isPts)
+{
+  TextTable t;
+  std::string_view line;
+  std::size_t lineNumber = 0;
+  bool sawData = false;
+  std::vector<double> row;
   while (detail::nextLine(text, line))
   {
     ++lineNumber;
@@ -57,20 +58,21 @@ PointCloud readTextPoints(const std::string& path)
     std::string_view rest = line;
     bool numeric = true;
     std::vector<std::string> tokens;
-    for (auto t = detail::nextToken(rest, comma); !t.empty(); t = detail::nextToken(rest, comma))
+    for (auto token = detail::nextToken(rest, comma); !token.empty();
+         token = detail::nextToken(rest, comma))
     {
       double v = 0;
-      tokens.emplace_back(t);
-      if (detail::parseNumber(t, v))
+      tokens.emplace_back(token);
+      if (detail::parseNumber(token, v))
         row.push_back(v);
       else
         numeric = false;
     }
-    if (!sawData && !numeric && header.empty())
+    if (!sawData && !numeric && t.header.empty())
     {
       // A header line naming the columns (CSV style).
-      for (auto& t : tokens)
-        header.push_back(detail::toLower(t));
+      for (auto& token : tokens)
+        t.header.push_back(detail::toLower(token));
       continue;
     }
     if (!numeric)
@@ -79,75 +81,78 @@ PointCloud readTextPoints(const std::string& path)
                                 "' is not a row of numbers");
     }
     // A PTS file starts with a line holding only the point count.
-    if (!sawData && isPts && row.size() == 1 && declaredCount == 0)
+    if (!sawData && isPts && row.size() == 1 && t.declaredCount == 0)
     {
       if (!(row[0] >= 0) || !detail::wholeNumberWithin(row[0], detail::LargestCount))
         throw FileError(path, "line " + std::to_string(lineNumber) + ": the point count '" +
                                   std::string(line) + "' is not a count");
-      declaredCount = static_cast<std::size_t>(row[0]);
+      t.declaredCount = static_cast<std::size_t>(row[0]);
       continue;
     }
     if (!sawData)
     {
-      columns = row.size();
-      if (columns < 3)
+      t.columns = row.size();
+      if (t.columns < 3)
         throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
-                                  std::to_string(columns) + " values; at least x y z are needed");
-      if (!header.empty() && header.size() != columns)
-        throw FileError(path, "the header names " + std::to_string(header.size()) +
+                                  std::to_string(t.columns) + " values; at least x y z are needed");
+      if (!t.header.empty() && t.header.size() != t.columns)
+        throw FileError(path, "the header names " + std::to_string(t.header.size()) +
                                   " columns but line " + std::to_string(lineNumber) + " has " +
-                                  std::to_string(columns));
+                                  std::to_string(t.columns));
       sawData = true;
     }
-    if (row.size() != columns)
+    if (row.size() != t.columns)
     {
       throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
                                 std::to_string(row.size()) + " values, earlier lines have " +
-                                std::to_string(columns) + " (truncated or malformed file)");
+                                std::to_string(t.columns) + " (truncated or malformed file)");
     }
-    values.insert(values.end(), row.begin(), row.end());
+    t.values.insert(t.values.end(), row.begin(), row.end());
   }
+  return t;
+}
 
-  PointCloud cloud;
-  if (columns == 0)
-    return cloud; // an empty frame; the caller decides whether that is an error
-  const std::size_t n = values.size() / columns;
-  if (declaredCount != 0 && declaredCount != n)
-    throw FileError(path, "the PTS header declares " + std::to_string(declaredCount) +
-                              " points but the file holds " + std::to_string(n) +
-                              " (truncated file?)");
-
-  // Assign a role to each column: from the header names, else by the column count.
+// What each column is (columnRole's codes; -1 an attribute, named in `names`): from the header
+// names, else by the column count.
+std::vector<int> rolesOf(const std::string& path, const TextTable& t, bool isPts,
+                         std::vector<std::string>& names)
+{
+  const std::size_t columns = t.columns;
   std::vector<int> role(columns, -1);
-  std::vector<std::string> names(columns);
+  names.resize(columns);
   for (std::size_t c = 0; c < columns; ++c)
-    names[c] = c < header.size() ? header[c] : "Column" + std::to_string(c);
-  if (!header.empty())
+    names[c] = c < t.header.size() ? t.header[c] : "Column" + std::to_string(c);
+  if (!t.header.empty())
   {
     for (std::size_t c = 0; c < columns; ++c)
-      role[c] = columnRole(header[c]);
+      role[c] = columnRole(t.header[c]);
     bool hasXYZ[3] = {false, false, false};
     for (int r : role)
       if (r >= 0 && r < 3)
         hasXYZ[r] = true;
     if (!hasXYZ[0] || !hasXYZ[1] || !hasXYZ[2])
       throw FileError(path, "the header line does not name columns x, y and z");
+    return role;
   }
-  else
+  role[0] = 0, role[1] = 1, role[2] = 2;
+  if (isPts && (columns == 4 || columns == 7))
   {
-    role[0] = 0, role[1] = 1, role[2] = 2;
-    if (isPts && (columns == 4 || columns == 7))
-    {
-      names[3] = "Intensity"; // Leica PTS: x y z intensity [r g b]
-      if (columns == 7)
-        role[4] = 6, role[5] = 7, role[6] = 8;
-    }
-    else if (columns >= 6)
-    {
-      role[3] = 3, role[4] = 4, role[5] = 5;
-    }
+    names[3] = "Intensity"; // Leica PTS: x y z intensity [r g b]
+    if (columns == 7)
+      role[4] = 6, role[5] = 7, role[6] = 8;
   }
+  else if (columns >= 6)
+  {
+    role[3] = 3, role[4] = 4, role[5] = 5;
+  }
+  return role;
+}
 
+PointCloud cloudOf(const TextTable& t, const std::vector<int>& role,
+                   const std::vector<std::string>& names)
+{
+  const std::size_t n = t.rows(), columns = t.columns;
+  PointCloud cloud;
   bool hasNormals = false, hasColors = false;
   for (int r : role)
   {
@@ -172,7 +177,7 @@ PointCloud readTextPoints(const std::string& path)
   for (std::size_t i = 0; i < n; ++i)
     for (std::size_t c = 0; c < columns; ++c)
     {
-      const double v = values[i * columns + c];
+      const double v = t.values[i * columns + c];
       const int r = role[c];
       if (r >= 0 && r < 3)
         cloud.points[3 * i + r] = v;
@@ -184,6 +189,24 @@ PointCloud readTextPoints(const std::string& path)
         cloud.attributes[attribute[c]].values[i] = static_cast<float>(v);
     }
   return cloud;
+}
+
+} // namespace
+
+PointCloud readTextPoints(const std::string& path)
+{
+  const std::string bytes = detail::readWholeFile(path);
+  const bool isPts = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
+  const TextTable table = readTable(path, bytes, isPts);
+  if (table.columns == 0)
+    return {}; // an empty frame; the caller decides whether that is an error
+  if (table.declaredCount != 0 && table.declaredCount != table.rows())
+    throw FileError(path, "the PTS header declares " + std::to_string(table.declaredCount) +
+                              " points but the file holds " + std::to_string(table.rows()) +
+                              " (truncated file?)");
+  std::vector<std::string> names;
+  const std::vector<int> role = rolesOf(path, table, isPts, names);
+  return cloudOf(table, role, names);
 }
 
 void writeTextPoints(const std::string& path, const PointCloud& cloud)
