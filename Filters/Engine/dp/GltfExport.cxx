@@ -124,78 +124,79 @@ std::string withJson(const std::string& glb, const nlohmann::json& json)
   return out;
 }
 
-} // namespace
-
-void writeGlb(const std::string& path, const CompressedSequence& sequence,
-              const GlbOptions& options)
+// The shape model with each weight track rescaled into [0, 1] (glTF players expect morph
+// weights there) and its offset folded into the base shape.
+struct MorphTargets
 {
-  const PcaModel& m = sequence.pca.model;
-  if (m.layout != PcaLayout::Shapes)
-    throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
-  if (sequence.triangles.empty())
-    throw std::invalid_argument("glTF export needs triangles");
-  const std::size_t nv = m.vertices, nt = m.frames, k = m.components();
+  Eigen::VectorXd base;    // 3Nv
+  Eigen::MatrixXd targets; // 3Nv x k
+  Eigen::MatrixXd weights; // Nt x k
+};
 
-  // Rescale each weight track into [0, 1]; fold the offset into the base.
-  Eigen::VectorXd base = m.mean;
-  Eigen::MatrixXd targets = m.basis;
-  Eigen::MatrixXd weights = m.weights; // Nt x k
-  for (std::size_t j = 0; j < k; ++j)
+MorphTargets morphTargetsOf(const PcaModel& m)
+{
+  MorphTargets out{m.mean, m.basis, m.weights};
+  for (std::size_t j = 0; j < m.components(); ++j)
   {
-    const double lo = weights.col(j).minCoeff(), hi = weights.col(j).maxCoeff();
-    base += lo * m.basis.col(j);
+    const double lo = out.weights.col(j).minCoeff(), hi = out.weights.col(j).maxCoeff();
+    out.base += lo * m.basis.col(j);
     if (hi > lo)
     {
-      targets.col(j) *= hi - lo;
-      weights.col(j) = (weights.col(j).array() - lo) / (hi - lo);
+      out.targets.col(j) *= hi - lo;
+      out.weights.col(j) = (out.weights.col(j).array() - lo) / (hi - lo);
     }
     else
     {
-      targets.col(j).setZero();
-      weights.col(j).setZero();
+      out.targets.col(j).setZero();
+      out.weights.col(j).setZero();
     }
   }
+  return out;
+}
 
-  tinygltf::Model model;
-  model.asset.version = "2.0";
-  model.asset.generator = "DynamicPoints";
-  model.buffers.resize(1);
+// The triangles as 32-bit indices; returns their accessor.
+int addIndices(tinygltf::Model& model, const std::vector<std::int64_t>& triangles)
+{
+  auto& data = model.buffers[0].data;
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = data.size();
+  view.byteLength = triangles.size() * sizeof(std::uint32_t);
+  view.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+  for (std::int64_t index : triangles)
+  {
+    const auto v = static_cast<std::uint32_t>(index);
+    const auto* b = reinterpret_cast<const unsigned char*>(&v);
+    data.insert(data.end(), b, b + 4);
+  }
+  model.bufferViews.push_back(view);
+  tinygltf::Accessor indices;
+  indices.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+  indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
+  indices.count = triangles.size();
+  indices.type = TINYGLTF_TYPE_SCALAR;
+  model.accessors.push_back(indices);
+  return static_cast<int>(model.accessors.size()) - 1;
+}
 
-  std::vector<float> positions(base.data(), base.data() + base.size());
+// One node with the mesh: the base shape, the triangles and a morph target per component.
+void addMesh(tinygltf::Model& model, const MorphTargets& morph,
+             const std::vector<std::int64_t>& triangles, std::size_t nv)
+{
+  std::vector<float> positions(morph.base.data(), morph.base.data() + morph.base.size());
   tinygltf::Primitive primitive;
   primitive.mode = TINYGLTF_MODE_TRIANGLES;
   primitive.attributes["POSITION"] =
       addAccessor(model, positions, TINYGLTF_TYPE_VEC3, nv, true, TINYGLTF_TARGET_ARRAY_BUFFER);
-  {
-    auto& data = model.buffers[0].data;
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = data.size();
-    view.byteLength = sequence.triangles.size() * sizeof(std::uint32_t);
-    view.target = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
-    for (std::int64_t index : sequence.triangles)
-    {
-      const auto v = static_cast<std::uint32_t>(index);
-      const auto* b = reinterpret_cast<const unsigned char*>(&v);
-      data.insert(data.end(), b, b + 4);
-    }
-    model.bufferViews.push_back(view);
-    tinygltf::Accessor indices;
-    indices.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
-    indices.componentType = TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT;
-    indices.count = sequence.triangles.size();
-    indices.type = TINYGLTF_TYPE_SCALAR;
-    model.accessors.push_back(indices);
-    primitive.indices = static_cast<int>(model.accessors.size()) - 1;
-  }
+  primitive.indices = addIndices(model, triangles);
   tinygltf::Mesh mesh;
   mesh.name = "tracked";
-  for (std::size_t j = 0; j < k; ++j)
+  for (Eigen::Index j = 0; j < morph.targets.cols(); ++j)
   {
-    std::vector<float> target(targets.col(j).data(), targets.col(j).data() + 3 * nv);
+    std::vector<float> target(morph.targets.col(j).data(), morph.targets.col(j).data() + 3 * nv);
     primitive.targets.push_back({{"POSITION", addAccessor(model, target, TINYGLTF_TYPE_VEC3, nv,
                                                           true, TINYGLTF_TARGET_ARRAY_BUFFER)}});
-    mesh.weights.push_back(weights(0, static_cast<Eigen::Index>(j)));
+    mesh.weights.push_back(morph.weights(0, j));
   }
   mesh.primitives.push_back(primitive);
   model.meshes.push_back(mesh);
@@ -207,77 +208,103 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
   scene.nodes.push_back(0);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
+}
 
-  if (k > 0 && nt > 1)
+// The weights over time: one linear sampler, a key per frame at FramesPerSecond.
+void addAnimation(tinygltf::Model& model, const Eigen::MatrixXd& weights)
+{
+  const std::size_t nt = static_cast<std::size_t>(weights.rows()),
+                    k = static_cast<std::size_t>(weights.cols());
+  std::vector<float> times(nt), values(nt * k);
+  for (std::size_t t = 0; t < nt; ++t)
   {
-    std::vector<float> times(nt), values(nt * k);
-    for (std::size_t t = 0; t < nt; ++t)
-    {
-      // The float at or just below t/24: players that step at 1/24 s from 0 (VTK's glTF reader)
-      // then meet the last key exactly once instead of a rounding step after it.
-      const double seconds = static_cast<double>(t) / FramesPerSecond;
-      times[t] = static_cast<float>(seconds);
-      if (static_cast<double>(times[t]) > seconds)
-        times[t] = std::nextafter(times[t], 0.0f);
-      for (std::size_t j = 0; j < k; ++j)
-        values[t * k + j] =
-            static_cast<float>(weights(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(j)));
-    }
-    tinygltf::AnimationSampler sampler;
-    sampler.input = addAccessor(model, times, TINYGLTF_TYPE_SCALAR, nt, true, 0);
-    sampler.output = addAccessor(model, values, TINYGLTF_TYPE_SCALAR, nt * k, false, 0);
-    sampler.interpolation = "LINEAR";
-    tinygltf::AnimationChannel channel;
-    channel.sampler = 0;
-    channel.target_node = 0;
-    channel.target_path = "weights";
-    tinygltf::Animation animation;
-    animation.name = "sequence";
-    animation.samplers.push_back(sampler);
-    animation.channels.push_back(channel);
-    model.animations.push_back(animation);
+    // The float at or just below t/24: players that step at 1/24 s from 0 (VTK's glTF reader)
+    // then meet the last key exactly once instead of a rounding step after it.
+    const double seconds = static_cast<double>(t) / FramesPerSecond;
+    times[t] = static_cast<float>(seconds);
+    if (static_cast<double>(times[t]) > seconds)
+      times[t] = std::nextafter(times[t], 0.0f);
+    for (std::size_t j = 0; j < k; ++j)
+      values[t * k + j] =
+          static_cast<float>(weights(static_cast<Eigen::Index>(t), static_cast<Eigen::Index>(j)));
   }
+  tinygltf::AnimationSampler sampler;
+  sampler.input = addAccessor(model, times, TINYGLTF_TYPE_SCALAR, nt, true, 0);
+  sampler.output = addAccessor(model, values, TINYGLTF_TYPE_SCALAR, nt * k, false, 0);
+  sampler.interpolation = "LINEAR";
+  tinygltf::AnimationChannel channel;
+  channel.sampler = 0;
+  channel.target_node = 0;
+  channel.target_path = "weights";
+  tinygltf::Animation animation;
+  animation.name = "sequence";
+  animation.samplers.push_back(sampler);
+  animation.channels.push_back(channel);
+  model.animations.push_back(animation);
+}
 
-  const std::string partial = path + ".partial";
+// The .glb with every buffer view compressed by meshoptimizer (EXT_meshopt_compression).
+// tinygltf writes buffer 0 (now the compressed bytes) as the BIN chunk; the views' extensions
+// and the fallback buffer are added to its JSON.
+void writeMeshoptGlb(const std::string& file, const std::string& path, tinygltf::Model& model,
+                     std::size_t nv)
+{
   tinygltf::TinyGLTF writer;
-  if (!options.meshopt)
+  std::size_t fallbackBytes = 0;
+  const std::vector<nlohmann::json> views = compressViews(model, nv, fallbackBytes);
+  std::ostringstream stream;
+  if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
+    throw std::runtime_error(path + ": cannot write the glTF file");
+  const std::string glb = stream.str();
+  std::uint32_t jsonLength = 0;
+  std::memcpy(&jsonLength, glb.data() + 12, 4);
+  nlohmann::json json = nlohmann::json::parse(glb.substr(20, jsonLength));
+  for (std::size_t v = 0; v < views.size(); ++v)
   {
-    if (!writer.WriteGltfSceneToFile(&model, partial, true, true, false, true))
-    {
-      std::remove(partial.c_str());
-      throw std::runtime_error(path + ": cannot write the glTF file");
-    }
+    json["bufferViews"][v]["buffer"] = 1;
+    json["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = views[v];
   }
-  else
+  json["buffers"][1] = {{"byteLength", fallbackBytes},
+                        {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}};
+  json["extensionsUsed"] = {"EXT_meshopt_compression"};
+  json["extensionsRequired"] = {"EXT_meshopt_compression"};
+  const std::string bytes = withJson(glb, json);
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (!out)
   {
-    // tinygltf writes buffer 0 (now the compressed bytes) as the BIN chunk; the views'
-    // extensions and the fallback buffer are added to its JSON.
-    std::size_t fallbackBytes = 0;
-    const std::vector<nlohmann::json> views = compressViews(model, nv, fallbackBytes);
-    std::ostringstream stream;
-    if (!writer.WriteGltfSceneToStream(&model, stream, false, true))
-      throw std::runtime_error(path + ": cannot write the glTF file");
-    const std::string glb = stream.str();
-    std::uint32_t jsonLength = 0;
-    std::memcpy(&jsonLength, glb.data() + 12, 4);
-    nlohmann::json json = nlohmann::json::parse(glb.substr(20, jsonLength));
-    for (std::size_t v = 0; v < views.size(); ++v)
-    {
-      json["bufferViews"][v]["buffer"] = 1;
-      json["bufferViews"][v]["extensions"]["EXT_meshopt_compression"] = views[v];
-    }
-    json["buffers"][1] = {{"byteLength", fallbackBytes},
-                          {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}};
-    json["extensionsUsed"] = {"EXT_meshopt_compression"};
-    json["extensionsRequired"] = {"EXT_meshopt_compression"};
-    const std::string bytes = withJson(glb, json);
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    if (!out)
-    {
-      std::remove(partial.c_str());
-      throw std::runtime_error(path + ": cannot write the glTF file");
-    }
+    std::remove(file.c_str());
+    throw std::runtime_error(path + ": cannot write the glTF file");
+  }
+}
+
+} // namespace
+
+void writeGlb(const std::string& path, const CompressedSequence& sequence,
+              const GlbOptions& options)
+{
+  const PcaModel& m = sequence.pca.model;
+  if (m.layout != PcaLayout::Shapes)
+    throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
+  if (sequence.triangles.empty())
+    throw std::invalid_argument("glTF export needs triangles");
+  const MorphTargets morph = morphTargetsOf(m);
+  tinygltf::Model model;
+  model.asset.version = "2.0";
+  model.asset.generator = "DynamicPoints";
+  model.buffers.resize(1);
+  addMesh(model, morph, sequence.triangles, m.vertices);
+  if (m.components() > 0 && m.frames > 1)
+    addAnimation(model, morph.weights);
+
+  // Written beside and renamed, so a failed write never leaves a broken file under the name.
+  const std::string partial = path + ".partial";
+  if (options.meshopt)
+    writeMeshoptGlb(partial, path, model, m.vertices);
+  else if (!tinygltf::TinyGLTF().WriteGltfSceneToFile(&model, partial, true, true, false, true))
+  {
+    std::remove(partial.c_str());
+    throw std::runtime_error(path + ": cannot write the glTF file");
   }
   if (std::rename(partial.c_str(), path.c_str()) != 0)
     throw std::runtime_error(path + ": cannot rename " + partial + " into place");
