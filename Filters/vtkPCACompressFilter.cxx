@@ -97,124 +97,105 @@ long long vtkPCACompressFilter::NextInputFrame(std::size_t)
   return in.Result ? -1 : static_cast<long long>(in.collected());
 }
 
-int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,
-                                           vtkInformationVector** inputVector,
-                                           vtkInformationVector* outputVector)
+std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t frame)
 {
   Internals& in = *this->Internal;
-  vtkInformation* outInfo = outputVector->GetInformationObject(0);
-  vtkPolyData* output = vtkPolyData::GetData(outInfo);
-  auto fail = [&](const std::string& message)
+  if (!input || input->GetNumberOfPoints() == 0)
+    return "frame " + std::to_string(frame) + ": the input has no points";
+  if (frame == 0)
   {
-    ContinueExecuting(request, false);
-    vtkErrorMacro(<< message);
-    in.clear();
-    return 0;
-  };
-
-  if (!in.Result)
-  {
-    const std::size_t frame = in.collected();
-    vtkPolyData* input = vtkPolyData::GetData(inputVector[0], 0);
-    if (!input || input->GetNumberOfPoints() == 0)
-      return fail("frame " + std::to_string(frame) + ": the input has no points");
-    if (frame == 0)
+    std::vector<double> positions;
+    const char* why = "";
+    in.Triangles.clear();
+    if (input->GetNumberOfPolys() > 0 && !vtkDP::triangleMesh(input, in.Triangles, positions, why))
+      return std::string("frame 0: ") + why;
+    in.Vertices = input->GetNumberOfPoints();
+    in.Polys = input->GetPolys();
+    if (input->GetNumberOfPolys() == 0)
     {
-      std::vector<double> positions;
-      const char* why = "";
-      in.Triangles.clear();
-      if (input->GetNumberOfPolys() > 0 &&
-          !vtkDP::triangleMesh(input, in.Triangles, positions, why))
-        return fail(std::string("frame 0: ") + why);
-      in.Vertices = input->GetNumberOfPoints();
-      in.Polys = input->GetPolys();
-      if (input->GetNumberOfPolys() == 0)
-      {
-        // A raw point sequence has the same count each frame but not the same points.
-        vtkWarningMacro(<< "frame 0 has no polygons: PCA Compress expects one mesh moving (point "
-                           "i the same surface point in every frame); the points of a scanned "
-                           "sequence are not, and compress poorly. Track them first "
-                           "(Deformable Track)");
-      }
-    }
-    else if (input->GetNumberOfPoints() != in.Vertices ||
-             input->GetNumberOfPolys() != in.Polys->GetNumberOfCells())
-      return fail(
-          "frame " + std::to_string(frame) + " has " + std::to_string(input->GetNumberOfPoints()) +
-          " points and " + std::to_string(input->GetNumberOfPolys()) + " polygons, frame 0 " +
-          std::to_string(in.Vertices) + " and " + std::to_string(in.Polys->GetNumberOfCells()) +
-          ": PCA needs one connectivity through the sequence");
-    for (vtkIdType i = 0; i < in.Vertices; ++i)
-    {
-      double p[3];
-      input->GetPoint(i, p);
-      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-        return fail("frame " + std::to_string(frame) + ": point " + std::to_string(i) +
-                    " is not finite");
-      in.Positions.insert(in.Positions.end(), p, p + 3);
-    }
-    const std::size_t frames = this->GetNumberOfInputFrames();
-    const std::string progress =
-        "PCA Compress: frame " + std::to_string(in.collected()) + " of " + std::to_string(frames);
-    this->SetProgressText(progress.c_str());
-    this->UpdateProgress(0.5 * static_cast<double>(in.collected()) / static_cast<double>(frames));
-    if (this->GetAbortExecute())
-      return fail("aborted while reading frame " + std::to_string(frame));
-    if (in.collected() < frames)
-    {
-      ContinueExecuting(request, true);
-      return 1;
-    }
-    ContinueExecuting(request, false);
-
-    const dp::PcaOptions options = Internals::optionsOf(*this);
-    std::vector<double> times(frames);
-    for (std::size_t t = 0; t < frames; ++t)
-      times[t] = this->GetInputFrameTime(t);
-    this->SetProgressText("PCA Compress: compressing");
-    try
-    {
-      in.Result = std::make_unique<dp::CompressedSequence>(
-          dp::compressSequence(in.Positions.data(), static_cast<std::size_t>(in.Vertices), frames,
-                               options, in.Triangles, times,
-                               [this](double f)
-                               {
-                                 this->UpdateProgress(0.5 + 0.5 * f);
-                                 return !this->GetAbortExecute();
-                               }));
-    }
-    catch (const std::exception& e)
-    {
-      return fail(std::string("cannot compress: ") + e.what());
-    }
-    this->WarnIfWeak(frames);
-    // Files: written beside and renamed, so a failure never leaves a broken file behind.
-    try
-    {
-      if (this->FileName && *this->FileName)
-        dp::writeCompressedSequence(this->FileName, *in.Result);
-    }
-    catch (const std::exception& e)
-    {
-      vtkErrorMacro(<< e.what());
-    }
-    try
-    {
-      if (this->GLBFileName && *this->GLBFileName)
-      {
-        dp::GlbOptions glb;
-        glb.meshopt = this->GLBMeshoptCompression;
-        dp::writeGlb(this->GLBFileName, *in.Result, glb);
-      }
-    }
-    catch (const std::exception& e)
-    {
-      vtkErrorMacro(<< e.what());
+      // A raw point sequence has the same count each frame but not the same points.
+      vtkWarningMacro(<< "frame 0 has no polygons: PCA Compress expects one mesh moving (point "
+                         "i the same surface point in every frame); the points of a scanned "
+                         "sequence are not, and compress poorly. Track them first "
+                         "(Deformable Track)");
     }
   }
+  else if (input->GetNumberOfPoints() != in.Vertices ||
+           input->GetNumberOfPolys() != in.Polys->GetNumberOfCells())
+    return "frame " + std::to_string(frame) + " has " + std::to_string(input->GetNumberOfPoints()) +
+           " points and " + std::to_string(input->GetNumberOfPolys()) + " polygons, frame 0 " +
+           std::to_string(in.Vertices) + " and " + std::to_string(in.Polys->GetNumberOfCells()) +
+           ": PCA needs one connectivity through the sequence";
+  for (vtkIdType i = 0; i < in.Vertices; ++i)
+  {
+    double p[3];
+    input->GetPoint(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      return "frame " + std::to_string(frame) + ": point " + std::to_string(i) + " is not finite";
+    in.Positions.insert(in.Positions.end(), p, p + 3);
+  }
+  return {};
+}
 
-  const std::size_t frame =
-      std::min(this->GetRequestedFrame(outInfo), this->GetNumberOfInputFrames() - 1);
+std::string vtkPCACompressFilter::Compress()
+{
+  Internals& in = *this->Internal;
+  const std::size_t frames = this->GetNumberOfInputFrames();
+  std::vector<double> times(frames);
+  for (std::size_t t = 0; t < frames; ++t)
+    times[t] = this->GetInputFrameTime(t);
+  this->SetProgressText("PCA Compress: compressing");
+  try
+  {
+    in.Result = std::make_unique<dp::CompressedSequence>(
+        dp::compressSequence(in.Positions.data(), static_cast<std::size_t>(in.Vertices), frames,
+                             Internals::optionsOf(*this), in.Triangles, times,
+                             [this](double f)
+                             {
+                               this->UpdateProgress(0.5 + 0.5 * f);
+                               return !this->GetAbortExecute();
+                             }));
+  }
+  catch (const std::exception& e)
+  {
+    return std::string("cannot compress: ") + e.what();
+  }
+  this->WarnIfWeak(frames);
+  this->WriteFiles();
+  return {};
+}
+
+void vtkPCACompressFilter::WriteFiles()
+{
+  // Written beside and renamed, so a failure never leaves a broken file behind.
+  const dp::CompressedSequence& result = *this->Internal->Result;
+  try
+  {
+    if (this->FileName && *this->FileName)
+      dp::writeCompressedSequence(this->FileName, result);
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+  }
+  try
+  {
+    if (this->GLBFileName && *this->GLBFileName)
+    {
+      dp::GlbOptions glb;
+      glb.meshopt = this->GLBMeshoptCompression;
+      dp::writeGlb(this->GLBFileName, result, glb);
+    }
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorMacro(<< e.what());
+  }
+}
+
+void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
+{
+  const Internals& in = *this->Internal;
   const dp::CompressedSequence& result = *in.Result;
   const auto n = in.Vertices;
   vtkNew<vtkDoubleArray> coordinates;
@@ -250,6 +231,45 @@ int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,
   vtkDP::addFieldValue(output, "ComponentsPerFrame",
                        static_cast<double>(r.components) /
                            static_cast<double>(this->GetNumberOfInputFrames()));
+}
+
+int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,
+                                           vtkInformationVector** inputVector,
+                                           vtkInformationVector* outputVector)
+{
+  Internals& in = *this->Internal;
+  vtkInformation* outInfo = outputVector->GetInformationObject(0);
+  auto fail = [&](const std::string& message)
+  {
+    ContinueExecuting(request, false);
+    vtkErrorMacro(<< message);
+    in.clear();
+    return 0;
+  };
+  if (!in.Result)
+  {
+    // Collecting: one frame per pass, then the compression.
+    const std::size_t frame = in.collected();
+    const std::string error = this->CollectFrame(vtkPolyData::GetData(inputVector[0], 0), frame);
+    if (!error.empty())
+      return fail(error);
+    const std::size_t frames = this->GetNumberOfInputFrames();
+    const std::string progress =
+        "PCA Compress: frame " + std::to_string(in.collected()) + " of " + std::to_string(frames);
+    this->SetProgressText(progress.c_str());
+    this->UpdateProgress(0.5 * static_cast<double>(in.collected()) / static_cast<double>(frames));
+    if (this->GetAbortExecute())
+      return fail("aborted while reading frame " + std::to_string(frame));
+    ContinueExecuting(request, in.collected() < frames);
+    if (in.collected() < frames)
+      return 1;
+    const std::string failure = this->Compress();
+    if (!failure.empty())
+      return fail(failure);
+  }
+  vtkPolyData* output = vtkPolyData::GetData(outInfo);
+  this->FillOutput(std::min(this->GetRequestedFrame(outInfo), this->GetNumberOfInputFrames() - 1),
+                   output);
   if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
     output->GetInformation()->Set(
         vtkDataObject::DATA_TIME_STEP(),

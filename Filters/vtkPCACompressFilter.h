@@ -36,6 +36,8 @@
 #include "DynamicPointsFiltersModule.h" // for export macro
 #include "vtkDPTemporalFilter.h"
 
+#include <string> // for std::string
+
 class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkDPTemporalFilter
 {
 public:
@@ -124,8 +126,17 @@ private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;
   void operator=(const vtkPCACompressFilter&) = delete;
 
+  // RequestFrameData's steps; those returning text return the error, empty when none.
+  /** Checks input frame `frame` against frame 0 and keeps its positions. */
+  std::string CollectFrame(vtkPolyData* input, std::size_t frame);
+  /** Compresses the frames collected, warns when weak, writes the files asked for. */
+  std::string Compress();
   /** Warns when most of the frames' worth of components were kept (weak compression). */
   void WarnIfWeak(std::size_t frames);
+  /** Writes FileName and GLBFileName when set; a failed file is an error, not a lost result. */
+  void WriteFiles();
+  /** The reconstruction of `frame` with its error and the figures. */
+  void FillOutput(std::size_t frame, vtkPolyData* output);
 
   struct Internals;
   Internals* Internal;

@@ -36,7 +36,7 @@ def run_node_tool(package, script, *args):
     module = os.path.join(NODE_TOOLS, "node_modules")
     if not os.path.isdir(os.path.join(module, package)):
         raise AssertionError(f"npm package {package} not found in {NODE_TOOLS!r}: "
-                             "Utilities/dp.sh build installs it")
+                             "Utilities/dp.sh test installs it")
     result = subprocess.run(["node", os.path.join(UTILITIES, "gltf", script), *args],
                             capture_output=True, text=True, timeout=120,
                             env=dict(os.environ, NODE_PATH=module))
@@ -60,7 +60,7 @@ def blender_report(path, frames=()):
     """What Blender (batch mode) makes of a .glb: see Utilities/gltf/blender_glb_report.py."""
     blender = shutil.which("blender")
     if not blender:
-        raise AssertionError("blender not found: Utilities/dp.sh build installs it (apt)")
+        raise AssertionError("blender not found: Utilities/dp.sh test installs it (apt)")
     result = subprocess.run(
         [blender, "-b", "--factory-startup", "--python-exit-code", "1", "-P",
          os.path.join(UTILITIES, "gltf", "blender_glb_report.py"), "--", path,
