@@ -58,6 +58,7 @@ struct vtkDeformableTrackFilter::Internals
     f.StretchStiffness = o.cloth.stretch;
     f.ShearStiffness = o.cloth.shear;
     f.BendStiffness = o.cloth.bend;
+    f.ThickPartStretch = o.softening.stretch;
     f.NormalTestAngle = o.normalTestDegrees;
     f.OutlierDistance = o.outlierDistance;
     f.VoxelSize = o.voxelSize;
@@ -90,6 +91,7 @@ struct vtkDeformableTrackFilter::Internals
     o.squaredDistance = f.SquaredDistance;
     o.restUpdate = f.RestUpdate;
     o.cloth = {f.StretchStiffness, f.ShearStiffness, f.BendStiffness};
+    o.softening.stretch = f.ThickPartStretch;
     o.normalTestDegrees = f.NormalTestAngle;
     o.outlierDistance = f.OutlierDistance;
     o.voxelSize = f.VoxelSize;
@@ -408,6 +410,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "DistanceMeasure: " << this->DistanceMeasure << "\n";
   os << indent << "SquaredDistance: " << this->SquaredDistance << "\n";
   os << indent << "RestUpdate: " << this->RestUpdate << "\n";
+  os << indent << "ThickPartStretch: " << this->ThickPartStretch << "\n";
   os << indent << "StretchStiffness: " << this->StretchStiffness << "\n";
   os << indent << "ShearStiffness: " << this->ShearStiffness << "\n";
   os << indent << "BendStiffness: " << this->BendStiffness << "\n";

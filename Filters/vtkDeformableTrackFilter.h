@@ -107,6 +107,15 @@ public:
   ///@}
 
   ///@{
+  /** Factor on the stretch stiffness of the template's thick parts (a trunk, away from its
+   *  limbs; dp::ThicknessSoftening): 1 (default) is one stiffness everywhere; about 0.3 lets a
+   *  human's skin stretch and slide over the torso, but can let a galloping animal's leg be
+   *  drawn onto another (README, Tracking). */
+  vtkSetClampMacro(ThickPartStretch, double, 0.0, 1.0);
+  vtkGetMacro(ThickPartStretch, double);
+  ///@}
+
+  ///@{
   /** Normal test: drop a vertex's distance term when its normal and its nearest point's normal
    *  differ by more than this angle in degrees (default 90; 180 switches the test off). */
   vtkSetClampMacro(NormalTestAngle, double, 0.0, 180.0);
@@ -239,6 +248,7 @@ protected:
   double StretchStiffness;
   double ShearStiffness;
   double BendStiffness;
+  double ThickPartStretch;
   double NormalTestAngle;
   double OutlierDistance;
   double VoxelSize;

@@ -309,7 +309,8 @@ const char* Usage =
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--solver gn|lbfgs|sd] [--distance-weight W] [--normal-test DEGREES]\n"
-    "             [--stiffness ST,SH,BE] [--tolerance T] [--max-iterations N]\n"
+    "             [--stiffness ST,SH,BE] [--soften-thick ST,BE,FROM,TO] [--tolerance T]\n"
+    "             [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
     "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
@@ -466,6 +467,14 @@ int main(int argc, char** argv)
         if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
                         &options.cloth.bend) != 3)
           throw UsageError("--stiffness wants stretch,shear,bend");
+      }
+      else if (arg == "--soften-thick")
+      {
+        const std::string v = optionValue(argc, argv, i);
+        dp::ThicknessSoftening& soft = options.softening;
+        if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &soft.stretch, &soft.bend, &soft.from,
+                        &soft.to) != 4)
+          throw UsageError("--soften-thick wants stretch,bend,from,to");
       }
       else
       {

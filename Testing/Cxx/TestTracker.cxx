@@ -60,6 +60,33 @@ TEST_P(ClothTerms, GradientMatchesFiniteDifferences)
 
 INSTANTIATE_TEST_SUITE_P(StretchShearBend, ClothTerms, ::testing::Values(0, 1, 2));
 
+TEST(ClothEnergy, StiffnessScalesWeighEachEdgeAndHingeAndKeepTheGradient)
+{
+  const MeshData m = tube();
+  dp::TriangleMesh mesh(m.triangles, m.positions.size() / 3);
+  dp::ClothEnergy energy(mesh, m.positions.data(), dp::ClothParameters{1, 0, 1});
+  const std::vector<double> x = jiggle(m.positions, 0.02, 7);
+  const double unscaled = energy.value(x.data());
+  energy.setStiffnessScales(std::vector<double>(mesh.edges().size(), 2.0),
+                            std::vector<double>(mesh.hinges().size(), 2.0));
+  EXPECT_NEAR(energy.value(x.data()), 2 * unscaled, 1e-12 * unscaled);
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> scale(0.0, 3.0);
+  std::vector<double> edges(mesh.edges().size()), hinges(mesh.hinges().size());
+  for (double& s : edges)
+    s = scale(random);
+  for (double& s : hinges)
+    s = scale(random);
+  energy.setStiffnessScales(edges, hinges);
+  expectGradientMatches([&](const double* p, double* g)
+                        { return g ? energy.addGradient(p, g) : energy.value(p); },
+                        x, 1e-5);
+  edges.pop_back();
+  EXPECT_THROW(energy.setStiffnessScales(edges, hinges), std::invalid_argument);
+  EXPECT_THROW(energy.setStiffnessScales({}, std::vector<double>(hinges.size(), -1.0)),
+               std::invalid_argument);
+}
+
 TEST(ClothEnergy, ZeroAtRestWithZeroGradientAndPositiveWhenDeformed)
 {
   const MeshData m = tube();
@@ -275,6 +302,13 @@ TEST(Tracker, RefusesOptionsOutOfRange)
   }
   o = dp::TrackerOptions{};
   o.coverage.weight = -1;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.softening.from = 0.7;
+  o.softening.to = 0.4;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.softening.stretch = std::nan("");
   EXPECT_THROW(make(o), std::invalid_argument);
 }
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The tracker's parts, each alone: the closest-point locator against brute force, every energy
 // term's gradient and Gauss-Newton model against finite differences, the deformation graph
-// (rigid motions, geodesic blending, fitting) and the coarse level's node-space gradient.
+// (rigid motions, geodesic blending, fitting), the coarse level's node-space gradient and the
+// local thickness that softens trunks.
 #include "dp/AnimatedMesh.h"
 #include "dp/ClothEnergy.h"
 #include "dp/SurfaceSampler.h"
@@ -11,6 +12,7 @@
 #include "dp/track/FrameData.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
+#include "dp/track/LocalThickness.h"
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
 
@@ -499,6 +501,83 @@ TEST(GraphRegistration, LimbsBendButDoNotStretch)
     }
   ASSERT_GT(scale, 0);
   EXPECT_LT(worst, 1e-4 * scale);
+}
+
+// A closed lat-long sphere of `radius` around `centre` (rings x segments quads, fans at the poles),
+// appended to `shape`; `inward` turns its faces inward.
+void addSphere(Shape& shape, const double centre[3], double radius, bool inward = false)
+{
+  const std::int64_t rings = 12, segments = 24;
+  const auto first = static_cast<std::int64_t>(shape.positions.size() / 3);
+  const auto put = [&](double polar, double azimuth)
+  {
+    shape.positions.insert(shape.positions.end(),
+                           {centre[0] + radius * std::sin(polar) * std::cos(azimuth),
+                            centre[1] + radius * std::sin(polar) * std::sin(azimuth),
+                            centre[2] + radius * std::cos(polar)});
+  };
+  put(0, 0);
+  for (std::int64_t r = 1; r < rings; ++r)
+    for (std::int64_t s = 0; s < segments; ++s)
+      put(M_PI * static_cast<double>(r) / rings, 2 * M_PI * static_cast<double>(s) / segments);
+  put(M_PI, 0);
+  const std::int64_t south = first + 1 + (rings - 1) * segments;
+  const auto ring = [&](std::int64_t r, std::int64_t s)
+  { return first + 1 + (r - 1) * segments + s % segments; };
+  const auto face = [&](std::int64_t a, std::int64_t b, std::int64_t c)
+  {
+    if (inward)
+      std::swap(b, c);
+    shape.triangles.insert(shape.triangles.end(), {a, b, c});
+  };
+  for (std::int64_t s = 0; s < segments; ++s)
+  {
+    face(first, ring(1, s), ring(1, s + 1));
+    face(south, ring(rings - 1, s + 1), ring(rings - 1, s));
+    for (std::int64_t r = 1; r + 1 < rings; ++r)
+    {
+      face(ring(r, s), ring(r + 1, s), ring(r + 1, s + 1));
+      face(ring(r, s), ring(r + 1, s + 1), ring(r, s + 1));
+    }
+  }
+}
+
+TEST(LocalThickness, FindsEachPartsRadiusWhicheverWayItsFacesTurn)
+{
+  // A thin part and a thick one far apart: each vertex's inner ball is its own sphere (within
+  // 10 %: area-weighted normals on a lat-long mesh lean a few degrees).
+  for (const bool inward : {false, true})
+  {
+    Shape shape;
+    const double thin[3] = {0, 0, 0}, thick[3] = {2, 0, 0};
+    addSphere(shape, thin, 0.1, inward);
+    const std::size_t thinVertices = shape.positions.size() / 3;
+    addSphere(shape, thick, 0.4, inward);
+    const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+    const std::vector<double> radius = dp::medialRadii(mesh, shape.positions.data(), 1.0);
+    ASSERT_EQ(radius.size(), mesh.numberOfVertices());
+    for (std::size_t v = 0; v < radius.size(); ++v)
+      EXPECT_NEAR(radius[v], v < thinVertices ? 0.1 : 0.4, v < thinVertices ? 0.01 : 0.04)
+          << "vertex " << v << (inward ? " (faces turned inward)" : "");
+  }
+}
+
+TEST(LocalThickness, AnOpenTubesRadiusIsItsOwn)
+{
+  // The bending tube (radius 0.1 here) closed by nothing: balls stop at the tube's own far
+  // side, so the radius is the tube's; the cap `largest` bounds balls that meet nothing.
+  const Shape shape = tube();
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  const std::vector<double> radius = dp::medialRadii(mesh, shape.positions.data(), 5.0, 0);
+  std::vector<double> sorted = radius;
+  std::sort(sorted.begin(), sorted.end());
+  const double median = sorted[sorted.size() / 2];
+  double tubeRadius = 0;
+  const std::size_t n = mesh.numberOfVertices();
+  for (std::size_t v = 0; v < n; ++v)
+    tubeRadius += std::hypot(shape.positions[3 * v], shape.positions[3 * v + 1]) / n;
+  EXPECT_NEAR(median, tubeRadius, 0.05 * tubeRadius);
+  EXPECT_LE(sorted.back(), 5.0);
 }
 
 } // namespace

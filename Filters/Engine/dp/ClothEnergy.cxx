@@ -177,6 +177,24 @@ void ClothEnergy::setRestState(ClothRestState rest)
   Rest = std::move(rest);
 }
 
+void ClothEnergy::setStiffnessScales(std::vector<double> edgeStretch, std::vector<double> hingeBend)
+{
+  auto check = [](const std::vector<double>& scales, std::size_t size, const char* what)
+  {
+    if (!scales.empty() && scales.size() != size)
+      throw std::invalid_argument(std::string("stiffness scales: ") +
+                                  std::to_string(scales.size()) + " for " + std::to_string(size) +
+                                  " " + what);
+    for (const double s : scales)
+      if (!(s >= 0) || !std::isfinite(s))
+        throw std::invalid_argument("stiffness scales must be non-negative numbers");
+  };
+  check(edgeStretch, Mesh->edges().size(), "edges");
+  check(hingeBend, Mesh->hinges().size(), "hinges");
+  StretchScale = std::move(edgeStretch);
+  BendScale = std::move(hingeBend);
+}
+
 ClothRestState ClothRestState::blend(const ClothRestState& a, const ClothRestState& b, double t)
 {
   ClothRestState out = a;
@@ -241,7 +259,7 @@ void ClothEnergy::forEachTerm(const double* x,
       const V3 u = l > 0 ? (1.0 / (l * L)) * d : V3{0, 0, 0};
       put(0, edges[e][1], u);
       put(1, edges[e][0], -1.0 * u);
-      finish(K.stretch);
+      finish(StretchScale.empty() ? K.stretch : K.stretch * StretchScale[e]);
     }
   // Shear: r = theta - theta0 at each triangle corner.
   term.count = 3;
@@ -277,7 +295,7 @@ void ClothEnergy::forEachTerm(const double* x,
       term.residual = cosine - Rest.cosine[h];
       for (int k = 0; k < 4; ++k)
         put(k, v[k], gh[k]);
-      finish(K.bend * HingeWeight[h]);
+      finish(K.bend * HingeWeight[h] * (BendScale.empty() ? 1.0 : BendScale[h]));
     }
 }
 

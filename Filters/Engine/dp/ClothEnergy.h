@@ -85,6 +85,10 @@ public:
    *  parameter rule and the units still hold. */
   void setRestState(ClothRestState rest);
   const ClothRestState& restState() const { return Rest; }
+  /** Scales k_st edge by edge and k_ben hinge by hinge (a stiffer or softer region); empty
+   *  vectors are all 1. Throws std::invalid_argument for sizes other than the mesh's or
+   *  negative or non-finite scales. */
+  void setStiffnessScales(std::vector<double> edgeStretch, std::vector<double> hingeBend);
 
   const std::vector<double>& vertexMass() const { return Mass; }
   double lengthScale() const { return L; }
@@ -96,8 +100,10 @@ private:
   ClothParameters K;
   double L = 1.0;
   ClothRestState Rest;
-  std::vector<double> HingeWeight; // per hinge
-  std::vector<double> Mass;        // per vertex
+  std::vector<double> HingeWeight;  // per hinge
+  std::vector<double> StretchScale; // per edge; empty: 1
+  std::vector<double> BendScale;    // per hinge; empty: 1
+  std::vector<double> Mass;         // per vertex
 };
 
 } // namespace dp

@@ -9,6 +9,7 @@
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
+#include "dp/track/LocalThickness.h"
 #include "dp/track/MotionPredictor.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
@@ -21,6 +22,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -68,8 +71,44 @@ void validate(const TrackerOptions& o)
   check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
   check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
   check(nonNegative(o.graph.stretchWeight), "graph stretch weight (>= 0)");
+  const ThicknessSoftening& soft = o.softening;
+  check(nonNegative(soft.stretch) && nonNegative(soft.bend),
+        "thickness softening stiffness factors (>= 0)");
+  check(nonNegative(soft.from) && soft.to > soft.from && std::isfinite(soft.to),
+        "thickness softening range (0 <= from < to)");
   check(o.recovery.reach > 0 && std::isfinite(o.recovery.reach), "recovery reach (> 0)");
   check(nonNegative(o.recovery.margin), "failure margin (>= 0)");
+}
+
+// ThicknessSoftening's stiffness factors: per vertex a softness in [0, 1] from its medial radius
+// over the template's 90th percentile (smoothstep between `from` and `to`), per edge the mean of
+// its ends', per hinge that of its shared edge.
+void softenThickParts(ClothEnergy& cloth, const TriangleMesh& mesh, const double* positions,
+                      const ThicknessSoftening& soft)
+{
+  if (soft.stretch == 1.0 && soft.bend == 1.0)
+    return;
+  const std::size_t n = mesh.numberOfVertices();
+  std::vector<double> radius =
+      medialRadii(mesh, positions, 0.5 * boundingBoxDiagonal(positions, n));
+  std::vector<double> sorted = radius;
+  const auto rank = sorted.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(n - 1));
+  std::nth_element(sorted.begin(), rank, sorted.end());
+  const double reference = *rank;
+  std::vector<double> softness(n);
+  for (std::size_t v = 0; v < n; ++v)
+  {
+    const double s =
+        std::clamp((radius[v] / reference - soft.from) / (soft.to - soft.from), 0.0, 1.0);
+    softness[v] = s * s * (3 - 2 * s);
+  }
+  const auto blend = [](double factor, double s) { return 1.0 + s * (factor - 1.0); };
+  std::vector<double> stretch, bend;
+  for (const auto& e : mesh.edges())
+    stretch.push_back(blend(soft.stretch, 0.5 * (softness[e[0]] + softness[e[1]])));
+  for (const auto& h : mesh.hinges())
+    bend.push_back(blend(soft.bend, 0.5 * (softness[h[0]] + softness[h[1]])));
+  cloth.setStiffnessScales(std::move(stretch), std::move(bend));
 }
 
 double elapsed(std::chrono::steady_clock::time_point since)
@@ -194,6 +233,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
 {
   validate(options);
   TemplateRest = Cloth.restState();
+  softenThickParts(Cloth, Mesh, Template.data(), options.softening);
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
   P->Newton = std::make_unique<GaussNewtonSolver>(Mesh.numberOfVertices(), finePairs(Mesh));
   if (options.graph.enabled)
