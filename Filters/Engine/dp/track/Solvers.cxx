@@ -73,6 +73,88 @@ Eigen::VectorXd GaussNewtonSolver::precondition(const Eigen::VectorXd& r) const
   return Eigen::Map<const Eigen::VectorXd>(z.data(), 3 * n);
 }
 
+namespace
+{
+// E at `trial`; the distance term (when given) per vertex into `dataAtTrial`, for the blame.
+double energyAt(const std::vector<double>& trial, const std::vector<EnergyTerm*>& terms,
+                const DistanceTerm* distance, std::vector<double>& dataAtTrial)
+{
+  double energy = 0;
+  for (const EnergyTerm* t : terms)
+  {
+    if (t != distance)
+    {
+      energy += t->evaluate(trial.data(), nullptr);
+      continue;
+    }
+    distance->vertexValues(trial.data(), dataAtTrial.data());
+    for (double value : dataAtTrial)
+      energy += value;
+  }
+  return energy;
+}
+
+// After a rejected step: damps the vertices whose distance term at the trial exceeds the model's
+// promise by a fifth of the shortfall (they sit on a ridge of the field). False when none did.
+bool blameVertices(const DistanceTerm* distance, const Eigen::VectorXd& step,
+                   const std::vector<double>& dataAtTrial, double shortfall,
+                   std::vector<double>& vertexDamping)
+{
+  bool blamed = false;
+  for (std::size_t v = 0; distance && v < vertexDamping.size() && shortfall > 0; ++v)
+  {
+    const double c = distance->stiffness(v);
+    if (c == 0)
+      continue;
+    if (dataAtTrial[v] - distance->promised(v, &step[static_cast<Eigen::Index>(3 * v)]) >
+        0.2 * shortfall)
+    {
+      vertexDamping[v] = 10 * std::max(vertexDamping[v], c);
+      blamed = true;
+    }
+  }
+  return blamed;
+}
+} // namespace
+
+double GaussNewtonSolver::buildModel(const std::vector<double>& x,
+                                     const std::vector<EnergyTerm*>& terms,
+                                     Eigen::VectorXd& gradient)
+{
+  for (EnergyTerm* t : terms)
+    t->linearise(x.data());
+  Hessian.setZero();
+  gradient.setZero();
+  double energy = 0;
+  for (const EnergyTerm* t : terms)
+    energy += t->addModel(x.data(), Hessian, gradient.data());
+  return energy;
+}
+
+Eigen::VectorXd GaussNewtonSolver::dampedStep(const Eigen::VectorXd& gradient,
+                                              const Eigen::VectorXd& shift, bool factorise)
+{
+  Hessian.addToDiagonal(shift);
+  if (factorise)
+  {
+    const auto P = Hessian.traceMatrix();
+    if (!Analysed)
+    {
+      Preconditioner.analyzePattern(P);
+      Analysed = true;
+    }
+    Preconditioner.factorize(P);
+  }
+  const Eigen::VectorXd step =
+      Preconditioner.info() == Eigen::Success
+          ? conjugateGradients(
+                Hessian.matrix(), -gradient,
+                [&](const Eigen::VectorXd& r) { return precondition(r); }, StepTolerance, 200)
+          : Eigen::VectorXd(-gradient.cwiseQuotient(shift));
+  Hessian.addToDiagonal(-shift);
+  return step;
+}
+
 int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
                              const DistanceTerm* distance, const SolveSettings& settings)
 {
@@ -85,13 +167,7 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
   int iteration = 0;
   for (; iteration < settings.maxIterations; ++iteration)
   {
-    for (EnergyTerm* t : terms)
-      t->linearise(x.data());
-    Hessian.setZero();
-    gradient.setZero();
-    double energyAtX = 0;
-    for (const EnergyTerm* t : terms)
-      energyAtX += t->addModel(x.data(), Hessian, gradient.data());
+    const double energyAtX = buildModel(x, terms, gradient);
     const double meanDiagonal = std::max(Hessian.diagonal().mean(), 1e-300);
 
     // One preconditioner per iteration, at the damping of its first attempt; later attempts
@@ -105,43 +181,14 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
       for (std::size_t v = 0; v < nv; ++v)
         shift.segment<3>(static_cast<Eigen::Index>(3 * v))
             .setConstant(damping * meanDiagonal + vertexDamping[v]);
-      Hessian.addToDiagonal(shift);
-      if (attempt == 0)
-      {
-        const auto P = Hessian.traceMatrix();
-        if (!Analysed)
-        {
-          Preconditioner.analyzePattern(P);
-          Analysed = true;
-        }
-        Preconditioner.factorize(P);
-      }
-      const Eigen::VectorXd step =
-          Preconditioner.info() == Eigen::Success
-              ? conjugateGradients(
-                    Hessian.matrix(), -gradient,
-                    [&](const Eigen::VectorXd& r) { return precondition(r); }, StepTolerance, 200)
-              : Eigen::VectorXd(-gradient.cwiseQuotient(shift));
-      Hessian.addToDiagonal(-shift);
+      const Eigen::VectorXd step = dampedStep(gradient, shift, attempt == 0);
       for (std::size_t i = 0; i < x.size(); ++i)
         trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
       // The decrease the quadratic model promises: -(gradient.step + step.H.step / 2).
       const double predicted =
           -(gradient.dot(step) +
             0.5 * step.dot(Hessian.matrix().selfadjointView<Eigen::Lower>() * step));
-      double energyAtTrial = 0;
-      for (const EnergyTerm* t : terms)
-      {
-        if (t != distance)
-        {
-          energyAtTrial += t->evaluate(trial.data(), nullptr);
-          continue;
-        }
-        distance->vertexValues(trial.data(), dataAtTrial.data());
-        for (double value : dataAtTrial)
-          energyAtTrial += value;
-      }
-      const double actual = energyAtX - energyAtTrial;
+      const double actual = energyAtX - energyAt(trial, terms, distance, dataAtTrial);
       if (predicted > 0 && actual > 0.1 * predicted)
       {
         accepted = true;
@@ -154,22 +201,7 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
                     step.cwiseAbs().maxCoeff() <= settings.settledStep;
         continue;
       }
-      // Which vertices broke the promise: their distance term at the trial against the model's.
-      const double shortfall = predicted - actual;
-      bool blamed = false;
-      for (std::size_t v = 0; distance && v < nv && shortfall > 0; ++v)
-      {
-        const double c = distance->stiffness(v);
-        if (c == 0)
-          continue;
-        if (dataAtTrial[v] - distance->promised(v, &step[static_cast<Eigen::Index>(3 * v)]) >
-            0.2 * shortfall)
-        {
-          vertexDamping[v] = 10 * std::max(vertexDamping[v], c);
-          blamed = true;
-        }
-      }
-      if (!blamed)
+      if (!blameVertices(distance, step, dataAtTrial, predicted - actual, vertexDamping))
         damping *= 10;
     }
     // Settled: decide the terms' choices again at the new shape (at most `decisions` times); go

@@ -60,6 +60,13 @@ public:
 
 private:
   Eigen::VectorXd precondition(const Eigen::VectorXd& r) const;
+  /** Linearises the terms at x and fills Hessian and gradient with their model; returns E(x). */
+  double buildModel(const std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
+                    Eigen::VectorXd& gradient);
+  /** The step of the model damped by `shift` (on the diagonal): conjugate gradients
+   *  preconditioned by the trace matrix, factorised again when `factorise`. */
+  Eigen::VectorXd dampedStep(const Eigen::VectorXd& gradient, const Eigen::VectorXd& shift,
+                             bool factorise);
 
   detail::BlockSparseMatrix Hessian;
   // P (x) I_3, P the matrix of the blocks' traces / 3: a rotation-invariant, Laplacian-like
