@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDeformableTrackFilter.h"
 
-#include "dp/DistanceField.h"
+#include "dp/NormalEstimation.h"
 #include "dp/SurfaceReconstruction.h"
 #include "dp/Tracker.h"
 #include "vtkDPPointSetAccess.h"

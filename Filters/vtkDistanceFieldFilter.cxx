@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDistanceFieldFilter.h"
 
-#include "dp/DistanceField.h" // estimateNormals
+#include "dp/DistanceField.h"
+#include "dp/NormalEstimation.h"
 #include "dp/DistanceImage.h"
 #include "vtkDPPointSetAccess.h"
 

@@ -6,7 +6,7 @@
 #pragma once
 
 #include "dp/AnimatedMesh.h"
-#include "dp/DistanceField.h"
+#include "dp/NormalEstimation.h"
 #include "dp/SurfaceReconstruction.h"
 #include "dp/SurfaceSampler.h"
 

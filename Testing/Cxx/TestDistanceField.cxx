@@ -3,6 +3,7 @@
 // differences, continuity across voxel faces, out-of-band behaviour, bad input, and normals.
 #include "dp/AnimatedMesh.h"
 #include "dp/DistanceField.h"
+#include "dp/NormalEstimation.h"
 #include "dp/SurfaceSampler.h"
 
 #include <gtest/gtest.h>

@@ -12,14 +12,11 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_group.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
 #include <mutex>
-#include <queue>
 #include <string>
 
 namespace dp
@@ -495,127 +492,6 @@ void DistanceField::sampleMany(const double* positions, std::size_t count,
                       for (std::size_t i = range.begin(); i != range.end(); ++i)
                         out[i] = sample(positions + 3 * i);
                     });
-}
-
-std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours,
-                                   std::vector<std::uint32_t>* parts)
-{
-  // 1 - |cos| of the angle beyond which orientation carried from one point to the next starts a
-  // new part (60 degrees).
-  constexpr float WeakOrientation = 0.5f;
-  std::vector<float> normals(3 * count, 0.0f);
-  if (parts)
-    parts->assign(count, 0);
-  if (count == 0)
-    return normals;
-  const std::size_t k = std::max<std::size_t>(3, std::min(neighbours, count));
-  const detail::KdTree tree(points, count);
-  std::vector<std::uint32_t> graph(count * k);
-  std::vector<std::size_t> degree(count);
-
-  // Local PCA: the normal is the eigenvector of the smallest eigenvalue of the covariance.
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
-                    [&](const tbb::blocked_range<std::size_t>& range)
-                    {
-                      std::vector<double> d2(k);
-                      for (std::size_t i = range.begin(); i != range.end(); ++i)
-                      {
-                        std::uint32_t* ids = &graph[i * k];
-                        degree[i] = tree.nearest(points + 3 * i, k, ids, d2.data());
-                        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-                        for (std::size_t j = 0; j < degree[i]; ++j)
-                          mean += Eigen::Vector3d(points + 3 * ids[j]);
-                        mean /= static_cast<double>(degree[i]);
-                        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-                        for (std::size_t j = 0; j < degree[i]; ++j)
-                        {
-                          const Eigen::Vector3d d = Eigen::Vector3d(points + 3 * ids[j]) - mean;
-                          covariance += d * d.transpose();
-                        }
-                        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-                        const Eigen::Vector3d n = solver.eigenvectors().col(0);
-                        for (int c = 0; c < 3; ++c)
-                          normals[3 * i + c] = static_cast<float>(n[c]);
-                      }
-                    });
-
-  // Orientation: Prim's spanning tree on the neighbour graph with weight 1 - |n_i . n_j| plus
-  // |n_i . d_ij| / 2 (d_ij the unit step from point i to j; halved, as thin parts such as legs
-  // step off their tangent planes too: horse-gallop), so orientation crosses the flattest,
-  // most reliable edges first, and last a step along the normal: from one side of a thin gap to
-  // the other (a hand on the body, touching thighs), where the normals are opposite but |n_i .
-  // n_j| alone would call the edge the surest of all.
-  auto dot = [&](std::size_t a, std::size_t b)
-  {
-    return normals[3 * a] * normals[3 * b] + normals[3 * a + 1] * normals[3 * b + 1] +
-           normals[3 * a + 2] * normals[3 * b + 2];
-  };
-  auto weight = [&](std::size_t a, std::size_t b)
-  {
-    double d[3], length2 = 0, along = 0;
-    for (int c = 0; c < 3; ++c)
-    {
-      d[c] = points[3 * b + c] - points[3 * a + c];
-      length2 += d[c] * d[c];
-      along += d[c] * normals[3 * a + c];
-    }
-    const double across = length2 > 0 ? std::abs(along) / std::sqrt(length2) : 0.0;
-    return static_cast<float>(1.0 - std::abs(dot(a, b)) + 0.5 * across);
-  };
-  std::vector<char> done(count, 0);
-  // Seeds in order of decreasing x, so each connected part starts at its largest-x point.
-  std::vector<std::uint32_t> order(count);
-  for (std::size_t i = 0; i < count; ++i)
-    order[i] = static_cast<std::uint32_t>(i);
-  std::sort(order.begin(), order.end(),
-            [&](std::uint32_t a, std::uint32_t b) { return points[3 * a] > points[3 * b]; });
-  using Edge = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>; // weight, (from, to)
-  std::priority_queue<Edge, std::vector<Edge>, std::greater<Edge>> queue;
-  std::uint32_t part = 0;
-  for (std::uint32_t seed : order)
-  {
-    if (done[seed])
-      continue;
-    if (parts)
-      (*parts)[seed] = part;
-    if (normals[3 * seed] < 0)
-      for (int c = 0; c < 3; ++c)
-        normals[3 * seed + c] = -normals[3 * seed + c];
-    done[seed] = 1;
-    auto push = [&](std::uint32_t from)
-    {
-      for (std::size_t j = 0; j < degree[from]; ++j)
-      {
-        const std::uint32_t to = graph[from * k + j];
-        if (!done[to])
-          queue.push({weight(from, to), {from, to}});
-      }
-    };
-    push(seed);
-    while (!queue.empty())
-    {
-      const auto [from, to] = queue.top().second;
-      const float cost = queue.top().first;
-      queue.pop();
-      if (done[to])
-        continue;
-      if (dot(from, to) < 0)
-        for (int c = 0; c < 3; ++c)
-          normals[3 * to + c] = -normals[3 * to + c];
-      done[to] = 1;
-      if (parts)
-      {
-        // Orientation carried across a sharp turn of the normals is the least sure: a new part.
-        if (cost > WeakOrientation)
-          (*parts)[to] = ++part;
-        else
-          (*parts)[to] = (*parts)[from];
-      }
-      push(to);
-    }
-    ++part;
-  }
-  return normals;
 }
 
 } // namespace dp

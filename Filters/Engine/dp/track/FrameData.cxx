@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameData.h"
 
+#include "dp/NormalEstimation.h"
 #include "dp/SurfaceSampler.h"
 
 #include <algorithm>

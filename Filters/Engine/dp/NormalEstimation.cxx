@@ -1,0 +1,177 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/NormalEstimation.h"
+
+#include "dp/detail/KdTree.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+#include <utility>
+
+namespace dp
+{
+namespace
+{
+// 1 - |cos| of the angle beyond which orientation carried from one point to the next starts a
+// new part (60 degrees).
+constexpr float WeakOrientation = 0.5f;
+
+// Each point's k nearest points (itself included): ids[i * k + j] for j < degree[i].
+struct NeighbourGraph
+{
+  std::size_t k = 0;
+  std::vector<std::uint32_t> ids;
+  std::vector<std::size_t> degree;
+};
+
+// Local PCA: each normal is the eigenvector of the smallest eigenvalue of the covariance of the
+// point's neighbours (unoriented). Returns the neighbour graph it used.
+NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k,
+                          std::vector<float>& normals)
+{
+  const detail::KdTree tree(points, count);
+  NeighbourGraph graph{k, std::vector<std::uint32_t>(count * k), std::vector<std::size_t>(count)};
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
+                    [&](const tbb::blocked_range<std::size_t>& range)
+                    {
+                      std::vector<double> d2(k);
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                      {
+                        std::uint32_t* ids = &graph.ids[i * k];
+                        const std::size_t degree = tree.nearest(points + 3 * i, k, ids, d2.data());
+                        graph.degree[i] = degree;
+                        Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+                        for (std::size_t j = 0; j < degree; ++j)
+                          mean += Eigen::Vector3d(points + 3 * ids[j]);
+                        mean /= static_cast<double>(degree);
+                        Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+                        for (std::size_t j = 0; j < degree; ++j)
+                        {
+                          const Eigen::Vector3d d = Eigen::Vector3d(points + 3 * ids[j]) - mean;
+                          covariance += d * d.transpose();
+                        }
+                        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+                        const Eigen::Vector3d n = solver.eigenvectors().col(0);
+                        for (int c = 0; c < 3; ++c)
+                          normals[3 * i + c] = static_cast<float>(n[c]);
+                      }
+                    });
+  return graph;
+}
+
+// Orientation: Prim's spanning tree on the neighbour graph with weight 1 - |n_i . n_j| plus
+// |n_i . d_ij| / 2 (d_ij the unit step from point i to j; halved, as thin parts such as legs
+// step off their tangent planes too: horse-gallop), so orientation crosses the flattest, most
+// reliable edges first, and last a step along the normal: from one side of a thin gap to the
+// other (a hand on the body, touching thighs), where the normals are opposite but |n_i . n_j|
+// alone would call the edge the surest of all.
+class SpanningTreeOrientation
+{
+public:
+  SpanningTreeOrientation(const double* points, const NeighbourGraph& graph,
+                          std::vector<float>& normals, std::vector<std::uint32_t>* parts)
+      : Points(points), Graph(graph), Normals(normals), Parts(parts), Done(graph.degree.size(), 0)
+  {
+  }
+
+  /** Orients the part of `seed` (if not done yet) from it, its normal made to point to +x. */
+  void orientPartOf(std::uint32_t seed)
+  {
+    if (Done[seed])
+      return;
+    if (Parts)
+      (*Parts)[seed] = Part;
+    if (Normals[3 * seed] < 0)
+      flip(seed);
+    Done[seed] = 1;
+    push(seed);
+    while (!Queue.empty())
+    {
+      const auto [from, to] = Queue.top().second;
+      const float cost = Queue.top().first;
+      Queue.pop();
+      if (Done[to])
+        continue;
+      if (dot(from, to) < 0)
+        flip(to);
+      Done[to] = 1;
+      // Orientation carried across a sharp turn of the normals is the least sure: a new part.
+      if (Parts)
+        (*Parts)[to] = cost > WeakOrientation ? ++Part : (*Parts)[from];
+      push(to);
+    }
+    ++Part;
+  }
+
+private:
+  float dot(std::size_t a, std::size_t b) const
+  {
+    return Normals[3 * a] * Normals[3 * b] + Normals[3 * a + 1] * Normals[3 * b + 1] +
+           Normals[3 * a + 2] * Normals[3 * b + 2];
+  }
+  float weight(std::size_t a, std::size_t b) const
+  {
+    double d[3], length2 = 0, along = 0;
+    for (int c = 0; c < 3; ++c)
+    {
+      d[c] = Points[3 * b + c] - Points[3 * a + c];
+      length2 += d[c] * d[c];
+      along += d[c] * Normals[3 * a + c];
+    }
+    const double across = length2 > 0 ? std::abs(along) / std::sqrt(length2) : 0.0;
+    return static_cast<float>(1.0 - std::abs(dot(a, b)) + 0.5 * across);
+  }
+  void flip(std::size_t i)
+  {
+    for (int c = 0; c < 3; ++c)
+      Normals[3 * i + c] = -Normals[3 * i + c];
+  }
+  void push(std::uint32_t from)
+  {
+    for (std::size_t j = 0; j < Graph.degree[from]; ++j)
+    {
+      const std::uint32_t to = Graph.ids[from * Graph.k + j];
+      if (!Done[to])
+        Queue.push({weight(from, to), {from, to}});
+    }
+  }
+
+  const double* Points;
+  const NeighbourGraph& Graph;
+  std::vector<float>& Normals;
+  std::vector<std::uint32_t>* Parts;
+  std::vector<char> Done;
+  using Edge = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>; // weight, (from, to)
+  std::priority_queue<Edge, std::vector<Edge>, std::greater<Edge>> Queue;
+  std::uint32_t Part = 0;
+};
+} // namespace
+
+std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours,
+                                   std::vector<std::uint32_t>* parts)
+{
+  std::vector<float> normals(3 * count, 0.0f);
+  if (parts)
+    parts->assign(count, 0);
+  if (count == 0)
+    return normals;
+  const std::size_t k = std::max<std::size_t>(3, std::min(neighbours, count));
+  const NeighbourGraph graph = pcaNormals(points, count, k, normals);
+  // Seeds in order of decreasing x, so each connected part starts at its largest-x point.
+  std::vector<std::uint32_t> order(count);
+  for (std::size_t i = 0; i < count; ++i)
+    order[i] = static_cast<std::uint32_t>(i);
+  std::sort(order.begin(), order.end(),
+            [&](std::uint32_t a, std::uint32_t b) { return points[3 * a] > points[3 * b]; });
+  SpanningTreeOrientation orientation(points, graph, normals, parts);
+  for (std::uint32_t seed : order)
+    orientation.orientPartOf(seed);
+  return normals;
+}
+
+} // namespace dp
