@@ -77,6 +77,12 @@ struct DistanceField::Impl
     inBand = Lazy && d2 <= Band * Band;
     return index;
   }
+
+  /** Eager mode: the band's voxels with their nearest points (and the kd-tree). Throws
+   *  GridTooLarge, before allocating the band, when it would exceed `maxActiveVoxels`. */
+  void buildGrid(std::size_t count, std::size_t maxActiveVoxels);
+  /** Sets every active voxel's nearest point; switches off those beyond the band. */
+  void fillNearest();
 };
 
 namespace
@@ -124,6 +130,95 @@ DistanceField::~DistanceField() = default;
 DistanceField::DistanceField(DistanceField&&) noexcept = default;
 DistanceField& DistanceField::operator=(DistanceField&&) noexcept = default;
 
+namespace
+{
+// The largest |coordinate| of the points; throws naming the first point with a NaN or infinite
+// coordinate.
+double largestCoordinate(const double* points, std::size_t count)
+{
+  double largest = 0;
+  for (std::size_t i = 0; i < 3 * count; ++i)
+  {
+    if (!std::isfinite(points[i]))
+      throw std::invalid_argument("point " + std::to_string(i / 3) +
+                                  " has a NaN or infinite coordinate");
+    largest = std::max(largest, std::abs(points[i]));
+  }
+  return largest;
+}
+} // namespace
+
+void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxels)
+{
+  // A voxel whose centre is within the band of a point p lies at most `reach` voxels
+  // (Chebyshev) from the voxel holding p: a point is at least (k - 1/2) voxels from a centre
+  // k voxels away.
+  const int reach = static_cast<int>(std::floor(Band / Voxel + 0.5));
+  initializeOpenVDB();
+  Grid = IndexGrid::create(-1);
+  // The grid keeps OpenVDB's identity transform: coordinates are mapped to voxels here, and
+  // OpenVDB refuses linear transforms whose scale cubed is below 1e-8 (a 2 mm voxel).
+  Grid->setName("NearestPointIndex");
+  IndexTree& tree = Grid->tree();
+
+  // Topology: the voxels holding a point, dilated (26-neighbourhood) by `reach`.
+  {
+    auto acc = Grid->getAccessor();
+    for (std::size_t i = 0; i < count; ++i)
+    {
+      const double* p = &Points[3 * i];
+      acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / Voxel)),
+                           static_cast<int>(std::lround(p[1] / Voxel)),
+                           static_cast<int>(std::lround(p[2] / Voxel))));
+    }
+  }
+  // Memory guard before dilating: nothing proportional to the band is allocated when the
+  // settings are absurd.
+  const double bound = activeVoxelUpperBound(tree, reach);
+  if (bound > static_cast<double>(maxActiveVoxels))
+    throw GridTooLarge("a distance field with VoxelSize " + std::to_string(Voxel) +
+                       " and BandWidth " + std::to_string(Band) + " needs up to " +
+                       std::to_string(static_cast<unsigned long long>(bound)) +
+                       " voxels, over the limit of " + std::to_string(maxActiveVoxels) +
+                       ": use a larger voxel size or a narrower band");
+  // The kd-tree builds while the band is dilated.
+  tbb::task_group kdBuild;
+  kdBuild.run([&] { Tree = std::make_unique<detail::KdTree>(Points.data(), count); });
+  if (reach > 0)
+    openvdb::tools::dilateActiveValues(tree, reach, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                       openvdb::tools::IGNORE_TILES);
+  kdBuild.wait();
+  fillNearest();
+}
+
+void DistanceField::Impl::fillNearest()
+{
+  // The exact nearest point of every voxel centre (kd-tree), in parallel over leaves; voxels
+  // farther than the band from every point are switched off and pruned.
+  IndexTree& tree = Grid->tree();
+  const double band2 = Band * Band;
+  openvdb::tree::LeafManager<IndexTree> leaves(tree);
+  leaves.foreach (
+      [&](IndexTree::LeafNodeType& leaf, std::size_t)
+      {
+        const auto active = leaf.getValueMask(); // a copy: the loop switches voxels off
+        for (auto it = active.beginOn(); it; ++it)
+        {
+          const openvdb::Index offset = it.pos();
+          const Coord c = leaf.offsetToGlobalCoord(offset);
+          const double centre[3] = {Voxel * c.x(), Voxel * c.y(), Voxel * c.z()};
+          double d2 = 0;
+          const auto index = static_cast<std::int32_t>(Tree->nearest(centre, &d2));
+          if (d2 <= band2)
+            leaf.setValueOnly(offset, index);
+          else
+            leaf.setValueOff(offset, -1);
+        }
+      });
+  openvdb::tools::pruneInactive(tree);
+  Active = static_cast<std::size_t>(tree.activeVoxelCount());
+}
+
 void DistanceField::build(const double* points, std::size_t count,
                           const DistanceFieldOptions& options)
 {
@@ -138,119 +233,28 @@ void DistanceField::build(const double* points, std::size_t count,
   const double band = options.bandWidth == 0 ? 3 * voxel : options.bandWidth;
   if (!(band > 0) || !std::isfinite(band))
     throw std::invalid_argument("BandWidth must be a positive number, got " + std::to_string(band));
-
-  double largest = 0;
-  for (std::size_t i = 0; i < 3 * count; ++i)
-  {
-    if (!std::isfinite(points[i]))
-      throw std::invalid_argument("point " + std::to_string(i / 3) +
-                                  " has a NaN or infinite coordinate");
-    largest = std::max(largest, std::abs(points[i]));
-  }
+  const double largest = largestCoordinate(points, count);
   if ((largest + band) / voxel > 1e9)
     throw GridTooLarge("VoxelSize " + std::to_string(voxel) +
                        " is too small for coordinates up to " + std::to_string(largest) +
                        " (voxel indices would overflow)");
+  if (options.lazy && (largest + band) / voxel > (1 << 20) - 2)
+    throw GridTooLarge("VoxelSize " + std::to_string(voxel) +
+                       " is too small for coordinates up to " + std::to_string(largest) +
+                       " in lazy mode (voxel indices limited to 2^20)");
 
+  // Built aside, then adopted: a build that throws leaves the field as it was.
+  auto next = std::make_unique<Impl>();
+  next->Points.assign(points, points + 3 * count);
+  next->Voxel = voxel;
+  next->Band = band;
+  next->Lazy = options.lazy;
   if (options.lazy)
-  {
-    if ((largest + band) / voxel > (1 << 20) - 2)
-      throw GridTooLarge("VoxelSize " + std::to_string(voxel) +
-                         " is too small for coordinates up to " + std::to_string(largest) +
-                         " in lazy mode (voxel indices limited to 2^20)");
-    Impl next;
-    next.Points.assign(points, points + 3 * count);
-    next.Voxel = voxel;
-    next.Band = band;
-    next.Lazy = true;
-    next.Tree = std::make_unique<detail::KdTree>(next.Points.data(), count);
-    P->Visited.clear();
-    P->Points = std::move(next.Points);
-    P->Voxel = voxel;
-    P->Band = band;
-    P->Lazy = true;
-    P->Grid = nullptr;
-    P->Active = 0;
-    P->Tree = std::move(next.Tree); // its adaptor points into the moved vector's buffer
-    return;
-  }
-
-  // A voxel whose centre is within the band of a point p lies at most `reach` voxels
-  // (Chebyshev) from the voxel holding p: a point is at least (k - 1/2) voxels from a centre
-  // k voxels away.
-  const int reach = static_cast<int>(std::floor(band / voxel + 0.5));
-
-  initializeOpenVDB();
-  Impl next;
-  next.Points.assign(points, points + 3 * count);
-  next.Voxel = voxel;
-  next.Band = band;
-  next.Grid = IndexGrid::create(-1);
-  // The grid keeps OpenVDB's identity transform: coordinates are mapped to voxels here, and
-  // OpenVDB refuses linear transforms whose scale cubed is below 1e-8 (a 2 mm voxel).
-  next.Grid->setName("NearestPointIndex");
-  IndexTree& tree = next.Grid->tree();
-
-  // Topology: the voxels holding a point, dilated (26-neighbourhood) by `reach`.
-  {
-    auto acc = next.Grid->getAccessor();
-    for (std::size_t i = 0; i < count; ++i)
-    {
-      const double* p = &next.Points[3 * i];
-      acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / voxel)),
-                           static_cast<int>(std::lround(p[1] / voxel)),
-                           static_cast<int>(std::lround(p[2] / voxel))));
-    }
-  }
-  // Memory guard before dilating: nothing proportional to the band is allocated when the
-  // settings are absurd.
-  const double bound = activeVoxelUpperBound(tree, reach);
-  if (bound > static_cast<double>(options.maxActiveVoxels))
-    throw GridTooLarge("a distance field with VoxelSize " + std::to_string(voxel) +
-                       " and BandWidth " + std::to_string(band) + " needs up to " +
-                       std::to_string(static_cast<unsigned long long>(bound)) +
-                       " voxels, over the limit of " + std::to_string(options.maxActiveVoxels) +
-                       ": use a larger voxel size or a narrower band");
-  // The kd-tree builds while the band is dilated.
-  tbb::task_group kdBuild;
-  kdBuild.run([&] { next.Tree = std::make_unique<detail::KdTree>(next.Points.data(), count); });
-  if (reach > 0)
-    openvdb::tools::dilateActiveValues(tree, reach, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
-  kdBuild.wait();
-
-  // Values: the exact nearest point of every voxel centre (kd-tree), in parallel over leaves;
-  // voxels farther than the band from every point are switched off and pruned.
-  const double band2 = band * band;
-  openvdb::tree::LeafManager<IndexTree> leaves(tree);
-  leaves.foreach (
-      [&](IndexTree::LeafNodeType& leaf, std::size_t)
-      {
-        const auto active = leaf.getValueMask(); // a copy: the loop switches voxels off
-        for (auto it = active.beginOn(); it; ++it)
-        {
-          const openvdb::Index offset = it.pos();
-          const Coord c = leaf.offsetToGlobalCoord(offset);
-          const double centre[3] = {voxel * c.x(), voxel * c.y(), voxel * c.z()};
-          double d2 = 0;
-          const auto index = static_cast<std::int32_t>(next.Tree->nearest(centre, &d2));
-          if (d2 <= band2)
-            leaf.setValueOnly(offset, index);
-          else
-            leaf.setValueOff(offset, -1);
-        }
-      });
-  openvdb::tools::pruneInactive(tree);
-  next.Active = static_cast<std::size_t>(tree.activeVoxelCount());
-  P->Visited.clear();
-  P->Points = std::move(next.Points);
-  P->Voxel = next.Voxel;
-  P->Band = next.Band;
-  P->Lazy = false;
-  P->Grid = std::move(next.Grid);
-  P->Active = next.Active;
-  P->Tree = std::move(next.Tree);
-  // The kd-tree's adaptor points at next.Points' buffer, which moved along with the vector.
+    next->Tree = std::make_unique<detail::KdTree>(next->Points.data(), count);
+  else
+    next->buildGrid(count, options.maxActiveVoxels);
+  // The kd-tree's adaptor points into next->Points' buffer, which moves along with the Impl.
+  P = std::move(next);
 }
 
 bool DistanceField::empty() const
