@@ -688,11 +688,11 @@ TEST(Tracker, FlagsAFrameItCannotExplainAfterTryingAgain)
 
 TEST(Tracker, KeepsALegThatPassesAnother)
 {
-  // The front foot passes the hind one, 2 cm apart, moving 0.12 a frame (three quarters of a
-  // leg's width): with the paper's energy the passing foot lags onto the other leg's data (5 %
-  // of the surface uncovered, 34 mm); the default tracker keeps both legs within 11 mm. (At 0.16 a
-  // frame it loses the leg too: README, Tracking.)
-  const PassingLegs legs(0.12, 10);
+  // The front foot passes the hind one, 2 cm apart, moving 0.2 a frame (more than a leg's width
+  // of 0.16): with the paper's energy the passing foot lags onto the other leg's data; the default
+  // tracker keeps both legs. (Before the coarse level continued each node's turn about its own
+  // axis, not only its displacement, it lost the leg from 0.16 a frame: README, Tracking.)
+  const PassingLegs legs(0.2, 10);
   const dp::TriangleMesh mesh(legs.triangles(), legs.numberOfVertices());
   dp::SamplerOptions sampling;
   sampling.pointsPerFrame = 8000;
@@ -721,7 +721,7 @@ TEST(Tracker, KeepsALegThatPassesAnother)
   }
   EXPECT_GT(worstUncovered[0], 0.03) << "the paper's energy was expected to lose the foot";
   EXPECT_LT(worstUncovered[1], 0.01) << "the default tracker lost part of a leg";
-  EXPECT_LT(worstError[1], 0.03) << "a leg's vertices were carried off by the other leg";
+  EXPECT_LT(worstError[1], 0.02) << "a leg's vertices were carried off by the other leg";
 }
 
 } // namespace

@@ -322,6 +322,15 @@ TEST(DeformationGraph, MovesRigidlyFitsRigidMotionsAndContinuesThem)
     half.rotation[j] = R;
   const dp::DeformationGraph::State next = dp::extrapolate(graph.identity(), half, graph, 1.0);
   EXPECT_LT((next.rotation[0] - R * R).norm(), 1e-12);
+  // A rigid motion continued is the same motion once more, x -> R (R x + t) + t, for a turn about
+  // a point far from the nodes too (a leg about its hip): not only the rotation continues.
+  const dp::DeformationGraph::State twice = dp::extrapolate(graph.identity(), rigid, graph, 1.0);
+  graph.deform(twice, x.data());
+  for (std::size_t v = 0; v < mesh.numberOfVertices(); ++v)
+  {
+    const Eigen::Vector3d p(&s.positions[3 * v]);
+    ASSERT_LT((Eigen::Vector3d(&x[3 * v]) - (R * (R * p + t) + t)).norm(), 1e-12) << v;
+  }
 }
 
 TEST(DeformationGraph, BlendsAlongTheSurfaceNotAcrossGaps)

@@ -41,6 +41,8 @@ constexpr double FineCoverageReach = 8.0;
 // A frame whose edges grew beyond their template length by more than this many mean edge lengths
 // has a torn limb: its retries start with the coarse level held stiffer.
 constexpr double TearGrowth = 2.0;
+// Robust scale, in voxels, of the distance term that chooses the coarse level's start.
+constexpr double StartChoiceScale = 3.0;
 
 // Throws std::invalid_argument naming the first option out of its range (NaN included).
 void validate(const TrackerOptions& o)
@@ -368,6 +370,27 @@ void Tracker::startState(Start start, Attempt& a) const
   }
 }
 
+void Tracker::preferStraightIfCloser(DistanceTerm& distance, Attempt& a,
+                                     std::vector<double>& x) const
+{
+  // The data decides between a turning and a straight continuation, as the paper's MP decides
+  // along the vertices' extrapolations: the distance term, robust at a few voxels so that the
+  // parts both starts leave far from the data do not decide.
+  DeformationGraph::State straight;
+  P->Predictor.predictState(*P->Graph, 1.0, straight, Extrapolation::Straight);
+  std::vector<double> y(x.size());
+  P->Graph->deform(straight, y.data());
+  distance.setRobustScale(StartChoiceScale * Voxel);
+  distance.decide(x.data());
+  const double turning = distance.evaluate(x.data(), nullptr);
+  distance.decide(y.data());
+  if (distance.evaluate(y.data(), nullptr) < turning)
+  {
+    a.state = std::move(straight);
+    x.swap(y);
+  }
+}
+
 Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
 {
   Attempt a;
@@ -395,6 +418,9 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
     startState(start, a);
     x.resize(Template.size());
     P->Graph->deform(a.state, x.data());
+    if ((start == Start::Predicted || start == Start::Stiff) && Options.motionPrediction &&
+        predictor.hasMotion())
+      preferStraightIfCloser(distance, a, x);
   }
   else
   {

@@ -138,6 +138,10 @@ private:
   /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
    *  frame 0). */
   void startState(Start start, Attempt& a) const;
+  /** Replaces the turning continuation a.state (deformed: x) by the straight one when the data
+   *  are closer to it (MotionPredictor, Extrapolation). */
+  void preferStraightIfCloser(class DistanceTerm& distance, Attempt& a,
+                              std::vector<double>& x) const;
   bool failed(const Attempt& a) const;
   /** The predicted attempt, then the retries while it fails; counts them in `result`. */
   Attempt solveWithRetries(const class FrameData& frame, FrameResult& result);

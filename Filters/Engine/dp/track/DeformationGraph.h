@@ -92,10 +92,20 @@ private:
   double Spacing = 0;
 };
 
+/** How a node's motion is continued: its rotation always turns on by the last step's; its point
+ *  moves on by the last displacement (Straight) or by that displacement turned as well (Turning:
+ *  a rigid motion continued, exact for a limb turning about a joint). */
+enum class Extrapolation
+{
+  Straight,
+  Turning
+};
+
 /** The state one step after `last` if the motion from `before` to `last` went on, scaled by
  *  `share` (1: constant velocity; 0: `last`). */
 DeformationGraph::State extrapolate(const DeformationGraph::State& before,
                                     const DeformationGraph::State& last,
-                                    const DeformationGraph& graph, double share);
+                                    const DeformationGraph& graph, double share,
+                                    Extrapolation kind = Extrapolation::Turning);
 
 } // namespace dp

@@ -74,11 +74,11 @@ MotionPredictor::searchExtrapolations(const std::function<double(const double*)>
 }
 
 bool MotionPredictor::predictState(const DeformationGraph& graph, double share,
-                                   DeformationGraph::State& out) const
+                                   DeformationGraph::State& out, Extrapolation kind) const
 {
   if (States.empty())
     return false;
-  out = States.size() >= 2 ? extrapolate(States[0], States[1], graph, share) : States.back();
+  out = States.size() >= 2 ? extrapolate(States[0], States[1], graph, share, kind) : States.back();
   return true;
 }
 

@@ -8,7 +8,9 @@
  * target, and the start without data) and the paper's motion prediction (MP): the minimum of E
  * along the constant, linear and quadratic extrapolations of the trajectories (a 1-D search on
  * each, at 0.25 .. 1.5 of the step). For the coarse level it continues each graph node's
- * rotation and translation (a limb swinging keeps turning, not only translating).
+ * rotation and the displacement of its point, that displacement turned with the node (a limb
+ * swinging keeps turning about its joint) or not (Extrapolation; the tracker lets the data
+ * choose).
  *
  * Limits: one global step length per frame in MP (not per vertex); a sudden change of motion
  * (a landing) is not foreseen: the coarse level's capture range has to absorb it.
@@ -50,8 +52,10 @@ public:
   searchExtrapolations(const std::function<double(const double*)>& energy) const;
   /** The graph state continued by `share` of the last step (the last state when there is only
    *  one); false when no state is known. */
-  bool predictState(const DeformationGraph& graph, double share,
-                    DeformationGraph::State& out) const;
+  bool predictState(const DeformationGraph& graph, double share, DeformationGraph::State& out,
+                    Extrapolation kind = Extrapolation::Turning) const;
+  /** Whether there are two states to continue (else predictState gives the last). */
+  bool hasMotion() const { return States.size() >= 2; }
   /** The last recorded graph state (null when none). */
   const DeformationGraph::State* lastState() const
   {
