@@ -8,6 +8,7 @@
 #include "FramePlot.h"
 
 #include "dp/AnimatedMesh.h"
+#include "dp/BoundingBox.h"
 #include "dp/SurfaceSampler.h"
 
 #include "vtkCallbackCommand.h"

@@ -4,6 +4,7 @@
 #include "CommandLine.h"
 
 #include "dp/AnimatedMesh.h"
+#include "dp/BoundingBox.h"
 #include "dp/FrameSequence.h"
 #include "dp/SurfaceSampler.h"
 

@@ -19,6 +19,7 @@
 #include "TrackingTruth.h"
 
 #include "dp/AnimatedMesh.h"
+#include "dp/BoundingBox.h"
 #include "dp/PointCloudIO.h"
 #include "dp/SurfaceSampler.h"
 #include "dp/Tracker.h"

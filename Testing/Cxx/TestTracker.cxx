@@ -2,6 +2,7 @@
 // The tracker's energies (gradients against finite differences, rest state, invariances, the
 // subdivision rule) and tracking a generated sequence against its ground truth.
 #include "dp/AnimatedMesh.h"
+#include "dp/BoundingBox.h"
 #include "dp/ClothEnergy.h"
 #include "dp/SurfaceReconstruction.h"
 #include "dp/SurfaceSampler.h"

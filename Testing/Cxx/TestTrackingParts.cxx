@@ -4,6 +4,7 @@
 // (rigid motions, geodesic blending, fitting), the coarse level's node-space gradient and the
 // local thickness that softens trunks.
 #include "dp/AnimatedMesh.h"
+#include "dp/BoundingBox.h"
 #include "dp/ClothEnergy.h"
 #include "dp/SurfaceSampler.h"
 #include "dp/track/CoverageTerm.h"

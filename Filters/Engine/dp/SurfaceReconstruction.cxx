@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/SurfaceReconstruction.h"
 
-#include "dp/SurfaceSampler.h"
+#include "dp/BoundingBox.h"
 #include "dp/detail/IsotropicRemesher.h"
 #include "dp/detail/KdTree.h"
 #include "dp/detail/Vec3.h"

@@ -65,9 +65,4 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
                                  const std::string& outDir,
                                  const SequenceWriteOptions& writing = {});
 
-/** Length of the diagonal of the bounding box of x y z triples. */
-double boundingBoxDiagonal(const std::vector<double>& positions);
-/** The same for `count` points (3 numbers each); 0 for none. */
-double boundingBoxDiagonal(const double* positions, std::size_t count);
-
 } // namespace dp
