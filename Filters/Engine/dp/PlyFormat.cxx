@@ -348,15 +348,23 @@ std::size_t listLength(const std::string& path, const PlyElement& element, std::
   return static_cast<std::size_t>(value);
 }
 
-void readVertices(const std::string& path, const PlyElement& element, BodyReader& reader,
-                  PointCloud& cloud)
+// Where each property of the vertex element goes.
+struct VertexLayout
 {
-  std::vector<Slot> slots;
-  std::vector<int> attributeIndex(element.properties.size(), -1);
+  std::vector<Slot> slots;         // per property
+  std::vector<int> attributeIndex; // per property: its attribute in the cloud (-1: none)
+  int colorCount = 0;              // colour channels declared
+  bool colorIsFloat = false;       // channels in [0,1], not [0,255]
+};
+
+// The layout of a vertex element; the cloud's arrays sized for its `count` vertices. Throws
+// when x, y or z is missing.
+VertexLayout layOutVertices(const std::string& path, const PlyElement& element, PointCloud& cloud)
+{
+  VertexLayout layout;
+  layout.attributeIndex.assign(element.properties.size(), -1);
   bool hasXYZ[3] = {false, false, false};
   bool hasNormal = false;
-  int colorCount = 0;
-  bool colorIsFloat = false;
   for (std::size_t p = 0; p < element.properties.size(); ++p)
   {
     const PlyProperty& prop = element.properties[p];
@@ -367,39 +375,85 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
       hasNormal = true;
     if (slot >= Slot::Red && slot <= Slot::Alpha)
     {
-      ++colorCount;
-      colorIsFloat = colorIsFloat || prop.type == PlyType::Float32 || prop.type == PlyType::Float64;
+      ++layout.colorCount;
+      layout.colorIsFloat =
+          layout.colorIsFloat || prop.type == PlyType::Float32 || prop.type == PlyType::Float64;
     }
     if (slot == Slot::Attribute)
     {
-      attributeIndex[p] = static_cast<int>(cloud.attributes.size());
+      layout.attributeIndex[p] = static_cast<int>(cloud.attributes.size());
       cloud.attributes.push_back({prop.name, 1, {}});
     }
-    slots.push_back(slot);
+    layout.slots.push_back(slot);
   }
   if (!hasXYZ[0] || !hasXYZ[1] || !hasXYZ[2])
-  {
     throw FileError(path, "PLY 'vertex' element lacks one of the properties x, y, z");
-  }
   const std::size_t n = element.count;
   cloud.points.assign(3 * n, 0.0);
   if (hasNormal)
     cloud.normals.assign(3 * n, 0.0f);
-  if (colorCount >= 3)
+  if (layout.colorCount >= 3)
   {
-    cloud.colorComponents = colorCount >= 4 ? 4 : 3;
+    cloud.colorComponents = layout.colorCount >= 4 ? 4 : 3;
     cloud.colors.assign(cloud.colorComponents * n, 255);
   }
   for (auto& a : cloud.attributes)
     a.values.resize(n);
+  return layout;
+}
 
-  for (std::size_t i = 0; i < n; ++i)
+// Stores the value of property p of vertex i where the layout says.
+void storeVertexValue(const VertexLayout& layout, std::size_t p, std::size_t i, double value,
+                      PointCloud& cloud)
+{
+  const Slot slot = layout.slots[p];
+  switch (slot)
   {
+  case Slot::X:
+  case Slot::Y:
+  case Slot::Z:
+    cloud.points[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::X)] = value;
+    break;
+  case Slot::NX:
+  case Slot::NY:
+  case Slot::NZ:
+    cloud.normals[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::NX)] =
+        static_cast<float>(value);
+    break;
+  case Slot::Red:
+  case Slot::Green:
+  case Slot::Blue:
+  case Slot::Alpha:
+  {
+    const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
+    if (c < cloud.colorComponents)
+    {
+      // A NaN colour (float channels) is black: clamping keeps a NaN, and casting it is
+      // undefined.
+      const double scaled = layout.colorIsFloat ? value * 255.0 + 0.5 : value;
+      cloud.colors[cloud.colorComponents * i + c] =
+          static_cast<std::uint8_t>(std::isnan(scaled) ? 0.0 : std::clamp(scaled, 0.0, 255.0));
+    }
+    break;
+  }
+  case Slot::Attribute:
+    cloud.attributes[layout.attributeIndex[p]].values[i] = static_cast<float>(value);
+    break;
+  case Slot::Skip:
+    break;
+  }
+}
+
+void readVertices(const std::string& path, const PlyElement& element, BodyReader& reader,
+                  PointCloud& cloud)
+{
+  const VertexLayout layout = layOutVertices(path, element, cloud);
+  for (std::size_t i = 0; i < element.count; ++i)
     for (std::size_t p = 0; p < element.properties.size(); ++p)
     {
       const PlyProperty& prop = element.properties[p];
       double value = 0;
-      if (prop.isList)
+      if (prop.isList) // read past: a vertex's lists carry nothing we keep
       {
         if (!reader.read(prop.countType, value))
           truncated(path, element, i);
@@ -410,48 +464,10 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
       }
       if (!reader.read(prop.type, value))
         truncated(path, element, i);
-      const Slot slot = slots[p];
-      switch (slot)
-      {
-      case Slot::X:
-      case Slot::Y:
-      case Slot::Z:
-        cloud.points[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::X)] = value;
-        break;
-      case Slot::NX:
-      case Slot::NY:
-      case Slot::NZ:
-        cloud.normals[3 * i + static_cast<int>(slot) - static_cast<int>(Slot::NX)] =
-            static_cast<float>(value);
-        break;
-      case Slot::Red:
-      case Slot::Green:
-      case Slot::Blue:
-      case Slot::Alpha:
-      {
-        const int c = static_cast<int>(slot) - static_cast<int>(Slot::Red);
-        if (c < cloud.colorComponents)
-        {
-          // A NaN colour (float channels) is black: clamping keeps a NaN, and casting it is
-          // undefined.
-          const double scaled = colorIsFloat ? value * 255.0 + 0.5 : value;
-          cloud.colors[cloud.colorComponents * i + c] =
-              static_cast<std::uint8_t>(std::isnan(scaled) ? 0.0 : std::clamp(scaled, 0.0, 255.0));
-        }
-        break;
-      }
-      case Slot::Attribute:
-        cloud.attributes[attributeIndex[p]].values[i] = static_cast<float>(value);
-        break;
-      case Slot::Skip:
-        break;
-      }
+      storeVertexValue(layout, p, i, value, cloud);
     }
-  }
-  if (colorCount > 0 && colorCount < 3)
-  {
+  if (layout.colorCount > 0 && layout.colorCount < 3)
     cloud.colorComponents = 0;
-  }
 }
 
 void readFaces(const std::string& path, const PlyElement& element, BodyReader& reader,

@@ -427,14 +427,17 @@ private:
   }
 };
 
-// The zero crossing of the band-limited signed field at voxel size h, as triangles. The band:
-// every voxel within NarrowBand voxels of a point (the plane distance), plus the voxels of holes
-// (interpolated). Outside the band, each piece of space takes the sign of most of its border
-// (OutsideBand), so no crossing appears where the band ends. `open` tells whether some piece's
-// border has both signs in large parts (open data: the crossings at the band's end there are
-// to be dropped).
-FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
-                   const ReconstructionOptions& options, bool& open)
+// Throws when the grid at voxel size h would hold more voxels than the options allow.
+void checkGridSize(double voxels, double h, const ReconstructionOptions& options)
+{
+  if (voxels > static_cast<double>(options.maxActiveVoxels))
+    throw std::runtime_error("surface reconstruction: the grid at voxel size " + std::to_string(h) +
+                             " would exceed " + std::to_string(options.maxActiveVoxels) +
+                             " voxels");
+}
+
+// The band: every voxel within NarrowBand voxels of a point, active, with no value yet.
+openvdb::FloatGrid::Ptr pointBand(const Input& in, double h, const ReconstructionOptions& options)
 {
   const float background = static_cast<float>(NarrowBand);
   openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(background);
@@ -443,143 +446,139 @@ FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
     for (std::size_t i = 0; i < in.count; ++i)
       acc.setValueOn(voxelOf(in.points + 3 * i, h), background);
   }
+  // A quarter of the dilation cube per seed: neighbouring seeds share most of their cubes.
   const double cube = std::pow(2 * NarrowBand + 1, 3);
-  if (static_cast<double>(grid->activeVoxelCount()) * cube / 4 >
-      static_cast<double>(options.maxActiveVoxels))
-    throw std::runtime_error("surface reconstruction: the grid at voxel size " + std::to_string(h) +
-                             " would exceed " + std::to_string(options.maxActiveVoxels) +
-                             " voxels");
+  checkGridSize(static_cast<double>(grid->activeVoxelCount()) * cube / 4, h, options);
   openvdb::tools::dilateActiveValues(grid->tree(), static_cast<int>(NarrowBand),
                                      openvdb::tools::NN_FACE_EDGE_VERTEX,
                                      openvdb::tools::IGNORE_TILES);
-  const double sigma2 = std::pow(std::max(h, in.spacing), 2);
+  return grid;
+}
 
-  // Holes: on a coarse grid, the cells that a morphological closing of the points' cells adds
-  // (gaps in the data narrower than about twice `reach`, and concave corners). Their voxels
-  // outside the band get no field value (the plane distance far from the data is unreliable:
-  // a wrongly oriented patch, or data passing through itself, would grow sheets there); they
-  // are interpolated below, harmonically, between the band and the pieces outside it.
+// Holes: on a coarse grid, the cells that a morphological closing of the points' cells adds
+// (gaps in the data narrower than about twice `reach`, and concave corners). Their voxels
+// outside the band are made active with the value Unknown and returned: the plane distance far
+// from the data is unreliable (a wrongly oriented patch, or data passing through itself, would
+// grow sheets there), so they are interpolated later, harmonically, between the band and the
+// pieces outside it.
+std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input& in, double h,
+                                          double reach)
+{
   std::vector<openvdb::Coord> holes;
   const double H = CoarseRatio * h;
   const int closing = static_cast<int>(std::ceil(reach / H));
-  if (closing > 0)
+  if (closing <= 0)
+    return holes;
+  openvdb::MaskGrid::Ptr cells = openvdb::MaskGrid::create();
   {
-    openvdb::MaskGrid::Ptr cells = openvdb::MaskGrid::create();
-    {
-      auto acc = cells->getAccessor();
-      for (std::size_t i = 0; i < in.count; ++i)
-        acc.setValueOn(voxelOf(in.points + 3 * i, H));
-    }
-    openvdb::MaskGrid::Ptr closed = cells->deepCopy();
-    openvdb::tools::dilateActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
-    openvdb::tools::erodeActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                      openvdb::tools::IGNORE_TILES);
-    closed->tree().topologyDifference(cells->tree());
-    auto acc = grid->getAccessor();
-    for (auto it = closed->cbeginValueOn(); it; ++it)
-    {
-      // The cell's voxels (the cell of coarse voxel c is centred on CoarseRatio c).
-      const openvdb::Coord c = it.getCoord();
-      const int half = CoarseRatio / 2;
-      for (int i = -half; i < CoarseRatio - half; ++i)
-        for (int j = -half; j < CoarseRatio - half; ++j)
-          for (int l = -half; l < CoarseRatio - half; ++l)
-          {
-            const openvdb::Coord v(CoarseRatio * c.x() + i, CoarseRatio * c.y() + j,
-                                   CoarseRatio * c.z() + l);
-            if (!acc.isValueOn(v))
-            {
-              acc.setValueOn(v, Unknown);
-              holes.push_back(v);
-            }
-          }
-    }
-  }
-  if (grid->activeVoxelCount() > options.maxActiveVoxels)
-    throw std::runtime_error("surface reconstruction: the grid at voxel size " + std::to_string(h) +
-                             " would exceed " + std::to_string(options.maxActiveVoxels) +
-                             " voxels");
-
-  OutsideBand outside(*grid);
-  evaluate(in, *grid, h, k, sigma2);
-  outside.findPieces(*grid);
-  // Normals against the pieces: each border voxel of the band (next to a piece whose border
-  // mostly agrees) asks the three points nearest to it whether their planes put it on its
-  // piece's side (the nearest only: beyond a thin part, those of its far side answer). A point that
-  // most of its voxels find on the wrong side has its normal the wrong way round (a patch oriented
-  // against the rest): flipped, and the field around it evaluated again.
-  std::vector<std::uint32_t> flipped;
-  {
-    std::vector<std::pair<openvdb::Coord, bool>> voxels; // border voxel, its piece inside
-    outside.borderOfSettledPieces(voxels);
-    std::vector<std::atomic<int>> support(in.count);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
-                      [&](const tbb::blocked_range<std::size_t>& range)
-                      {
-                        std::vector<std::uint32_t> ids(k);
-                        std::vector<double> d2(k);
-                        for (std::size_t b = range.begin(); b != range.end(); ++b)
-                        {
-                          const auto& [v, inside] = voxels[b];
-                          const double x[3] = {h * v.x(), h * v.y(), h * v.z()};
-                          const std::size_t found = in.tree.nearest(x, std::min<std::size_t>(k, 3),
-                                                                    ids.data(), d2.data());
-                          for (std::size_t j = 0; j < found; ++j)
-                          {
-                            const double* p = in.points + 3 * ids[j];
-                            const float* n = in.normals + 3 * ids[j];
-                            const double along =
-                                n[0] * (x[0] - p[0]) + n[1] * (x[1] - p[1]) + n[2] * (x[2] - p[2]);
-                            support[ids[j]] += (along < 0) == inside ? 1 : -1;
-                          }
-                        }
-                      });
+    auto acc = cells->getAccessor();
     for (std::size_t i = 0; i < in.count; ++i)
-      if (support[i] < 0)
-        flipped.push_back(static_cast<std::uint32_t>(i));
+      acc.setValueOn(voxelOf(in.points + 3 * i, H));
   }
-  std::vector<float> corrected;
-  Input again = in;
-  if (!flipped.empty())
+  openvdb::MaskGrid::Ptr closed = cells->deepCopy();
+  openvdb::tools::dilateActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  openvdb::tools::erodeActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                    openvdb::tools::IGNORE_TILES);
+  closed->tree().topologyDifference(cells->tree());
+  auto acc = grid.getAccessor();
+  const int half = CoarseRatio / 2;
+  for (auto it = closed->cbeginValueOn(); it; ++it)
   {
-    corrected.assign(in.normals, in.normals + 3 * in.count);
-    for (std::uint32_t i : flipped)
-      for (int c = 0; c < 3; ++c)
-        corrected[3 * i + c] = -corrected[3 * i + c];
-    again.normals = corrected.data();
-    // The voxels whose neighbours may include a flipped point.
-    openvdb::MaskGrid::Ptr touched = openvdb::MaskGrid::create();
-    {
-      auto acc = touched->getAccessor();
-      for (std::uint32_t i : flipped)
-        acc.setValueOn(voxelOf(in.points + 3 * i, h));
-    }
-    openvdb::tools::dilateActiveValues(touched->tree(), static_cast<int>(NarrowBand) + 2,
-                                       openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
-    auto acc = grid->getAccessor();
-    std::vector<std::uint32_t> ids(k);
-    std::vector<double> d2(k);
-    for (auto it = touched->cbeginValueOn(); it; ++it)
-    {
-      const openvdb::Coord c = it.getCoord();
-      if (!acc.isValueOn(c) || acc.getValue(c) == Unknown)
-        continue;
-      const double x[3] = {h * c.x(), h * c.y(), h * c.z()};
-      const double distance = planeDistance(again, x, k, sigma2, ids.data(), d2.data()) / h;
-      acc.setValue(c, static_cast<float>(std::clamp(distance, -NarrowBand, NarrowBand)));
-    }
-    outside.findPieces(*grid);
+    // The cell's voxels (the cell of coarse voxel c is centred on CoarseRatio c).
+    const openvdb::Coord c = it.getCoord();
+    for (int i = -half; i < CoarseRatio - half; ++i)
+      for (int j = -half; j < CoarseRatio - half; ++j)
+        for (int l = -half; l < CoarseRatio - half; ++l)
+        {
+          const openvdb::Coord v(CoarseRatio * c.x() + i, CoarseRatio * c.y() + j,
+                                 CoarseRatio * c.z() + l);
+          if (!acc.isValueOn(v))
+          {
+            acc.setValueOn(v, Unknown);
+            holes.push_back(v);
+          }
+        }
   }
-  outside.settle(*grid, background);
-  open = outside.open();
-  interpolateHoles(*grid, holes, background);
+  return holes;
+}
 
+// Normals against the pieces: each border voxel of the band (next to a piece whose border
+// mostly agrees) asks the three points nearest to it whether their planes put it on its
+// piece's side (the nearest only: beyond a thin part, those of its far side answer). A point
+// that most of its voxels find on the wrong side has its normal the wrong way round (a patch
+// oriented against the rest); those points are returned.
+std::vector<std::uint32_t> wronglyOrientedPoints(const Input& in, const OutsideBand& outside,
+                                                 double h, std::size_t k)
+{
+  std::vector<std::pair<openvdb::Coord, bool>> voxels; // border voxel, its piece inside
+  outside.borderOfSettledPieces(voxels);
+  std::vector<std::atomic<int>> support(in.count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, voxels.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range)
+                    {
+                      std::vector<std::uint32_t> ids(k);
+                      std::vector<double> d2(k);
+                      for (std::size_t b = range.begin(); b != range.end(); ++b)
+                      {
+                        const auto& [v, inside] = voxels[b];
+                        const double x[3] = {h * v.x(), h * v.y(), h * v.z()};
+                        const std::size_t found =
+                            in.tree.nearest(x, std::min<std::size_t>(k, 3), ids.data(), d2.data());
+                        for (std::size_t j = 0; j < found; ++j)
+                        {
+                          const double* p = in.points + 3 * ids[j];
+                          const float* n = in.normals + 3 * ids[j];
+                          const double along =
+                              n[0] * (x[0] - p[0]) + n[1] * (x[1] - p[1]) + n[2] * (x[2] - p[2]);
+                          support[ids[j]] += (along < 0) == inside ? 1 : -1;
+                        }
+                      }
+                    });
+  std::vector<std::uint32_t> flipped;
+  for (std::size_t i = 0; i < in.count; ++i)
+    if (support[i] < 0)
+      flipped.push_back(static_cast<std::uint32_t>(i));
+  return flipped;
+}
+
+// The field evaluated again (with `corrected`, the normals after flipping) on the band's voxels
+// whose neighbours may include a flipped point.
+void reevaluateAround(openvdb::FloatGrid& grid, const Input& corrected,
+                      const std::vector<std::uint32_t>& flipped, double h, std::size_t k,
+                      double sigma2)
+{
+  openvdb::MaskGrid::Ptr touched = openvdb::MaskGrid::create();
+  {
+    auto acc = touched->getAccessor();
+    for (std::uint32_t i : flipped)
+      acc.setValueOn(voxelOf(corrected.points + 3 * i, h));
+  }
+  openvdb::tools::dilateActiveValues(touched->tree(), static_cast<int>(NarrowBand) + 2,
+                                     openvdb::tools::NN_FACE_EDGE_VERTEX,
+                                     openvdb::tools::IGNORE_TILES);
+  auto acc = grid.getAccessor();
+  std::vector<std::uint32_t> ids(k);
+  std::vector<double> d2(k);
+  for (auto it = touched->cbeginValueOn(); it; ++it)
+  {
+    const openvdb::Coord c = it.getCoord();
+    if (!acc.isValueOn(c) || acc.getValue(c) == Unknown)
+      continue;
+    const double x[3] = {h * c.x(), h * c.y(), h * c.z()};
+    const double distance = planeDistance(corrected, x, k, sigma2, ids.data(), d2.data()) / h;
+    acc.setValue(c, static_cast<float>(std::clamp(distance, -NarrowBand, NarrowBand)));
+  }
+}
+
+// The field's zero crossing as triangles in world units (quads split along their shorter
+// diagonal, degenerate triangles dropped).
+FineMesh zeroCrossing(const openvdb::FloatGrid& grid, double h)
+{
   std::vector<openvdb::Vec3s> vertices;
   std::vector<openvdb::Vec3I> triangles;
   std::vector<openvdb::Vec4I> quads;
-  openvdb::tools::volumeToMesh(*grid, vertices, triangles, quads, 0.0, 0.0);
+  openvdb::tools::volumeToMesh(grid, vertices, triangles, quads, 0.0, 0.0);
 
   FineMesh mesh;
   mesh.positions.reserve(vertices.size());
@@ -608,6 +607,43 @@ FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
     }
   }
   return mesh;
+}
+
+// The zero crossing of the band-limited signed field at voxel size h, as triangles. The band:
+// every voxel within NarrowBand voxels of a point (the plane distance), plus the voxels of holes
+// (interpolated). Outside the band, each piece of space takes the sign of most of its border
+// (OutsideBand), so no crossing appears where the band ends; points whose normals most of
+// their piece's border contradicts are flipped first. `open` tells whether some piece's border
+// has both signs in large parts (open data: the crossings at the band's end there are to be
+// dropped).
+FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
+                   const ReconstructionOptions& options, bool& open)
+{
+  const float background = static_cast<float>(NarrowBand);
+  openvdb::FloatGrid::Ptr grid = pointBand(in, h, options);
+  const double sigma2 = std::pow(std::max(h, in.spacing), 2);
+  const std::vector<openvdb::Coord> holes = addHoleVoxels(*grid, in, h, reach);
+  checkGridSize(static_cast<double>(grid->activeVoxelCount()), h, options);
+
+  OutsideBand outside(*grid);
+  evaluate(in, *grid, h, k, sigma2);
+  outside.findPieces(*grid);
+  const std::vector<std::uint32_t> flipped = wronglyOrientedPoints(in, outside, h, k);
+  if (!flipped.empty())
+  {
+    std::vector<float> corrected(in.normals, in.normals + 3 * in.count);
+    for (std::uint32_t i : flipped)
+      for (int c = 0; c < 3; ++c)
+        corrected[3 * i + c] = -corrected[3 * i + c];
+    Input again = in;
+    again.normals = corrected.data();
+    reevaluateAround(*grid, again, flipped, h, k, sigma2);
+    outside.findPieces(*grid);
+  }
+  outside.settle(*grid, background);
+  open = outside.open();
+  interpolateHoles(*grid, holes, background);
+  return zeroCrossing(*grid, h);
 }
 
 // Keeps the triangles of the largest edge-connected piece and drops unused vertices.

@@ -191,6 +191,133 @@ PointCloud cloudOf(const TextTable& t, const std::vector<int>& role,
   return cloud;
 }
 
+// Wavefront OBJ read a statement at a time: the vertices (with "v x y z r g b" colours), the
+// faces, and the normals, bound to vertices through the faces' v//vn references or listed one
+// per vertex in order. Other statements (vt, g, o, s, usemtl, mtllib, l, p, comments) carry
+// nothing we keep.
+class ObjParser
+{
+public:
+  explicit ObjParser(const std::string& path) : Path(path) {}
+
+  void statement(std::string_view line)
+  {
+    ++LineNumber;
+    std::string_view rest = line;
+    const std::string_view keyword = detail::nextToken(rest);
+    if (keyword == "v" || keyword == "vn")
+      coordinates(keyword == "v", rest);
+    else if (keyword == "f")
+      face(rest);
+  }
+
+  PointCloud finish()
+  {
+    if (Cloud.colorComponents == 3 && Cloud.colors.size() != 3 * Cloud.numberOfPoints())
+    {
+      Cloud.colors.clear(); // only some vertices had colours
+      Cloud.colorComponents = 0;
+    }
+    const std::size_t n = Cloud.numberOfPoints();
+    const bool referenced =
+        std::any_of(NormalOfVertex.begin(), NormalOfVertex.end(), [](auto i) { return i >= 0; });
+    if (referenced || (n > 0 && NormalList.size() == 3 * n))
+    {
+      Cloud.normals.assign(3 * n, 0.0f);
+      for (std::size_t i = 0; i < n; ++i)
+      {
+        const std::int64_t k = referenced ? NormalOfVertex[i] : static_cast<std::int64_t>(i);
+        if (k >= 0)
+          std::memcpy(&Cloud.normals[3 * i], &NormalList[3 * k], 3 * sizeof(float));
+      }
+    }
+    return std::move(Cloud);
+  }
+
+private:
+  [[noreturn]] void fail(const std::string& why) const
+  {
+    throw FileError(Path, "OBJ line " + std::to_string(LineNumber) + ": " + why);
+  }
+
+  // "v x y z [r g b]" or "vn x y z".
+  void coordinates(bool vertex, std::string_view rest)
+  {
+    double xyz[6];
+    int count = 0;
+    for (auto t = detail::nextToken(rest); !t.empty() && count < 6; t = detail::nextToken(rest))
+      if (!detail::parseNumber(t, xyz[count++]))
+        fail("'" + std::string(t) + "' is not a number");
+    if (count < 3)
+      fail("expected 3 coordinates (truncated file?)");
+    if (!vertex)
+    {
+      for (int c = 0; c < 3; ++c)
+        NormalList.push_back(static_cast<float>(xyz[c]));
+      return;
+    }
+    Cloud.points.insert(Cloud.points.end(), xyz, xyz + 3);
+    if (count == 6) // colours in [0,1]; kept only if the first vertex has them
+    {
+      if (Cloud.colors.empty() && Cloud.numberOfPoints() == 1)
+        Cloud.colorComponents = 3;
+      if (Cloud.colorComponents == 3 && Cloud.colors.size() == 3 * (Cloud.numberOfPoints() - 1))
+        for (int c = 3; c < 6; ++c)
+          Cloud.colors.push_back(
+              static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, xyz[c] * 255.0 + 0.5))));
+    }
+    NormalOfVertex.push_back(-1);
+  }
+
+  // "f" and three or more of v, v/vt, v//vn or v/vt/vn; negative indices count back from the end.
+  void face(std::string_view rest)
+  {
+    Face.clear();
+    for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
+      Face.push_back(faceVertex(t));
+    if (Face.size() < 3)
+      fail("a face needs at least 3 vertices");
+    Cloud.addFace(Face.data(), Face.size());
+  }
+
+  // One corner of a face: its vertex index; a normal it references is bound to the vertex.
+  std::int64_t faceVertex(std::string_view t)
+  {
+    const auto nv = static_cast<std::int64_t>(Cloud.numberOfPoints());
+    const std::size_t slash = t.find('/');
+    double v = 0;
+    if (!detail::parseNumber(t.substr(0, slash), v) || v == 0 ||
+        !detail::wholeNumberWithin(v, detail::LargestCount))
+      fail("bad face vertex '" + std::string(t) + "'");
+    auto index = static_cast<std::int64_t>(v);
+    index = index > 0 ? index - 1 : nv + index;
+    if (std::abs(v) > static_cast<double>(nv) || index < 0 || index >= nv)
+      fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +
+           " vertices are defined so far");
+    const std::size_t lastSlash = t.rfind('/');
+    if (slash == std::string_view::npos || lastSlash <= slash)
+      return index; // v or v/vt
+    const auto nn = static_cast<std::int64_t>(NormalList.size() / 3);
+    double vn = 0;
+    if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0 &&
+        detail::wholeNumberWithin(vn, static_cast<double>(nn)))
+    {
+      auto n = static_cast<std::int64_t>(vn);
+      n = n > 0 ? n - 1 : nn + n;
+      if (n >= 0 && n < nn)
+        NormalOfVertex[index] = n;
+    }
+    return index;
+  }
+
+  const std::string& Path;
+  std::size_t LineNumber = 0;
+  PointCloud Cloud;
+  std::vector<float> NormalList;            // vn entries, as listed
+  std::vector<std::int64_t> NormalOfVertex; // vn index used by each vertex (-1: none)
+  std::vector<std::int64_t> Face;
+};
+
 } // namespace
 
 PointCloud readTextPoints(const std::string& path)
@@ -241,110 +368,10 @@ PointCloud readOBJ(const std::string& path)
   const std::string bytes = detail::readWholeFile(path);
   std::string_view text(bytes);
   std::string_view line;
-  PointCloud cloud;
-  std::vector<float> normalList;            // vn entries, as listed
-  std::vector<std::int64_t> normalOfVertex; // vn index used by each vertex (-1: none)
-  std::vector<std::int64_t> face;
-  std::size_t lineNumber = 0;
-  auto fail = [&](const std::string& why)
-  { throw FileError(path, "OBJ line " + std::to_string(lineNumber) + ": " + why); };
-
+  ObjParser parser(path);
   while (detail::nextLine(text, line))
-  {
-    ++lineNumber;
-    std::string_view rest = line;
-    const std::string_view keyword = detail::nextToken(rest);
-    if (keyword == "v" || keyword == "vn")
-    {
-      double xyz[6];
-      int count = 0;
-      for (auto t = detail::nextToken(rest); !t.empty() && count < 6; t = detail::nextToken(rest))
-        if (!detail::parseNumber(t, xyz[count++]))
-          fail("'" + std::string(t) + "' is not a number");
-      if (count < 3)
-        fail("expected 3 coordinates (truncated file?)");
-      if (keyword == "v")
-      {
-        cloud.points.insert(cloud.points.end(), xyz, xyz + 3);
-        if (count == 6) // "v x y z r g b", colours in [0,1]
-        {
-          if (cloud.colors.empty() && cloud.numberOfPoints() == 1)
-            cloud.colorComponents = 3;
-          if (cloud.colorComponents == 3 && cloud.colors.size() == 3 * (cloud.numberOfPoints() - 1))
-            for (int c = 3; c < 6; ++c)
-              cloud.colors.push_back(
-                  static_cast<std::uint8_t>(std::min(255.0, std::max(0.0, xyz[c] * 255.0 + 0.5))));
-        }
-        normalOfVertex.push_back(-1);
-      }
-      else
-      {
-        for (int c = 0; c < 3; ++c)
-          normalList.push_back(static_cast<float>(xyz[c]));
-      }
-    }
-    else if (keyword == "f")
-    {
-      face.clear();
-      const auto nv = static_cast<std::int64_t>(cloud.numberOfPoints());
-      const auto nn = static_cast<std::int64_t>(normalList.size() / 3);
-      for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
-      {
-        // v, v/vt, v//vn or v/vt/vn; negative indices count back from the end.
-        const std::size_t slash = t.find('/');
-        double v = 0;
-        if (!detail::parseNumber(t.substr(0, slash), v) || v == 0 ||
-            !detail::wholeNumberWithin(v, detail::LargestCount))
-          fail("bad face vertex '" + std::string(t) + "'");
-        if (std::abs(v) > static_cast<double>(nv))
-          fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +
-               " vertices are defined so far");
-        auto index = static_cast<std::int64_t>(v);
-        index = index > 0 ? index - 1 : nv + index;
-        if (index < 0 || index >= nv)
-          fail("face uses vertex " + std::string(t) + " but only " + std::to_string(nv) +
-               " vertices are defined so far");
-        face.push_back(index);
-        const std::size_t lastSlash = t.rfind('/');
-        if (slash != std::string_view::npos && lastSlash > slash) // v//vn or v/vt/vn
-        {
-          double vn = 0;
-          if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0 &&
-              detail::wholeNumberWithin(vn, static_cast<double>(nn)))
-          {
-            auto n = static_cast<std::int64_t>(vn);
-            n = n > 0 ? n - 1 : nn + n;
-            if (n >= 0 && n < nn)
-              normalOfVertex[index] = n;
-          }
-        }
-      }
-      if (face.size() < 3)
-        fail("a face needs at least 3 vertices");
-      cloud.addFace(face.data(), face.size());
-    }
-    // Other statements (vt, g, o, s, usemtl, mtllib, l, p, comments) carry nothing we keep.
-  }
-  if (cloud.colorComponents == 3 && cloud.colors.size() != 3 * cloud.numberOfPoints())
-  {
-    cloud.colors.clear(); // only some vertices had colours
-    cloud.colorComponents = 0;
-  }
-  // Normals: through the faces' v//vn references, or one vn per v in order.
-  const std::size_t n = cloud.numberOfPoints();
-  const bool referenced =
-      std::any_of(normalOfVertex.begin(), normalOfVertex.end(), [](auto i) { return i >= 0; });
-  if (referenced || (n > 0 && normalList.size() == 3 * n))
-  {
-    cloud.normals.assign(3 * n, 0.0f);
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      const std::int64_t k = referenced ? normalOfVertex[i] : static_cast<std::int64_t>(i);
-      if (k >= 0)
-        std::memcpy(&cloud.normals[3 * i], &normalList[3 * k], 3 * sizeof(float));
-    }
-  }
-  return cloud;
+    parser.statement(line);
+  return parser.finish();
 }
 
 void writeOBJ(const std::string& path, const PointCloud& cloud)
