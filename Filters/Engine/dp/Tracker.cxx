@@ -393,23 +393,44 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
 {
   Attempt a;
   auto clock = std::chrono::steady_clock::now();
-  const std::vector<double>& mass = Cloth.vertexMass();
   const double L = Cloth.lengthScale();
-  const MotionPredictor& predictor = P->Predictor;
-
   DistanceTermOptions distanceOptions;
   distanceOptions.weight = Options.distanceWeight;
   distanceOptions.measure = Options.distanceMeasure;
   distanceOptions.squared = Options.squaredDistance;
   distanceOptions.normalTestDegrees = Options.normalTestDegrees;
   distanceOptions.outlierDistance = Options.outlierDistance;
-  DistanceTerm distance(frame, Mesh, mass, L, distanceOptions);
+  DistanceTerm distance(frame, Mesh, Cloth.vertexMass(), L, distanceOptions);
   std::unique_ptr<CoverageTerm> coverage;
   if (Options.coverage.weight > 0 && !frame.spread().empty())
     coverage = std::make_unique<CoverageTerm>(frame, Mesh, L, Options.coverage);
   InternalEnergyTerm internal(Cloth);
 
-  // The start.
+  std::vector<double> x = startPositions(start, a, distance, internal);
+  a.timings.prediction = elapsed(clock);
+  a.startPositions = x;
+
+  clock = std::chrono::steady_clock::now();
+  solveCoarse(start, a, distance, coverage.get(), x);
+  a.timings.coarse = elapsed(clock);
+  a.coarsePositions = x;
+
+  clock = std::chrono::steady_clock::now();
+  solveFine(a, distance, coverage.get(), internal, x);
+  a.timings.fine = elapsed(clock);
+
+  clock = std::chrono::steady_clock::now();
+  a.quality =
+      assessFrame(frame, Mesh, x.data(), Cloth.vertexMass(), Options.recovery.reach * Voxel);
+  a.timings.quality = elapsed(clock);
+  a.positions = std::move(x);
+  return a;
+}
+
+std::vector<double> Tracker::startPositions(Start start, Attempt& a, DistanceTerm& distance,
+                                            InternalEnergyTerm& internal) const
+{
+  const MotionPredictor& predictor = P->Predictor;
   std::vector<double> x;
   if (P->Graph)
   {
@@ -419,41 +440,40 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
     if ((start == Start::Predicted || start == Start::Stiff) && Options.motionPrediction &&
         predictor.hasMotion())
       preferStraightIfCloser(distance, a, x);
+    return x;
   }
-  else
+  x = predictor.empty() ? Template : start == Start::LastGood ? P->LastGood : predictor.last();
+  if (!predictor.empty() && Options.motionPrediction && start == Start::Predicted)
   {
-    x = predictor.empty() ? Template : start == Start::LastGood ? P->LastGood : predictor.last();
-    if (!predictor.empty() && Options.motionPrediction && start == Start::Predicted)
-    {
-      distance.decide(x.data());
-      x = predictor.searchExtrapolations(
-          [&](const double* y)
-          { return internal.evaluate(y, nullptr) + distance.evaluate(y, nullptr); });
-    }
     distance.decide(x.data());
-    if (Options.rigidAlignment)
-      alignRigidly(x, distance);
+    x = predictor.searchExtrapolations(
+        [&](const double* y)
+        { return internal.evaluate(y, nullptr) + distance.evaluate(y, nullptr); });
   }
-  a.timings.prediction = elapsed(clock);
-  a.startPositions = x;
+  distance.decide(x.data());
+  if (Options.rigidAlignment)
+    alignRigidly(x, distance);
+  return x;
+}
 
-  // The coarse level.
-  clock = std::chrono::steady_clock::now();
-  if (P->Graph)
-  {
-    const double stiffer = start == Start::Stiff ? 2.0 : 1.0;
-    P->Registration->setStretchWeight(stiffer * stiffer * Options.graph.stretchWeight);
-    a.coarseIterations = P->Registration->registerFrame(
-        a.state, distance, coverage.get(), stiffer * Options.graph.rigidity,
-        Options.graph.robustScale * Voxel, Options.graph.iterations);
-    P->Registration->setStretchWeight(Options.graph.stretchWeight);
-    P->Graph->deform(a.state, x.data());
-  }
-  a.timings.coarse = elapsed(clock);
-  a.coarsePositions = x;
+void Tracker::solveCoarse(Start start, Attempt& a, DistanceTerm& distance, CoverageTerm* coverage,
+                          std::vector<double>& x)
+{
+  if (!P->Graph)
+    return;
+  const double stiffer = start == Start::Stiff ? 2.0 : 1.0;
+  P->Registration->setStretchWeight(stiffer * stiffer * Options.graph.stretchWeight);
+  a.coarseIterations =
+      P->Registration->registerFrame(a.state, distance, coverage, stiffer * Options.graph.rigidity,
+                                     Options.graph.robustScale * Voxel, Options.graph.iterations);
+  P->Registration->setStretchWeight(Options.graph.stretchWeight);
+  P->Graph->deform(a.state, x.data());
+}
 
-  // The fine level.
-  clock = std::chrono::steady_clock::now();
+void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* coverage,
+                        InternalEnergyTerm& internal, std::vector<double>& x)
+{
+  const MotionPredictor& predictor = P->Predictor;
   // The fine level starts within reach of the data: the paper's term, not robust (the coarse
   // level left it with its own robust scale).
   distance.setRobustScale(0.0);
@@ -470,11 +490,12 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   if (Options.temporalWeight > 0 && predictor.depth() >= 2)
   {
     target = predictor.constantVelocity();
-    temporal = std::make_unique<TemporalTerm>(target, mass, Options.temporalWeight, L, Voxel);
+    temporal = std::make_unique<TemporalTerm>(target, Cloth.vertexMass(), Options.temporalWeight,
+                                              Cloth.lengthScale(), Voxel);
   }
   std::vector<EnergyTerm*> terms{&internal, &distance};
   if (coverage)
-    terms.push_back(coverage.get());
+    terms.push_back(coverage);
   if (temporal)
     terms.push_back(temporal.get());
   SolveSettings settings;
@@ -487,7 +508,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   else if (Options.solver == TrackerSolver::LBFGS)
     a.iterations = solveLbfgs(x, terms, settings);
   else
-    a.iterations = solveSteepestDescent(x, terms, Mesh, L, settings,
+    a.iterations = solveSteepestDescent(x, terms, Mesh, Cloth.lengthScale(), settings,
                                         Options.provisionalDetermination ? &a.frozen : nullptr);
   a.internalEnergy = internal.evaluate(x.data(), nullptr);
   a.distanceEnergy = distance.evaluate(x.data(), nullptr);
@@ -498,13 +519,6 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
     a.rejected[v] = distance.weights()[v] == 0;
     a.residual[v] = distance.sample(&x[3 * v], v).distance;
   }
-  a.timings.fine = elapsed(clock);
-
-  clock = std::chrono::steady_clock::now();
-  a.quality = assessFrame(frame, Mesh, x.data(), mass, Options.recovery.reach * Voxel);
-  a.timings.quality = elapsed(clock);
-  a.positions = std::move(x);
-  return a;
 }
 
 void Tracker::trackEmptyFrame(FrameResult& result)

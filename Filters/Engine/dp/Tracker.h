@@ -134,7 +134,20 @@ private:
     LastGood,  // the last frame that did not fail (while the frames since fail)
     Template   // the template, moved rigidly onto the last frame
   };
+  /** One try at a frame from `start`: the start, the coarse level, the fine solve, the
+   *  frame's quality. */
   Attempt attempt(const class FrameData& frame, Start start);
+  /** The start's positions (the graph deformed by a.state, or the last frame's extrapolated
+   *  and aligned when the coarse level is off). */
+  std::vector<double> startPositions(Start start, Attempt& a, class DistanceTerm& distance,
+                                     class InternalEnergyTerm& internal) const;
+  /** The coarse level from a.state; x becomes the graph's deformation. */
+  void solveCoarse(Start start, Attempt& a, class DistanceTerm& distance,
+                   class CoverageTerm* coverage, std::vector<double>& x);
+  /** The fine solve from x with the frame's terms; records iterations, energies and the
+   *  per-vertex residuals in `a`. */
+  void solveFine(Attempt& a, class DistanceTerm& distance, class CoverageTerm* coverage,
+                 class InternalEnergyTerm& internal, std::vector<double>& x);
   /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
    *  frame 0). */
   void startState(Start start, Attempt& a) const;
