@@ -394,8 +394,8 @@ DistanceSample DistanceField::interpolate(const double x[3], VoxelCell* cell,
     const std::int32_t index = corners.nearest[corner];
     const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
     double valueGradient[3] = {0, 0, 0}, dWeight[3];
-    const double value = cornerValue(centre, index, p, valueGradient);
     const double weight = cornerWeight(corner, t, v, dWeight);
+    const double value = cornerValue(centre, index, p, weight, valueGradient);
     s.distance += weight * value;
     for (int k = 0; k < 3; ++k)
       s.gradient[k] += dWeight[k] * value + weight * valueGradient[k];
@@ -414,7 +414,7 @@ DistanceSample DistanceField::sample(const double x[3], VoxelCell* cell) const
 {
   // Each corner: the exact distance from the voxel centre to its nearest point (a constant).
   return interpolate(x, cell,
-                     [](const double* centre, std::int32_t, const double* p, double*)
+                     [](const double* centre, std::int32_t, const double* p, double, double*)
                      {
                        return std::sqrt((centre[0] - p[0]) * (centre[0] - p[0]) +
                                         (centre[1] - p[1]) * (centre[1] - p[1]) +
@@ -431,54 +431,39 @@ DistanceSample DistanceField::sampleToPlanes(const double x[3], const float* nor
   // beyond `reach`. Squared, the planes need no orientation; averaged, they have no false zero
   // between two sheets whose planes disagree; and with the weights held, each term is a linear
   // residual, so D^2 near x is exactly the quadric a Gauss-Newton step wants.
-  VoxelCell local;
-  double t[3];
-  const VoxelCell& corners = locate(x, cell ? cell : &local, t);
-  const double v = P->Voxel;
   PlaneQuadric q;
-  double squared = 0, gradient[3] = {0, 0, 0};
-  DistanceSample s;
-  s.inBand = corners.inBand;
-  double best = std::numeric_limits<double>::infinity();
-  for (int corner = 0; corner < 8; ++corner)
-  {
-    const std::int32_t index = corners.nearest[corner];
-    const double* p = &P->Points[3 * static_cast<std::size_t>(index)];
-    const float* normal = normals + 3 * static_cast<std::size_t>(index);
-    const double n[3] = {normal[0], normal[1], normal[2]};
-    const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
-    double dWeight[3];
-    const double w = cornerWeight(corner, t, v, dWeight);
-    // The corner's residuals: a along n (the plane), f along u (beyond reach).
-    const double a = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
-    const double length = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-    const double f = std::max(0.0, length - reach);
-    const double u[3] = {f > 0 ? r[0] / length : 0.0, f > 0 ? r[1] / length : 0.0,
-                         f > 0 ? r[2] / length : 0.0};
-    const double value = a * a + f * f;
-    squared += w * value;
-    for (int k = 0; k < 3; ++k)
-      gradient[k] += dWeight[k] * value + 2 * w * (a * n[k] + f * u[k]);
-    if (quadric)
-    {
-      int m = 0;
-      for (int i = 0; i < 3; ++i)
+  DistanceSample s = interpolate(
+      x, cell,
+      [&](const double*, std::int32_t index, const double* p, double w, double* valueGradient)
       {
-        q.vector[i] += w * (a * n[i] + f * u[i]);
-        for (int j = i; j < 3; ++j)
-          q.matrix[m++] += w * (n[i] * n[j] + u[i] * u[j]);
-      }
-    }
-    if (length < best)
-    {
-      best = length;
-      s.nearest = index;
-    }
-  }
+        const float* normal = normals + 3 * static_cast<std::size_t>(index);
+        const double n[3] = {normal[0], normal[1], normal[2]};
+        const double r[3] = {x[0] - p[0], x[1] - p[1], x[2] - p[2]};
+        // The corner's residuals: a along n (the plane), f along u (beyond reach).
+        const double a = n[0] * r[0] + n[1] * r[1] + n[2] * r[2];
+        const double length = std::sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+        const double f = std::max(0.0, length - reach);
+        const double u[3] = {f > 0 ? r[0] / length : 0.0, f > 0 ? r[1] / length : 0.0,
+                             f > 0 ? r[2] / length : 0.0};
+        for (int k = 0; k < 3; ++k)
+          valueGradient[k] = 2 * (a * n[k] + f * u[k]);
+        if (quadric)
+        {
+          int m = 0;
+          for (int i = 0; i < 3; ++i)
+          {
+            q.vector[i] += w * (a * n[i] + f * u[i]);
+            for (int j = i; j < 3; ++j)
+              q.matrix[m++] += w * (n[i] * n[j] + u[i] * u[j]);
+          }
+        }
+        return a * a + f * f;
+      });
+  // s holds D^2 and its gradient: D and dD = dD^2 / (2 D).
+  const double squared = s.distance;
   s.distance = std::sqrt(squared);
-  if (s.distance > 0)
-    for (int k = 0; k < 3; ++k)
-      s.gradient[k] = gradient[k] / (2 * s.distance);
+  for (int k = 0; k < 3; ++k)
+    s.gradient[k] = s.distance > 0 ? s.gradient[k] / (2 * s.distance) : 0.0;
   if (quadric)
   {
     q.constant = squared;

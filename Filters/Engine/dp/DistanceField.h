@@ -148,6 +148,9 @@ public:
 private:
   // The cell around x (from `cell` when x is still in it) and x's position in it (0..1 each).
   const VoxelCell& locate(const double x[3], VoxelCell* cell, double t[3]) const;
+  // Sum over the 8 corners c of x's cell of w_c(x) v_c(x), with the gradient: cornerValue(
+  // centre, nearest index, nearest point, weight w_c, out: grad v_c) returns v_c; the nearest
+  // of the corners' points to x.
   template <typename CornerValue>
   DistanceSample interpolate(const double x[3], VoxelCell* cell, CornerValue cornerValue) const;
 
