@@ -59,6 +59,7 @@ struct vtkDeformableTrackFilter::Internals
     f.ShearStiffness = o.cloth.shear;
     f.BendStiffness = o.cloth.bend;
     f.ThickPartStretch = o.softening.stretch;
+    f.CreaseStretch = o.creases.stretch;
     f.NormalTestAngle = o.normalTestDegrees;
     f.OutlierDistance = o.outlierDistance;
     f.VoxelSize = o.voxelSize;
@@ -92,6 +93,7 @@ struct vtkDeformableTrackFilter::Internals
     o.restUpdate = f.RestUpdate;
     o.cloth = {f.StretchStiffness, f.ShearStiffness, f.BendStiffness};
     o.softening.stretch = f.ThickPartStretch;
+    o.creases.stretch = f.CreaseStretch;
     o.normalTestDegrees = f.NormalTestAngle;
     o.outlierDistance = f.OutlierDistance;
     o.voxelSize = f.VoxelSize;
@@ -411,6 +413,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "SquaredDistance: " << this->SquaredDistance << "\n";
   os << indent << "RestUpdate: " << this->RestUpdate << "\n";
   os << indent << "ThickPartStretch: " << this->ThickPartStretch << "\n";
+  os << indent << "CreaseStretch: " << this->CreaseStretch << "\n";
   os << indent << "StretchStiffness: " << this->StretchStiffness << "\n";
   os << indent << "ShearStiffness: " << this->ShearStiffness << "\n";
   os << indent << "BendStiffness: " << this->BendStiffness << "\n";

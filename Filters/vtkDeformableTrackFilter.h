@@ -116,6 +116,14 @@ public:
   ///@}
 
   ///@{
+  /** Factor on the stretch stiffness in the template's creases (armpits, crotch, an arm that
+   *  touches the body in the template; dp::CreaseSoftening): default 0.1, so that those bridges
+   *  stretch as the parts move apart instead of dragging the torso's skin; 1 switches it off. */
+  vtkSetClampMacro(CreaseStretch, double, 0.0, 1.0);
+  vtkGetMacro(CreaseStretch, double);
+  ///@}
+
+  ///@{
   /** Normal test: drop a vertex's distance term when its normal and its nearest point's normal
    *  differ by more than this angle in degrees (default 90; 180 switches the test off). */
   vtkSetClampMacro(NormalTestAngle, double, 0.0, 180.0);
@@ -249,6 +257,7 @@ protected:
   double ShearStiffness;
   double BendStiffness;
   double ThickPartStretch;
+  double CreaseStretch;
   double NormalTestAngle;
   double OutlierDistance;
   double VoxelSize;

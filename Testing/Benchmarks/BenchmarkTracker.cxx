@@ -310,7 +310,8 @@ const char* Usage =
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--solver gn|lbfgs|sd] [--distance-weight W] [--normal-test DEGREES]\n"
-    "             [--stiffness ST,SH,BE] [--soften-thick ST,BE,FROM,TO] [--tolerance T]\n"
+    "             [--stiffness ST,SH,BE] [--soften-thick ST,BE,FROM,TO]\n"
+    "             [--soften-creases ST,WIDTH] [--tolerance T]\n"
     "             [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
@@ -476,6 +477,13 @@ int main(int argc, char** argv)
         if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &soft.stretch, &soft.bend, &soft.from,
                         &soft.to) != 4)
           throw UsageError("--soften-thick wants stretch,bend,from,to");
+      }
+      else if (arg == "--soften-creases")
+      {
+        const std::string v = optionValue(argc, argv, i);
+        dp::CreaseSoftening& creases = options.creases;
+        if (std::sscanf(v.c_str(), "%lf,%lf", &creases.stretch, &creases.width) != 2)
+          throw UsageError("--soften-creases wants stretch,width");
       }
       else
       {

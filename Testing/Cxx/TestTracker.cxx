@@ -311,6 +311,12 @@ TEST(Tracker, RefusesOptionsOutOfRange)
   o = dp::TrackerOptions{};
   o.softening.stretch = std::nan("");
   EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.creases.stretch = -0.1;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
+  o.creases.width = std::nan("");
+  EXPECT_THROW(make(o), std::invalid_argument);
 }
 
 TEST(Tracker, RefusesATemplateWithADegenerateTriangle)

@@ -7,6 +7,7 @@
 #include "dp/BoundingBox.h"
 #include "dp/ClothEnergy.h"
 #include "dp/SurfaceSampler.h"
+#include "dp/Tracker.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
@@ -570,6 +571,72 @@ TEST(LocalThickness, FindsEachPartsRadiusWhicheverWayItsFacesTurn)
       EXPECT_NEAR(radius[v], v < thinVertices ? 0.1 : 0.4, v < thinVertices ? 0.01 : 0.04)
           << "vertex " << v << (inward ? " (faces turned inward)" : "");
   }
+}
+
+TEST(LocalThickness, OutsideBallsMeasureTheGapInFrontOfEachVertex)
+{
+  // Two spheres of radius 0.3, 0.2 apart: the ball outside the first sphere at its point facing
+  // the second fits the gap (radius 0.1); on its far side nothing faces it (the cap).
+  Shape shape;
+  const double a[3] = {0, 0, 0}, b[3] = {0.8, 0, 0};
+  addSphere(shape, a, 0.3);
+  const std::size_t first = shape.positions.size() / 3;
+  addSphere(shape, b, 0.3);
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  const std::vector<double> outer =
+      dp::medialRadii(mesh, shape.positions.data(), 1.0, 0, dp::MedialSide::Outside);
+  std::size_t facing = 0, away = 0;
+  for (std::size_t v = 0; v < first; ++v)
+  {
+    if (shape.positions[3 * v] > shape.positions[3 * facing])
+      facing = v;
+    if (shape.positions[3 * v] < shape.positions[3 * away])
+      away = v;
+  }
+  EXPECT_NEAR(outer[facing], 0.1, 0.01);
+  EXPECT_DOUBLE_EQ(outer[away], 1.0);
+  // Inside, the same vertices measure the sphere.
+  const std::vector<double> inner = dp::medialRadii(mesh, shape.positions.data(), 1.0, 0);
+  EXPECT_NEAR(inner[facing], 0.3, 0.03);
+}
+
+TEST(LocalThickness, TheTrackerSoftensTheStretchWhereTwoPartsFaceEachOther)
+{
+  // A template of two spheres 0.2 apart (a crease between parts, as where an arm touches the
+  // body): the edges facing the other sphere get the crease's factor, those on the far sides
+  // keep the full stiffness; with the factor 1 nothing is scaled.
+  Shape shape;
+  const double a[3] = {0, 0, 0}, b[3] = {0.8, 0, 0};
+  addSphere(shape, a, 0.3);
+  addSphere(shape, b, 0.3);
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  dp::TrackerOptions options;
+  options.creases.stretch = 0.25;
+  const dp::Tracker tracker(mesh, shape.positions, options);
+  const std::vector<double>& scales = tracker.clothEnergy().stretchScales();
+  ASSERT_EQ(scales.size(), mesh.edges().size());
+  std::size_t facing = 0, soft = 0;
+  for (std::size_t e = 0; e < scales.size(); ++e)
+  {
+    const auto [i, j] = mesh.edges()[e];
+    const double x = 0.5 * (shape.positions[3 * i] + shape.positions[3 * j]);
+    const bool inGap = x > 0.25 && x < 0.55; // both ends on the spheres' facing caps
+    facing += inGap;
+    soft += scales[e] == 0.25;
+    if (inGap)
+    {
+      EXPECT_DOUBLE_EQ(scales[e], 0.25) << "edge " << e << " at x " << x;
+    }
+    if (x < 0.0 || x > 0.8)
+    {
+      EXPECT_DOUBLE_EQ(scales[e], 1.0) << "edge " << e << " at x " << x;
+    }
+  }
+  EXPECT_GT(facing, 0u);
+  EXPECT_LT(soft, scales.size() / 2);
+  options.creases.stretch = 1.0;
+  const dp::Tracker stiff(mesh, shape.positions, options);
+  EXPECT_TRUE(stiff.clothEnergy().stretchScales().empty());
 }
 
 TEST(LocalThickness, AnOpenTubesRadiusIsItsOwn)

@@ -89,6 +89,8 @@ public:
    *  vectors are all 1. Throws std::invalid_argument for sizes other than the mesh's or
    *  negative or non-finite scales. */
   void setStiffnessScales(std::vector<double> edgeStretch, std::vector<double> hingeBend);
+  /** The per-edge factors on k_st (empty: 1 everywhere). */
+  const std::vector<double>& stretchScales() const { return StretchScale; }
 
   const std::vector<double>& vertexMass() const { return Mass; }
   double lengthScale() const { return L; }

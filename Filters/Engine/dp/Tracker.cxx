@@ -76,38 +76,55 @@ void validate(const TrackerOptions& o)
         "thickness softening stiffness factors (>= 0)");
   check(nonNegative(soft.from) && soft.to > soft.from && std::isfinite(soft.to),
         "thickness softening range (0 <= from < to)");
+  check(nonNegative(o.creases.stretch) && nonNegative(o.creases.width),
+        "crease softening stretch factor and width (>= 0)");
   check(o.recovery.reach > 0 && std::isfinite(o.recovery.reach), "recovery reach (> 0)");
   check(nonNegative(o.recovery.margin), "failure margin (>= 0)");
 }
 
-// ThicknessSoftening's stiffness factors: per vertex a softness in [0, 1] from its medial radius
-// over the template's 90th percentile (smoothstep between `from` and `to`), per edge the mean of
-// its ends', per hinge that of its shared edge.
-void softenThickParts(ClothEnergy& cloth, const TriangleMesh& mesh, const double* positions,
-                      const ThicknessSoftening& soft)
+// The cloth's stiffness by region (ThicknessSoftening, CreaseSoftening), from the template's
+// medial balls measured against its thickness (the 90th percentile of the inner radii). Thick
+// parts: per vertex a softness in [0, 1] (smoothstep of the inner radius between `from` and
+// `to`), per edge the mean of its ends', per hinge that of its shared edge. Creases: an edge
+// with an end whose outer radius is below `width` has its stretch stiffness multiplied by
+// `stretch`.
+void setRegionStiffness(ClothEnergy& cloth, const TriangleMesh& mesh, const double* positions,
+                        const ThicknessSoftening& thick, const CreaseSoftening& creases)
 {
-  if (soft.stretch == 1.0 && soft.bend == 1.0)
+  const bool softThick = thick.stretch != 1.0 || thick.bend != 1.0;
+  const bool softCreases = creases.stretch != 1.0 && creases.width > 0;
+  if (!softThick && !softCreases)
     return;
   const std::size_t n = mesh.numberOfVertices();
-  std::vector<double> radius =
-      medialRadii(mesh, positions, 0.5 * boundingBoxDiagonal(positions, n));
-  std::vector<double> sorted = radius;
+  const double largest = 0.5 * boundingBoxDiagonal(positions, n);
+  const std::vector<double> inner = medialRadii(mesh, positions, largest);
+  std::vector<double> sorted = inner;
   const auto rank = sorted.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(n - 1));
   std::nth_element(sorted.begin(), rank, sorted.end());
-  const double reference = *rank;
-  std::vector<double> softness(n);
-  for (std::size_t v = 0; v < n; ++v)
+  const double thickness = *rank;
+  std::vector<double> softness(n, 0.0);
+  if (softThick)
+    for (std::size_t v = 0; v < n; ++v)
+    {
+      const double s =
+          std::clamp((inner[v] / thickness - thick.from) / (thick.to - thick.from), 0.0, 1.0);
+      softness[v] = s * s * (3 - 2 * s);
+    }
+  std::vector<bool> crease(n, false);
+  if (softCreases)
   {
-    const double s =
-        std::clamp((radius[v] / reference - soft.from) / (soft.to - soft.from), 0.0, 1.0);
-    softness[v] = s * s * (3 - 2 * s);
+    // One smoothing pass: a crease is a few vertices wide.
+    const std::vector<double> outer = medialRadii(mesh, positions, largest, 1, MedialSide::Outside);
+    for (std::size_t v = 0; v < n; ++v)
+      crease[v] = outer[v] < creases.width * thickness;
   }
   const auto blend = [](double factor, double s) { return 1.0 + s * (factor - 1.0); };
   std::vector<double> stretch, bend;
   for (const auto& e : mesh.edges())
-    stretch.push_back(blend(soft.stretch, 0.5 * (softness[e[0]] + softness[e[1]])));
+    stretch.push_back(blend(thick.stretch, 0.5 * (softness[e[0]] + softness[e[1]])) *
+                      (crease[e[0]] || crease[e[1]] ? creases.stretch : 1.0));
   for (const auto& h : mesh.hinges())
-    bend.push_back(blend(soft.bend, 0.5 * (softness[h[0]] + softness[h[1]])));
+    bend.push_back(blend(thick.bend, 0.5 * (softness[h[0]] + softness[h[1]])));
   cloth.setStiffnessScales(std::move(stretch), std::move(bend));
 }
 
@@ -233,7 +250,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
 {
   validate(options);
   TemplateRest = Cloth.restState();
-  softenThickParts(Cloth, Mesh, Template.data(), options.softening);
+  setRegionStiffness(Cloth, Mesh, Template.data(), options.softening, options.creases);
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
   P->Newton = std::make_unique<GaussNewtonSolver>(Mesh.numberOfVertices(), finePairs(Mesh));
   if (options.graph.enabled)

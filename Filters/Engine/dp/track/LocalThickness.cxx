@@ -71,12 +71,14 @@ double shrinkBall(const detail::KdTree& tree, const double* x, std::size_t v, co
 } // namespace
 
 std::vector<double> medialRadii(const TriangleMesh& mesh, const double* positions, double largest,
-                                int smoothing)
+                                int smoothing, MedialSide side)
 {
   const std::size_t n = mesh.numberOfVertices();
   std::vector<double> normals(3 * n);
   mesh.vertexNormals(positions, normals.data());
-  const double outward = signedVolume6(mesh, positions) < 0 ? -1.0 : 1.0;
+  // The ball's side: the normal points away from it (outward for an inner ball).
+  const double outward = (signedVolume6(mesh, positions) < 0 ? -1.0 : 1.0) *
+                         (side == MedialSide::Outside ? -1.0 : 1.0);
   const detail::KdTree tree(positions, n);
   std::vector<double> radius(n, largest);
   for (std::size_t v = 0; v < n; ++v)
