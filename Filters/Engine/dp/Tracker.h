@@ -6,7 +6,8 @@
  *        Point Data", eq. 1) and, beyond the paper, terms that keep it on real captures:
  *
  *   E_int  the cloth energy (ClothEnergy: stretch, shear, bend; rest state = the template, or a
- *          blend with the last frame, restUpdate);
+ *          blend with the last frame, restUpdate), softer in stretch in the template's creases
+ *          (CreaseSoftening) and, on request, on its thick parts (ThicknessSoftening);
  *   E_dis  mesh -> points, read from the frame's distance field (DistanceTerm; the paper's term,
  *          with the normal test and an outlier cut-off; distance to the data's tangent planes
  *          and a squared penalty by default);
