@@ -86,8 +86,8 @@ void validate(const TrackerOptions& o)
 // medial balls measured against its thickness (the 90th percentile of the inner radii). Thick
 // parts: per vertex a softness in [0, 1] (smoothstep of the inner radius between `from` and
 // `to`), per edge the mean of its ends', per hinge that of its shared edge. Creases: an edge
-// with an end whose outer radius is below `width` has its stretch stiffness multiplied by
-// `stretch`.
+// with an end whose outer radius is below `width` times the thickness has its stretch stiffness
+// multiplied by `stretch`.
 void setRegionStiffness(ClothEnergy& cloth, const TriangleMesh& mesh, const double* positions,
                         const ThicknessSoftening& thick, const CreaseSoftening& creases)
 {
