@@ -9,6 +9,8 @@
 
 #include "dp/AnimatedMesh.h"
 #include "dp/BoundingBox.h"
+#include "dp/GltfExport.h"
+#include "dp/PcaCompression.h"
 #include "dp/SurfaceSampler.h"
 
 #include "vtkCallbackCommand.h"
@@ -470,9 +472,6 @@ private:
     compressor->SetInputConnection(Tracker->GetOutputPort());
     compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
     compressor->SetErrorTarget(S.errorTarget);
-    compressor->SetFileName(Dpz.string().c_str());
-    compressor->SetGLBFileName(Glb.string().c_str());
-    compressor->SetGLBMeshoptCompression(S.meshopt);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";
@@ -486,12 +485,14 @@ private:
                 << "\n";
       return;
     }
-    if (Printer->Errors > errorsBefore)
+    if (Printer->Errors > errorsBefore || !compressor->GetCompressedSequence())
     {
       std::cerr << "error: compression failed; the tracked frames are in " << Pvd.string() << "\n";
       Failed = true;
       return;
     }
+    if (!writeCompressed(*compressor->GetCompressedSequence()))
+      return;
     vtkPolyData* result = compressor->GetOutput();
     for (const char* name : {"Components", "KGError", "MaxError", "MaxErrorRelative",
                              "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
@@ -514,6 +515,26 @@ private:
                   "low-rank, or the tracking shakes)\n",
                   fieldValue(result, "Components"), Written.size());
     std::printf("glTF: %s\n", Glb.string().c_str());
+  }
+
+  /** Writes tracked.dpz and tracked.glb (each beside its name, renamed when complete); says
+   *  which failed and why. */
+  bool writeCompressed(const dp::CompressedSequence& sequence)
+  {
+    try
+    {
+      dp::writeCompressedSequence(Dpz.string(), sequence);
+      dp::GlbOptions glb;
+      glb.meshopt = S.meshopt;
+      dp::writeGlb(Glb.string(), sequence, glb);
+      return true;
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "error: " << e.what() << "; the tracked frames are in " << Pvd.string() << "\n";
+      Failed = true;
+      return false;
+    }
   }
 
   void writeReport() const

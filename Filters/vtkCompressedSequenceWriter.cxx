@@ -1,6 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkCompressedSequenceWriter.h"
 
+#include "dp/GltfExport.h"
+#include "dp/PcaCompression.h"
+
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
 #include "vtkErrorCode.h"
@@ -25,7 +28,7 @@ vtkCompressedSequenceWriter::vtkCompressedSequenceWriter()
   this->ErrorMeasure = codec->GetErrorMeasure();
   this->ErrorTarget = codec->GetErrorTarget();
   this->NumberOfComponents = codec->GetNumberOfComponents();
-  this->MeshoptCompression = codec->GetGLBMeshoptCompression();
+  this->MeshoptCompression = dp::GlbOptions().meshopt;
 }
 
 vtkCompressedSequenceWriter::~vtkCompressedSequenceWriter()
@@ -41,34 +44,51 @@ int vtkCompressedSequenceWriter::FillInputPortInformation(int, vtkInformation* i
 
 namespace
 {
-// Passes the codec's errors on as the writer's and its progress as the writer's progress.
-struct Relay
+// Shows the codec's progress as the writer's: "Saving tracked.dpz: PCA Compress: frame 3 of 30".
+struct ProgressRelay
 {
   vtkCompressedSequenceWriter* Writer;
-  std::string File; // as users see it in the progress text
-  std::string Errors;
+  std::string File; // as users see it
 };
-void relay(vtkObject* caller, unsigned long event, void* clientData, void* callData)
+void relayProgress(vtkObject* caller, unsigned long, void* clientData, void* callData)
 {
-  auto* r = static_cast<Relay*>(clientData);
-  if (event == vtkCommand::ProgressEvent)
-  {
-    // "Saving tracked.dpz: PCA Compress: frame 3 of 30", not the class names.
-    auto* codec = vtkAlgorithm::SafeDownCast(caller);
-    const std::string text =
-        "Saving " + r->File +
-        (codec && codec->GetProgressText() ? std::string(": ") + codec->GetProgressText()
-                                           : std::string());
-    r->Writer->SetProgressText(text.c_str());
-    r->Writer->UpdateProgress(*static_cast<double*>(callData));
-  }
-  else if (event == vtkCommand::ErrorEvent && callData)
-  {
-    std::string text = static_cast<const char*>(callData);
-    const std::size_t colon = text.find("): "); // drop VTK's "<class> (<address>): " prefix
-    r->Errors += (r->Errors.empty() ? "" : "; ") +
-                 (colon == std::string::npos ? text : text.substr(colon + 3));
-  }
+  auto* relay = static_cast<ProgressRelay*>(clientData);
+  auto* codec = vtkAlgorithm::SafeDownCast(caller);
+  const std::string text =
+      "Saving " + relay->File +
+      (codec && codec->GetProgressText() ? std::string(": ") + codec->GetProgressText()
+                                         : std::string());
+  relay->Writer->SetProgressText(text.c_str());
+  relay->Writer->UpdateProgress(*static_cast<double*>(callData));
+}
+
+bool endsWith(const std::string& name, const char* extension)
+{
+  const std::string lower = vtksys::SystemTools::LowerCase(name);
+  const std::size_t n = std::char_traits<char>::length(extension);
+  return lower.size() > n && lower.compare(lower.size() - n, n, extension) == 0;
+}
+// Runs `codec` on the writer's input with the writer's settings, its progress shown as the
+// writer's; returns its failure, empty when none.
+std::string compress(vtkCompressedSequenceWriter* writer, vtkPCACompressFilter* codec, bool glb)
+{
+  // The codec is a consumer of the writer's input of its own: it asks for every time step.
+  codec->SetInputConnection(writer->GetInputConnection(0, 0));
+  codec->SetLayout(glb ? vtkPCACompressFilter::SHAPES : writer->GetLayout()); // glTF: shapes
+  codec->SetErrorMeasure(writer->GetErrorMeasure());
+  codec->SetErrorTarget(writer->GetErrorTarget());
+  codec->SetNumberOfComponents(writer->GetNumberOfComponents());
+  ProgressRelay relay{writer, vtksys::SystemTools::GetFilenameName(writer->GetFileName())};
+  vtkNew<vtkCallbackCommand> progress;
+  progress->SetCallback(relayProgress);
+  progress->SetClientData(&relay);
+  codec->AddObserver(vtkCommand::ProgressEvent, progress);
+  // Its errors become the writer's, with the file's name; not printed twice.
+  vtkNew<vtkCallbackCommand> quiet;
+  codec->AddObserver(vtkCommand::ErrorEvent, quiet);
+  codec->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, quiet);
+  codec->UpdatePiece(writer->GetPiece(), writer->GetNumberOfPieces(), 0);
+  return codec->GetFailureMessage();
 }
 } // namespace
 
@@ -81,31 +101,33 @@ void vtkCompressedSequenceWriter::WriteData()
     this->SetErrorCode(vtkErrorCode::NoFileNameError);
     return;
   }
-  const bool glb = name.size() > 4 && (name.compare(name.size() - 4, 4, ".glb") == 0 ||
-                                       name.compare(name.size() - 4, 4, ".GLB") == 0);
-  // The codec runs as its own consumer of our input: it asks the input for every time step.
+  const bool glb = endsWith(name, ".glb");
   vtkNew<vtkPCACompressFilter> codec;
-  codec->SetInputConnection(this->GetInputConnection(0, 0));
-  codec->SetLayout(glb ? vtkPCACompressFilter::SHAPES : this->Layout);
-  codec->SetErrorMeasure(this->ErrorMeasure);
-  codec->SetErrorTarget(this->ErrorTarget);
-  codec->SetNumberOfComponents(this->NumberOfComponents);
-  codec->SetGLBMeshoptCompression(this->MeshoptCompression);
-  if (glb)
-    codec->SetGLBFileName(name.c_str());
-  else
-    codec->SetFileName(name.c_str());
-  Relay state{this, vtksys::SystemTools::GetFilenameName(name), {}};
-  vtkNew<vtkCallbackCommand> callback;
-  callback->SetCallback(relay);
-  callback->SetClientData(&state);
-  codec->AddObserver(vtkCommand::ProgressEvent, callback);
-  codec->AddObserver(vtkCommand::ErrorEvent, callback);
-  codec->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, callback);
-  codec->Update();
-  if (!state.Errors.empty())
+  std::string failure = compress(this, codec, glb);
+  const dp::CompressedSequence* sequence = codec->GetCompressedSequence();
+  if (failure.empty() && sequence) // none on pieces other than 0: process 0 writes
   {
-    vtkErrorMacro(<< name << ": not written: " << state.Errors);
+    // The engine's writers write beside the name and rename when complete: a failure never
+    // leaves a broken file behind.
+    try
+    {
+      if (glb)
+      {
+        dp::GlbOptions options;
+        options.meshopt = this->MeshoptCompression;
+        dp::writeGlb(name, *sequence, options);
+      }
+      else
+        dp::writeCompressedSequence(name, *sequence);
+    }
+    catch (const std::exception& e)
+    {
+      failure = e.what();
+    }
+  }
+  if (!failure.empty())
+  {
+    vtkErrorMacro(<< name << ": not written: " << failure);
     this->SetErrorCode(vtkErrorCode::UserError);
   }
 }
@@ -119,4 +141,5 @@ void vtkCompressedSequenceWriter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
   os << indent << "MeshoptCompression: " << this->MeshoptCompression << "\n";
+  os << indent << "Piece: " << this->Piece << " of " << this->NumberOfPieces << "\n";
 }

@@ -4,10 +4,10 @@
  * @brief   writes a whole temporal mesh sequence compressed: .dpz, or glTF 2.0 (.glb)
  *
  * Input: temporal vtkPolyData of fixed connectivity (the output of vtkDeformableTrackFilter, or
- * an animated mesh read from disk). Write() pulls every time step of the input, compresses the
- * sequence with the codec of vtkPCACompressFilter (principal components chosen for ErrorTarget,
- * quantised, predicted, zstd-coded; see dp/PcaCompression.h) and writes FileName in the format
- * its extension names:
+ * an animated mesh read from disk). Write() runs vtkPCACompressFilter on the input (which pulls
+ * every time step; principal components chosen for ErrorTarget, quantised, predicted,
+ * zstd-coded; see dp/PcaCompression.h) and writes its result with the engine's writers to
+ * FileName, in the format its extension names:
  *  - .dpz: DynamicPoints' compressed sequence (version, checksums), read back by
  *    vtkCompressedSequenceReader;
  *  - .glb: glTF 2.0 binary, one morph target per shape component and one animation of the
@@ -15,7 +15,8 @@
  * The file is written beside its name and renamed when complete, so a failure never leaves a
  * broken file. In ParaView this is File > Save Data for .dpz and .glb.
  *
- * Under MPI only process 0 writes (the sequence is whole there; see vtkPCACompressFilter).
+ * Under MPI only piece 0 writes (the sequence is whole there; see vtkDPTemporalFilter):
+ * ParaView sets Piece and NumberOfPieces to each process's rank and count.
  * Memory and time: as vtkPCACompressFilter, which this writer runs on its input.
  */
 #ifndef vtkCompressedSequenceWriter_h
@@ -52,10 +53,21 @@ public:
   ///@}
 
   ///@{
-  /** .glb only: buffers compressed by meshoptimizer (see vtkPCACompressFilter). Default off. */
+  /** .glb only: store the buffers compressed by meshoptimizer (EXT_meshopt_compression, then
+   *  required by the file): smaller files for web viewers (three.js, Babylon.js); Blender 3.4
+   *  and VTK 9.2 cannot read them. Default off. */
   vtkSetMacro(MeshoptCompression, vtkTypeBool);
   vtkGetMacro(MeshoptCompression, vtkTypeBool);
   vtkBooleanMacro(MeshoptCompression, vtkTypeBool);
+  ///@}
+
+  ///@{
+  /** The piece this writer's process asks its input for, of NumberOfPieces (defaults 0 of 1);
+   *  pieces other than 0 write nothing. */
+  vtkSetClampMacro(Piece, int, 0, VTK_INT_MAX);
+  vtkGetMacro(Piece, int);
+  vtkSetClampMacro(NumberOfPieces, int, 1, VTK_INT_MAX);
+  vtkGetMacro(NumberOfPieces, int);
   ///@}
 
 protected:
@@ -72,6 +84,8 @@ protected:
   double ErrorTarget;
   int NumberOfComponents;
   vtkTypeBool MeshoptCompression;
+  int Piece = 0;
+  int NumberOfPieces = 1;
 
 private:
   vtkCompressedSequenceWriter(const vtkCompressedSequenceWriter&) = delete;

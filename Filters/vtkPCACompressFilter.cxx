@@ -1,7 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPCACompressFilter.h"
 
-#include "dp/GltfExport.h"
 #include "dp/PcaCompression.h"
 #include "vtkDPPointSetAccess.h"
 
@@ -33,6 +32,7 @@ struct vtkPCACompressFilter::Internals
   vtkSmartPointer<vtkCellArray> Polys; // frame 0's
   std::vector<std::int64_t> Triangles; // frame 0's, for the file
   std::unique_ptr<dp::CompressedSequence> Result;
+  std::string Failure; // of the last update
 
   std::size_t collected() const
   {
@@ -57,7 +57,6 @@ struct vtkPCACompressFilter::Internals
     f.ErrorTarget = o.target;
     f.NumberOfComponents = static_cast<int>(o.components);
     f.Quantize = o.quantise;
-    f.GLBMeshoptCompression = dp::GlbOptions().meshopt;
   }
 
   static dp::PcaOptions optionsOf(const vtkPCACompressFilter& f)
@@ -81,8 +80,16 @@ vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals)
 vtkPCACompressFilter::~vtkPCACompressFilter()
 {
   delete this->Internal;
-  this->SetFileName(nullptr);
-  this->SetGLBFileName(nullptr);
+}
+
+const char* vtkPCACompressFilter::GetFailureMessage() const
+{
+  return this->Internal->Failure.c_str();
+}
+
+const dp::CompressedSequence* vtkPCACompressFilter::GetCompressedSequence() const
+{
+  return this->Internal->Result.get();
 }
 
 void vtkPCACompressFilter::ClearTemporalState()
@@ -161,36 +168,7 @@ std::string vtkPCACompressFilter::Compress()
     return std::string("cannot compress: ") + e.what();
   }
   this->WarnIfWeak(frames);
-  this->WriteFiles();
   return {};
-}
-
-void vtkPCACompressFilter::WriteFiles()
-{
-  // Written beside and renamed, so a failure never leaves a broken file behind.
-  const dp::CompressedSequence& result = *this->Internal->Result;
-  try
-  {
-    if (this->FileName && *this->FileName)
-      dp::writeCompressedSequence(this->FileName, result);
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro(<< e.what());
-  }
-  try
-  {
-    if (this->GLBFileName && *this->GLBFileName)
-    {
-      dp::GlbOptions glb;
-      glb.meshopt = this->GLBMeshoptCompression;
-      dp::writeGlb(this->GLBFileName, result, glb);
-    }
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro(<< e.what());
-  }
 }
 
 void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
@@ -242,12 +220,15 @@ int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,
   auto fail = [&](const std::string& message)
   {
     ContinueExecuting(request, false);
-    vtkErrorMacro(<< message);
     in.clear();
+    in.Failure = message;
+    vtkErrorMacro(<< message);
     return 0;
   };
   if (!in.Result)
   {
+    if (in.collected() == 0)
+      in.Failure.clear();
     // Collecting: one frame per pass, then the compression.
     const std::size_t frame = in.collected();
     const std::string error = this->CollectFrame(vtkPolyData::GetData(inputVector[0], 0), frame);
@@ -299,7 +280,4 @@ void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
   os << indent << "Quantize: " << this->Quantize << "\n";
-  os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
-  os << indent << "GLBFileName: " << (this->GLBFileName ? this->GLBFileName : "(none)") << "\n";
-  os << indent << "GLBMeshoptCompression: " << this->GLBMeshoptCompression << "\n";
 }

@@ -2,7 +2,7 @@
 /**
  * @class   vtkPCACompressFilter
  * @brief   compresses a temporal mesh sequence of fixed connectivity by PCA; outputs the
- *          reconstruction and, optionally, writes the compressed file
+ *          reconstruction and the codec's figures
  *
  * Input: temporal vtkPolyData whose every time step has the same number of points and the same
  * polygons (the output of vtkDeformableTrackFilter, or an animated mesh read from disk). The
@@ -22,9 +22,10 @@
  * (components kept over frames: above 1/2 the compression is weak, and a warning says so; so
  * does an input without polygons, which is unlikely to be one mesh moving).
  *
- * With FileName set, the compressed sequence is also written there (.dpz, read back by
- * vtkCompressedSequenceReader); with GLBFileName set, as a glTF 2.0 binary with morph targets
- * (needs the shape layout).
+ * The filter writes no file: vtkCompressedSequenceWriter writes .dpz (read back by
+ * vtkCompressedSequenceReader) and glTF 2.0 binaries (.glb, morph targets); C++ callers holding
+ * this filter can write its result with the engine's writers (GetCompressedSequence, the main
+ * job does). A failure is reported as an error and kept in GetFailureMessage.
  *
  * The result is kept: any time is answered without recomputing until a parameter or the input
  * changes. Memory: the input's positions for every frame (24 bytes per vertex and frame) plus
@@ -37,6 +38,11 @@
 #include "vtkDPTemporalFilter.h"
 
 #include <string> // for std::string
+
+namespace dp
+{
+struct CompressedSequence;
+}
 
 class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkDPTemporalFilter
 {
@@ -83,26 +89,15 @@ public:
   vtkBooleanMacro(Quantize, vtkTypeBool);
   ///@}
 
-  ///@{
-  /** Where to write the compressed sequence (.dpz); empty (default): not written. */
-  vtkSetStringMacro(FileName);
-  vtkGetStringMacro(FileName);
-  ///@}
+  /** Why the last update failed (the error it reported: a frame that differs from frame 0, a
+   *  point that is not finite, the codec's refusal), empty when it did not. */
+  const char* GetFailureMessage() const;
 
-  ///@{
-  /** Where to write a glTF binary (.glb) with morph targets; empty (default): not written. */
-  vtkSetStringMacro(GLBFileName);
-  vtkGetStringMacro(GLBFileName);
-  ///@}
-
-  ///@{
-  /** Store the .glb's buffers compressed by meshoptimizer (EXT_meshopt_compression, then
-   *  required by the file): smaller files for web viewers (three.js, Babylon.js); Blender 3.4
-   *  and VTK 9.2 cannot read them. Default off. */
-  vtkSetMacro(GLBMeshoptCompression, vtkTypeBool);
-  vtkGetMacro(GLBMeshoptCompression, vtkTypeBool);
-  vtkBooleanMacro(GLBMeshoptCompression, vtkTypeBool);
-  ///@}
+#ifndef __VTK_WRAP__
+  /** The compressed sequence once every frame is in, else null (before an update, after a
+   *  failure, on pieces other than 0). Owned by the filter, valid until it re-executes. */
+  const dp::CompressedSequence* GetCompressedSequence() const;
+#endif
 
 protected:
   vtkPCACompressFilter();
@@ -118,9 +113,6 @@ protected:
   double ErrorTarget;
   int NumberOfComponents;
   vtkTypeBool Quantize;
-  char* FileName = nullptr;
-  char* GLBFileName = nullptr;
-  vtkTypeBool GLBMeshoptCompression;
 
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;
@@ -129,12 +121,10 @@ private:
   // RequestFrameData's steps; those returning text return the error, empty when none.
   /** Checks input frame `frame` against frame 0 and keeps its positions. */
   std::string CollectFrame(vtkPolyData* input, std::size_t frame);
-  /** Compresses the frames collected, warns when weak, writes the files asked for. */
+  /** Compresses the frames collected and warns when the compression is weak. */
   std::string Compress();
   /** Warns when most of the frames' worth of components were kept (weak compression). */
   void WarnIfWeak(std::size_t frames);
-  /** Writes FileName and GLBFileName when set; a failed file is an error, not a lost result. */
-  void WriteFiles();
   /** The reconstruction of `frame` with its error and the figures. */
   void FillOutput(std::size_t frame, vtkPolyData* output);
 

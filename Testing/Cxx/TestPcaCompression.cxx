@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PCA compression: error targets, the paper's counts, the codec, the file and its failures.
 #include "dp/AnimatedMesh.h"
+#include "dp/GltfExport.h"
 #include "dp/PcaCompression.h"
 
 #include <gtest/gtest.h>
@@ -186,6 +187,36 @@ TEST(PcaCompression, RoundTripThroughTheFileIsExact)
     EXPECT_EQ(Eigen::Map<const Eigen::VectorXd>(frame.data(), frame.size()),
               s.pca.model.reconstruct().col(7));
   }
+}
+
+// A name that cannot take the file (a folder is in the way): an error naming it, and neither a
+// half file under the name nor the one written beside it left behind.
+TEST(PcaCompression, AFileThatCannotBePutInPlaceIsNamedAndLeavesNothing)
+{
+  const Animation a = bendingTube();
+  const dp::CompressedSequence s =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, dp::PcaOptions(), a.triangles);
+  const std::filesystem::path folder = temporaryPath("in-the-way");
+  for (const char* name : {"tracked.dpz", "tracked.glb"})
+  {
+    const std::filesystem::path path = folder / name;
+    std::filesystem::create_directories(path / "occupied");
+    try
+    {
+      if (path.extension() == ".glb")
+        dp::writeGlb(path.string(), s);
+      else
+        dp::writeCompressedSequence(path.string(), s);
+      ADD_FAILURE() << "no error for " << path;
+    }
+    catch (const std::exception& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(path.string()), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(std::filesystem::is_directory(path / "occupied"));
+    EXPECT_FALSE(std::filesystem::exists(path.string() + ".partial"));
+  }
+  std::filesystem::remove_all(folder);
 }
 
 // Per-vertex numbers are predicted from mesh neighbours, so a vertex order with no spatial sense

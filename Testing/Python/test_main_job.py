@@ -345,6 +345,17 @@ class TestBadInput(TempDirTestCase):
         self.assertEqual([t for t, _ in pvd_files(self.path("out", "tracked.pvd"))],
                          [0.0, 0.25, 0.5])
 
+    def test_an_output_that_cannot_be_written_is_named_and_the_rest_is_kept(self):
+        series = self.small_sequence(3)
+        os.makedirs(self.path("out", "tracked.glb", "in-the-way"))  # a folder where the file goes
+        result = self.run_main(series, "--vertices", 300)
+        self.assertEqual(result.returncode, 1)
+        self.assertIn("tracked.glb", result.stderr)
+        self.assertIn("the tracked frames are in", result.stderr)
+        self.assertEqual(len(pvd_files(self.path("out", "tracked.pvd"))), 3)
+        self.assertGreater(os.path.getsize(self.path("out", "tracked.dpz")), 0)
+        self.assertFalse(os.path.exists(self.path("out", "tracked.glb.partial")))
+
     def test_meshopt_gives_a_smaller_glb_that_requires_the_extension(self):
         series = self.small_sequence(3)
         self.assertEqual(self.run_main(series, "--vertices", 300).returncode, 0)

@@ -1,6 +1,6 @@
-"""vtkPCACompressFilter and vtkCompressedSequenceReader in a VTK pipeline: the error target on a
-generated animated mesh, the file round trip, a damaged file, the glTF export read back by VTK's
-own glTF reader, and a sequence whose connectivity changes."""
+"""vtkPCACompressFilter, vtkCompressedSequenceWriter and vtkCompressedSequenceReader in a VTK
+pipeline: the error target on a generated animated mesh, the file round trip, a damaged file, the
+glTF export read back by VTK's own glTF reader, and a sequence whose connectivity changes."""
 import json
 import os
 import unittest
@@ -52,6 +52,18 @@ class TestPCACompressFilter(TempDirTestCase):
             getattr(f, "Set" + name)(value)
         return f
 
+    def write(self, path, source=None, **settings):
+        """Writes the sequence (the tube's unless `source`) to `path` with the writer."""
+        writer = dynamicpoints.vtkCompressedSequenceWriter()
+        writer.SetInputConnection((source or self.source).GetOutputPort())
+        for name, value in settings.items():
+            getattr(writer, "Set" + name)(value)
+        writer.SetFileName(path)
+        self.assertEqual(writer.Write(), 1)
+        self.assertTrue(os.path.exists(path))
+        self.assertFalse(os.path.exists(path + ".partial"))
+        return writer
+
     def test_meets_the_error_target_and_reports_it(self):
         originals = np.stack([self.original(t) for t in range(FRAMES)])
         for layout in (0, 1):
@@ -78,12 +90,10 @@ class TestPCACompressFilter(TempDirTestCase):
             self.assertEqual(fd["PaperD1"][0], 3 * FRAMES * k + nv * k)
             self.assertLess(fd["BitsPerVertexFrame"][0], fd["QuantizedPlainBitsPerVertexFrame"][0])
 
-    def test_the_file_reads_back_the_same_sequence(self):
+    def test_the_file_reads_back_the_filters_sequence(self):
         path = self.path("tube.dpz")
-        f = self.compressor(FileName=path)
-        f.UpdateTimeStep(0)
-        self.assertTrue(os.path.exists(path))
-        self.assertFalse(os.path.exists(path + ".partial"))
+        self.write(path)
+        f = self.compressor()  # the same settings: the writer runs this filter's codec
         reader = dynamicpoints.vtkCompressedSequenceReader()
         self.assertEqual(reader.CanReadFile(path), 1)
         self.assertEqual(reader.CanReadFile(self.files[0]), 0)
@@ -100,26 +110,29 @@ class TestPCACompressFilter(TempDirTestCase):
                              f.GetOutput().GetNumberOfPolys())
 
     def test_pieces_other_than_zero_are_empty_and_write_nothing(self):
-        f = self.compressor(FileName=self.path("piece1.dpz"))
+        f = self.compressor()
         rec = MessageRecorder(f)
         f.UpdatePiece(1, 2, 0)
         self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
         self.assertEqual(rec.errors, [])
-        self.assertFalse(os.path.exists(self.path("piece1.dpz")))
-
-    def test_the_writer_writes_what_the_filter_writes(self):
-        self.compressor(FileName=self.path("filter.dpz"), GLBFileName=self.path("filter.glb"),
-                        ErrorTarget=0.5).Update()
+        self.assertEqual(f.GetFailureMessage(), "")
+        # The writer on a process other than the first (ParaView sets its piece): no file, no
+        # error; piece 0 writes.
         writer = dynamicpoints.vtkCompressedSequenceWriter()
         writer.SetInputConnection(self.source.GetOutputPort())
-        writer.SetErrorTarget(0.5)
-        for name in ("writer.dpz", "writer.glb"):
-            writer.SetFileName(self.path(name))
-            self.assertEqual(writer.Write(), 1)
-        for ext in ("dpz", "glb"):
-            with open(self.path("filter." + ext), "rb") as a, open(self.path("writer." + ext),
-                                                                   "rb") as b:
-                self.assertEqual(a.read(), b.read(), ext)
+        writer.SetFileName(self.path("piece1.dpz"))
+        writer.SetPiece(1)
+        writer.SetNumberOfPieces(2)
+        rec = MessageRecorder(writer)
+        self.assertEqual(writer.Write(), 1)
+        self.assertEqual(rec.errors, [])
+        self.assertFalse(os.path.exists(self.path("piece1.dpz")))
+        writer.SetPiece(0)
+        self.assertEqual(writer.Write(), 1)
+        self.assertTrue(os.path.exists(self.path("piece1.dpz")))
+
+    def test_the_writer_names_the_file_and_the_reason_when_it_cannot_write(self):
+        writer = self.write(self.path("first.dpz"), ErrorTarget=0.5)
         # A file that cannot be written: an error naming it, nothing left behind.
         rec = MessageRecorder(writer)
         writer.SetFileName(self.path("no-such-folder", "x.dpz"))
@@ -129,10 +142,18 @@ class TestPCACompressFilter(TempDirTestCase):
         writer.SetFileName(None)
         self.assertEqual(writer.Write(), 0)
         self.assertIn("no FileName", rec.error_text)
+        # A sequence the codec refuses: the writer's error says which file and why, once.
+        self.add_another_connectivity()
+        rec = MessageRecorder(writer)
+        writer.SetFileName(self.path("changed.glb"))
+        self.assertEqual(writer.Write(), 0)
+        self.assertEqual(len(rec.errors), 1, rec.errors)
+        self.assertIn(f"changed.glb: not written: frame {FRAMES} has", rec.error_text)
+        self.assertFalse(os.path.exists(self.path("changed.glb")))
 
     def test_a_damaged_file_is_named_in_the_error_and_gives_no_geometry(self):
         path = self.path("tube.dpz")
-        self.compressor(FileName=path).Update()
+        self.write(path)
         with open(path, "rb") as f:
             data = f.read()
         for name, content in (("cut.dpz", data[: len(data) // 2]),
@@ -149,9 +170,9 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_the_gltf_export_plays_back_in_vtk_within_the_target(self):
         glb = self.path("tube.glb")
-        f = self.compressor(GLBFileName=glb, ErrorTarget=0.2)
+        self.write(glb, ErrorTarget=0.2)
+        f = self.compressor(ErrorTarget=0.2)
         f.Update()
-        self.assertTrue(os.path.exists(glb))
         k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
         reader = vtkGLTFReader()
         reader.SetFileName(glb)
@@ -184,11 +205,7 @@ class TestPCACompressFilter(TempDirTestCase):
             for f in self.files[:n]:
                 source.AddFileName(f)
             glb = self.path(f"tube{n}.glb")
-            f = dynamicpoints.vtkPCACompressFilter()
-            f.SetInputConnection(source.GetOutputPort())
-            f.SetNumberOfComponents(2)
-            f.SetGLBFileName(glb)
-            f.Update()
+            self.write(glb, source, NumberOfComponents=2)
             reader = vtkGLTFReader()
             reader.SetFileName(glb)
             reader.UpdateInformation()
@@ -200,7 +217,7 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_the_gltf_export_passes_the_khronos_validator(self):
         glb = self.path("tube.glb")
-        self.compressor(GLBFileName=glb, ErrorTarget=0.2).Update()
+        self.write(glb, ErrorTarget=0.2)
         report = validate_gltf(glb)
         self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
         self.assertEqual(report["info"]["animationCount"], 1)
@@ -214,10 +231,7 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertGreater(validate_gltf(self.path("broken.glb"))["errors"], 0)
 
     def test_the_meshopt_variant_is_smaller_and_decodes_to_the_same_data(self):
-        writer = dynamicpoints.vtkCompressedSequenceWriter()
-        writer.SetInputConnection(self.source.GetOutputPort())
-        writer.SetFileName(self.path("plain.glb"))
-        self.assertEqual(writer.Write(), 1)
+        writer = self.write(self.path("plain.glb"))
         writer.MeshoptCompressionOn()
         writer.SetFileName(self.path("meshopt.glb"))
         self.assertEqual(writer.Write(), 1)
@@ -250,7 +264,8 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_blender_imports_every_frame_and_morph_target(self):
         glb = self.path("tube.glb")
-        f = self.compressor(GLBFileName=glb, ErrorTarget=0.2)
+        self.write(glb, ErrorTarget=0.2)
+        f = self.compressor(ErrorTarget=0.2)
         f.Update()
         k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
         report = blender_report(glb, (0, 7, FRAMES - 1))
@@ -266,18 +281,22 @@ class TestPCACompressFilter(TempDirTestCase):
             # Same vertices in the same order, at Blender's float32 precision.
             np.testing.assert_allclose(played, rebuilt, atol=1e-5)
 
-    def test_a_change_of_connectivity_is_refused_by_frame(self):
-        other = self.path("other.ply")
+    def add_another_connectivity(self):
+        """Appends a frame of another mesh (the sheet) to the tube's sequence."""
         run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 1, "--points", 100,
                  "--truth", self.path("sheet"))
         sheet = self.path("sheet", "truth")
         self.source.AddFileName(os.path.join(sheet, sorted(os.listdir(sheet))[0]))
+
+    def test_a_change_of_connectivity_is_refused_by_frame(self):
+        self.add_another_connectivity()
         f = self.compressor()
         rec = MessageRecorder(f)
         f.Update()
         self.assertIn(f"frame {FRAMES} has", rec.error_text)
         self.assertIn("one connectivity", rec.error_text)
-        self.assertFalse(os.path.exists(other))
+        self.assertIn(f"frame {FRAMES} has", f.GetFailureMessage())
+        self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
 
     def test_a_mesh_moving_smoothly_compresses_without_a_warning(self):
         f = self.compressor(ErrorTarget=0.2)

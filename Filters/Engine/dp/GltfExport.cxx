@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/GltfExport.h"
+#include "dp/detail/FileText.h"
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
@@ -306,8 +307,7 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
     std::remove(partial.c_str());
     throw std::runtime_error(path + ": cannot write the glTF file");
   }
-  if (std::rename(partial.c_str(), path.c_str()) != 0)
-    throw std::runtime_error(path + ": cannot rename " + partial + " into place");
+  detail::moveIntoPlace(partial, path);
 }
 
 } // namespace dp

@@ -67,6 +67,16 @@ void writeWholeFile(const std::string& path, const std::string& bytes)
   }
 }
 
+void moveIntoPlace(const std::string& partial, const std::string& path)
+{
+  if (std::rename(partial.c_str(), path.c_str()) != 0)
+  {
+    const std::string reason = std::strerror(errno);
+    std::remove(partial.c_str());
+    throw FileError(path, "cannot put the written file in place (" + reason + ")");
+  }
+}
+
 std::string toLower(std::string_view s)
 {
   std::string out(s);

@@ -5,6 +5,7 @@
 // anything is allocated, so a corrupt or hostile file is refused with its name and the reason.
 #include "dp/PcaCompression.h"
 #include "dp/compress/IntegerCodec.h"
+#include "dp/detail/FileText.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -295,10 +296,13 @@ void writeCompressedSequence(const std::string& path, const CompressedSequence& 
     out.write(reinterpret_cast<const char*>(bytes.data()),
               static_cast<std::streamsize>(bytes.size()));
     if (!out)
+    {
+      out.close();
+      std::remove(partial.c_str());
       throw std::runtime_error(path + ": write failed");
+    }
   }
-  if (std::rename(partial.c_str(), path.c_str()) != 0)
-    throw std::runtime_error(path + ": cannot rename " + partial + " into place");
+  detail::moveIntoPlace(partial, path);
 }
 
 CompressedSequence readCompressedSequence(const std::string& path)

@@ -18,6 +18,11 @@ std::string readWholeFile(const std::string& path);
 /** Writes a whole file; throws FileError naming it on failure. */
 void writeWholeFile(const std::string& path, const std::string& bytes);
 
+/** Renames `partial`, written beside `path`, onto `path`. On failure removes `partial` and
+ *  throws FileError naming `path`: writers write beside and rename, so a failure leaves neither
+ *  a half file under the name nor a stray one beside it. */
+void moveIntoPlace(const std::string& partial, const std::string& path);
+
 std::string toLower(std::string_view s);
 
 /** Splits off the next line (without its "\n" or "\r\n"); false at the end of text. */
