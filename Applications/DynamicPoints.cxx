@@ -7,11 +7,11 @@
 #include "CommandLine.h"
 #include "FramePlot.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/BoundingBox.h"
-#include "dp/GltfExport.h"
-#include "dp/PcaCompression.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"

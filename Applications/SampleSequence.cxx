@@ -3,10 +3,10 @@
 // paper made its CG experiments (random surface samples per frame, noise, holes).
 #include "CommandLine.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/BoundingBox.h"
-#include "dp/FrameSequence.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
 
 #include <cstdio>
 #include <iostream>

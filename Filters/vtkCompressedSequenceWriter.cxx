@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkCompressedSequenceWriter.h"
 
-#include "dp/GltfExport.h"
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"

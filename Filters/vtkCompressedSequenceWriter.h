@@ -6,7 +6,7 @@
  * Input: temporal vtkPolyData of fixed connectivity (the output of vtkDeformableTrackFilter, or
  * an animated mesh read from disk). Write() runs vtkPCACompressFilter on the input (which pulls
  * every time step; principal components chosen for ErrorTarget, quantised, predicted,
- * zstd-coded; see dp/PcaCompression.h) and writes its result with the engine's writers to
+ * zstd-coded; see dp/compress/PcaCompression.h) and writes its result with the engine's writers to
  * FileName, in the format its extension names:
  *  - .dpz: DynamicPoints' compressed sequence (version, checksums), read back by
  *    vtkCompressedSequenceReader;

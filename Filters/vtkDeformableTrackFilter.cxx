@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDeformableTrackFilter.h"
 
-#include "dp/NormalEstimation.h"
-#include "dp/SurfaceReconstruction.h"
-#include "dp/Tracker.h"
+#include "dp/field/SurfaceReconstruction.h"
+#include "dp/geometry/NormalEstimation.h"
+#include "dp/track/Tracker.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDistanceFieldFilter.h"
 
-#include "dp/DistanceField.h"
-#include "dp/NormalEstimation.h"
-#include "dp/DistanceImage.h"
+#include "dp/field/DistanceField.h"
+#include "dp/field/DistanceImage.h"
+#include "dp/geometry/NormalEstimation.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkDataArray.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPCACompressFilter.h"
 
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"

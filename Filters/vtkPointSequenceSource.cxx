@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPointSequenceSource.h"
 
-#include "dp/FrameSequence.h"
-#include "dp/PointCloudIO.h"
+#include "dp/io/FrameSequence.h"
+#include "dp/io/PointCloudIO.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"

@@ -10,10 +10,10 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/FrameSequence.h"
-#include "dp/GltfExport.h"
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
 
 #include <algorithm>
 #include <cstdio>

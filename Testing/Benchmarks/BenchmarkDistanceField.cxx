@@ -9,10 +9,10 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/DistanceField.h"
-#include "dp/FrameSequence.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/field/DistanceField.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
 
 #include "vtkDistanceFieldFilter.h"
 #include "vtkFloatArray.h"

@@ -7,10 +7,10 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/FrameSequence.h"
-#include "dp/PointCloudIO.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
+#include "dp/io/PointCloudIO.h"
 
 #include "vtkNew.h"
 #include "vtkPointSequenceSource.h"

@@ -2,8 +2,8 @@
 // The animated meshes the benchmarks run on: the built-in tube or a folder of ../shared/data.
 #pragma once
 
-#include "dp/AnimatedMesh.h"
-#include "dp/FrameSequence.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
 
 #include <cstdio>
 #include <filesystem>

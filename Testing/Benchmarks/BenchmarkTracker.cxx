@@ -18,11 +18,11 @@
 #include "CommandLine.h"
 #include "TrackingTruth.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/BoundingBox.h"
-#include "dp/PointCloudIO.h"
-#include "dp/SurfaceSampler.h"
-#include "dp/Tracker.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/PointCloudIO.h"
+#include "dp/track/Tracker.h"
 
 #include <Eigen/Dense>
 

@@ -5,10 +5,10 @@
 // jitter). VTK's cell locators do the exact point-to-surface distances.
 #pragma once
 
-#include "dp/AnimatedMesh.h"
-#include "dp/NormalEstimation.h"
-#include "dp/SurfaceReconstruction.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/field/SurfaceReconstruction.h"
+#include "dp/geometry/NormalEstimation.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
 
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"

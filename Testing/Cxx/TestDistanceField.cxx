@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The distance field against brute-force nearest-point search, its gradient against finite
 // differences, continuity across voxel faces, out-of-band behaviour, bad input, and normals.
-#include "dp/AnimatedMesh.h"
-#include "dp/DistanceField.h"
-#include "dp/NormalEstimation.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/field/DistanceField.h"
+#include "dp/geometry/NormalEstimation.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
 
 #include <gtest/gtest.h>
 

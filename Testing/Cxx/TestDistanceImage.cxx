@@ -2,7 +2,7 @@
 // The dense distance image against brute-force nearest points: exact within the band, a close
 // upper bound beyond it, points outside the image, the same bits on one thread and on all, and
 // bad arguments refused with the problem named.
-#include "dp/DistanceImage.h"
+#include "dp/field/DistanceImage.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

@@ -2,7 +2,7 @@
 // Listing a sequence: natural order, glob patterns, .series files, times, and their errors.
 #include "TestUtilities.h"
 
-#include "dp/FrameSequence.h"
+#include "dp/io/FrameSequence.h"
 
 #include <gtest/gtest.h>
 

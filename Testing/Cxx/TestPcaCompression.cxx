@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PCA compression: error targets, the paper's counts, the codec, the file and its failures.
-#include "dp/AnimatedMesh.h"
-#include "dp/GltfExport.h"
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
+#include "dp/io/AnimatedMesh.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // Engine readers and writers: every format, both directions, and every kind of bad file.
 #include "TestUtilities.h"
 
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <gtest/gtest.h>
 

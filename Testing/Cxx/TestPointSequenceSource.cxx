@@ -2,7 +2,7 @@
 // vtkPointSequenceSource in a VTK pipeline: time steps, per-frame reads, errors and warnings.
 #include "TestUtilities.h"
 
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include "vtkCommand.h"
 #include "vtkFieldData.h"

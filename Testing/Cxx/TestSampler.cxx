@@ -2,10 +2,10 @@
 // Procedural animated meshes and the sequence sampler that makes the test data.
 #include "TestUtilities.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/FrameSequence.h"
-#include "dp/PointCloudIO.h"
-#include "dp/SurfaceSampler.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/FrameSequence.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <gtest/gtest.h>
 

@@ -3,10 +3,10 @@
 // surface with the wanted vertex count (within 10%) and well-shaped triangles, at any scale,
 // from estimated normals too, with the data's holes bridged and a patch of wrong normals
 // tolerated; open data give an open mesh; bad input refused with a message.
-#include "dp/NormalEstimation.h"
-#include "dp/SurfaceReconstruction.h"
-#include "dp/SurfaceSampler.h"
-#include "dp/TriangleMesh.h"
+#include "dp/field/SurfaceReconstruction.h"
+#include "dp/geometry/NormalEstimation.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <gtest/gtest.h>
 

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The tracker's energies (gradients against finite differences, rest state, invariances, the
 // subdivision rule) and tracking a generated sequence against its ground truth.
-#include "dp/AnimatedMesh.h"
-#include "dp/BoundingBox.h"
-#include "dp/ClothEnergy.h"
-#include "dp/SurfaceReconstruction.h"
-#include "dp/SurfaceSampler.h"
-#include "dp/Tracker.h"
-#include "dp/TriangleMesh.h"
+#include "dp/field/SurfaceReconstruction.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/geometry/TriangleMesh.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/track/ClothEnergy.h"
 #include "dp/track/SurfaceLocator.h"
+#include "dp/track/Tracker.h"
 
 #include "NumericChecks.h"
 

@@ -3,11 +3,10 @@
 // term's gradient and Gauss-Newton model against finite differences, the deformation graph
 // (rigid motions, geodesic blending, fitting), the coarse level's node-space gradient and the
 // local thickness that softens trunks.
-#include "dp/AnimatedMesh.h"
-#include "dp/BoundingBox.h"
-#include "dp/ClothEnergy.h"
-#include "dp/SurfaceSampler.h"
-#include "dp/Tracker.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/track/ClothEnergy.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
@@ -17,6 +16,7 @@
 #include "dp/track/LocalThickness.h"
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
+#include "dp/track/Tracker.h"
 
 #include "NumericChecks.h"
 

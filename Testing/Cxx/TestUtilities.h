@@ -3,7 +3,7 @@
 // check that a call throws dp::FileError naming the right file.
 #pragma once
 
-#include "dp/PointCloud.h"
+#include "dp/io/PointCloud.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // libFuzzer target: the .dpz decoder on arbitrary bytes, in memory. Built with DP_FUZZING_BUILD,
 // so the checksums are computed but not enforced and mutations reach the decoder. An exception
 // is the expected answer to a bad file; a crash, a hang or undefined behaviour is a finding.
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 
 #include <cstdint>
 #include <exception>

@@ -4,7 +4,7 @@
 // undefined behaviour (ASan + UBSan abort) is a finding.
 #include "FuzzInputFile.h"
 
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <cstdint>
 #include <exception>

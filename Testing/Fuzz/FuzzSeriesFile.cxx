@@ -4,7 +4,7 @@
 // bad file; a crash, a hang, a leak or undefined behaviour is a finding.
 #include "FuzzInputFile.h"
 
-#include "dp/FrameSequence.h"
+#include "dp/io/FrameSequence.h"
 
 #include <cstdint>
 #include <exception>

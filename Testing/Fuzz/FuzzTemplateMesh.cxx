@@ -8,9 +8,9 @@
 // behaviour is a finding.
 #include "FuzzInputFile.h"
 
-#include "dp/AnimatedMesh.h"
-#include "dp/PointCloudIO.h"
-#include "dp/Tracker.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/PointCloudIO.h"
+#include "dp/track/Tracker.h"
 
 #include <cstdint>
 #include <exception>

@@ -12,7 +12,7 @@
  */
 #pragma once
 
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 
 #include <Eigen/Core>
 

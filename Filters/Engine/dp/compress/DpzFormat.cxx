@@ -3,8 +3,8 @@
 // counts, steps and times with its CRC-32, then two zstd sections (connectivity, geometry), each
 // with its sizes and CRC-32. Every count is checked against what the bytes can hold before
 // anything is allocated, so a corrupt or hostile file is refused with its name and the reason.
-#include "dp/PcaCompression.h"
 #include "dp/compress/IntegerCodec.h"
+#include "dp/compress/PcaCompression.h"
 #include "dp/detail/FileText.h"
 
 #include <zlib.h>

@@ -14,7 +14,7 @@
  */
 #pragma once
 
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 
 #include <cstddef>
 #include <cstdint>

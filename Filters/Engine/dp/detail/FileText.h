@@ -2,7 +2,7 @@
 // Internal helpers shared by the format parsers: whole-file reading and number scanning.
 #pragma once
 
-#include "dp/PointCloud.h"
+#include "dp/io/PointCloud.h"
 
 #include <charconv>
 #include <cmath>

@@ -29,11 +29,11 @@
  */
 #pragma once
 
-#include "dp/TrackerOptions.h"
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/FrameData.h"
 #include "dp/track/SurfaceLocator.h"
+#include "dp/track/TrackerOptions.h"
 
 #include <cstdint>
 #include <vector>

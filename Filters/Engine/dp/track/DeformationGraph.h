@@ -23,7 +23,7 @@
  */
 #pragma once
 
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <Eigen/Core>
 

@@ -26,8 +26,8 @@
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/FrameData.h"
 
-#include "dp/TrackerOptions.h"
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
+#include "dp/track/TrackerOptions.h"
 
 #include <cstdint>
 #include <vector>

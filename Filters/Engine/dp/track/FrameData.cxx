@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameData.h"
 
-#include "dp/BoundingBox.h"
-#include "dp/NormalEstimation.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/NormalEstimation.h"
 
 #include <algorithm>
 #include <cmath>

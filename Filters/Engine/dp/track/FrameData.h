@@ -23,7 +23,7 @@
  */
 #pragma once
 
-#include "dp/DistanceField.h"
+#include "dp/field/DistanceField.h"
 
 #include <cstdint>
 #include <vector>

@@ -19,7 +19,7 @@
  */
 #pragma once
 
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <vector>
 

@@ -25,8 +25,8 @@
  */
 #pragma once
 
-#include "dp/TriangleMesh.h"
 #include "dp/detail/BlockSparseMatrix.h"
+#include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
 
 #include <Eigen/SparseCholesky>

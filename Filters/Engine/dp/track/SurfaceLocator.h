@@ -16,7 +16,7 @@
  */
 #pragma once
 
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <cstdint>
 #include <limits>

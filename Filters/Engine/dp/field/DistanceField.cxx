@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/DistanceField.h"
+#include "dp/field/DistanceField.h"
 
 #include "dp/detail/KdTree.h"
 

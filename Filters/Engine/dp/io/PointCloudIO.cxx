@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include "dp/detail/FileText.h"
 

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/FrameSequence.h"
+#include "dp/io/FrameSequence.h"
 
-#include "dp/PointCloud.h"
-#include "dp/PointCloudIO.h"
 #include "dp/detail/FileText.h"
+#include "dp/io/PointCloud.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <nlohmann/json.hpp>
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <algorithm>
 #include <cmath>

@@ -26,7 +26,7 @@
  */
 #pragma once
 
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <cstdint>
 #include <functional>

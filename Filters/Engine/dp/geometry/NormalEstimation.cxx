@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/NormalEstimation.h"
+#include "dp/geometry/NormalEstimation.h"
 
 #include "dp/detail/KdTree.h"
 

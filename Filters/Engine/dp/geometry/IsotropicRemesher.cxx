@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/detail/IsotropicRemesher.h"
+#include "dp/geometry/IsotropicRemesher.h"
 
 #include "dp/detail/KdTree.h"
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/GltfExport.h"
+#include "dp/export/GltfExport.h"
 #include "dp/detail/FileText.h"
 
 #include <meshoptimizer.h>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/AnimatedMesh.h"
+#include "dp/io/AnimatedMesh.h"
 
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <cmath>
 #include <stdexcept>

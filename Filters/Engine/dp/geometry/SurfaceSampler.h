@@ -15,8 +15,8 @@
  */
 #pragma once
 
-#include "dp/AnimatedMesh.h"
-#include "dp/PointCloud.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/io/PointCloud.h"
 
 #include <cstdint>
 #include <string>

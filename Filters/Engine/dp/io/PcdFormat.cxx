@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PCD reader and writer (the Point Cloud Library's format, v0.7: ascii, binary,
 // binary_compressed).
-#include "dp/PointCloudIO.h"
 #include "dp/detail/FileText.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <cmath>
 #include <cstring>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // compressSequence: the bit-rate search over the parts in dp/compress/ (the decomposition, the
 // quantiser, the integer codec); the .dpz file is in dp/compress/DpzFormat.cxx.
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 #include "dp/compress/Decomposition.h"
 #include "dp/compress/IntegerCodec.h"
 #include "dp/compress/Quantiser.h"

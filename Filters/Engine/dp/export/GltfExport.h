@@ -21,7 +21,7 @@
  */
 #pragma once
 
-#include "dp/PcaCompression.h"
+#include "dp/compress/PcaCompression.h"
 
 #include <string>
 

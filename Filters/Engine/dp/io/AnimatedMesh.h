@@ -15,8 +15,8 @@
  */
 #pragma once
 
-#include "dp/FrameSequence.h"
-#include "dp/PointCloud.h"
+#include "dp/io/FrameSequence.h"
+#include "dp/io/PointCloud.h"
 
 #include <cstdint>
 #include <string>

@@ -16,7 +16,7 @@
  */
 #pragma once
 
-#include "dp/PointCloud.h"
+#include "dp/io/PointCloud.h"
 
 #include <string>
 

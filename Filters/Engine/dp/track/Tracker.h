@@ -47,9 +47,9 @@
  */
 #pragma once
 
-#include "dp/ClothEnergy.h"
-#include "dp/TrackerOptions.h"
-#include "dp/TriangleMesh.h"
+#include "dp/geometry/TriangleMesh.h"
+#include "dp/track/ClothEnergy.h"
+#include "dp/track/TrackerOptions.h"
 
 #include <cstdint>
 #include <memory>

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/SurfaceReconstruction.h"
+#include "dp/field/SurfaceReconstruction.h"
 
-#include "dp/BoundingBox.h"
-#include "dp/detail/IsotropicRemesher.h"
 #include "dp/detail/KdTree.h"
 #include "dp/detail/Vec3.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/IsotropicRemesher.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Morphology.h>

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/ClothEnergy.h"
+#include "dp/track/ClothEnergy.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -8,7 +8,7 @@
  */
 #pragma once
 
-#include "dp/ClothEnergy.h"
+#include "dp/track/ClothEnergy.h"
 
 #include <cstddef>
 

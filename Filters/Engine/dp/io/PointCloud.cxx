@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/PointCloud.h"
+#include "dp/io/PointCloud.h"
 
 #include <algorithm>
 #include <cmath>

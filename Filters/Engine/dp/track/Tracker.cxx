@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/Tracker.h"
+#include "dp/track/Tracker.h"
 
-#include "dp/BoundingBox.h"
+#include "dp/geometry/BoundingBox.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/DistanceImage.h"
+#include "dp/field/DistanceImage.h"
 
 #include "dp/detail/KdTree.h"
 

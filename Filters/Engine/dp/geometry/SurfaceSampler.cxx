@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/SurfaceSampler.h"
+#include "dp/geometry/SurfaceSampler.h"
 
-#include "dp/PointCloudIO.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <nlohmann/json.hpp>
 

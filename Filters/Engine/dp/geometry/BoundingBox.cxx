@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/BoundingBox.h"
+#include "dp/geometry/BoundingBox.h"
 
 #include <algorithm>
 #include <cmath>

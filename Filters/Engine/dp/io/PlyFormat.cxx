@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY reader and writer (Turk's format: ASCII, binary little and big endian).
-#include "dp/PointCloudIO.h"
 #include "dp/detail/FileText.h"
+#include "dp/io/PointCloudIO.h"
 
 #include <algorithm>
 #include <cmath>
