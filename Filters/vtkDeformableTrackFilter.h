@@ -108,9 +108,9 @@ public:
 
   ///@{
   /** Factor on the stretch stiffness of the template's thick parts (a trunk, away from its
-   *  limbs; dp::ThicknessSoftening): 1 (default) is one stiffness everywhere; about 0.3 lets a
-   *  human's skin stretch and slide over the torso, but can let a galloping animal's leg be
-   *  drawn onto another (README, Tracking). */
+   *  limbs; dp::ThicknessSoftening): default 0.3, so that a body's skin stretches and slides
+   *  over the torso as it bends; 1 is one stiffness everywhere, better for slow non-rigid
+   *  motion far from isometric (a collapse; README, Tracking). */
   vtkSetClampMacro(ThickPartStretch, double, 0.0, 1.0);
   vtkGetMacro(ThickPartStretch, double);
   ///@}

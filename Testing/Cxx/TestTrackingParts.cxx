@@ -611,6 +611,7 @@ TEST(LocalThickness, TheTrackerSoftensTheStretchWhereTwoPartsFaceEachOther)
   addSphere(shape, b, 0.3);
   const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
   dp::TrackerOptions options;
+  options.softening.stretch = 1.0; // the creases' factor alone
   options.creases.stretch = 0.25;
   const dp::Tracker tracker(mesh, shape.positions, options);
   const std::vector<double>& scales = tracker.clothEnergy().stretchScales();
@@ -637,6 +638,40 @@ TEST(LocalThickness, TheTrackerSoftensTheStretchWhereTwoPartsFaceEachOther)
   options.creases.stretch = 1.0;
   const dp::Tracker stiff(mesh, shape.positions, options);
   EXPECT_TRUE(stiff.clothEnergy().stretchScales().empty());
+}
+
+TEST(LocalThickness, OnlyWhatEnclosesABallIsSoftenedAsThick)
+{
+  // A ball (closed, thick everywhere) gets the thick parts' factor on every edge; a flat sheet
+  // (its balls meet nothing) keeps the full stiffness: it is no trunk.
+  dp::TrackerOptions options;
+  options.softening.stretch = 0.3;
+  options.creases.stretch = 1.0; // the thick parts' factor alone
+  Shape ball;
+  const double centre[3] = {0, 0, 0};
+  addSphere(ball, centre, 0.3);
+  const dp::TriangleMesh ballMesh(ball.triangles, ball.positions.size() / 3);
+  const dp::Tracker round(ballMesh, ball.positions, options);
+  ASSERT_EQ(round.clothEnergy().stretchScales().size(), ballMesh.edges().size());
+  for (const double scale : round.clothEnergy().stretchScales())
+    EXPECT_NEAR(scale, 0.3, 1e-9);
+
+  Shape sheet;
+  const int cells = 12;
+  for (int j = 0; j <= cells; ++j)
+    for (int i = 0; i <= cells; ++i)
+      sheet.positions.insert(sheet.positions.end(), {0.1 * i, 0.1 * j, 0.0});
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i)
+    {
+      const std::int64_t v = j * (cells + 1) + i;
+      sheet.triangles.insert(sheet.triangles.end(),
+                             {v, v + 1, v + cells + 2, v, v + cells + 2, v + cells + 1});
+    }
+  const dp::TriangleMesh sheetMesh(sheet.triangles, sheet.positions.size() / 3);
+  const dp::Tracker flat(sheetMesh, sheet.positions, options);
+  for (const double scale : flat.clothEnergy().stretchScales())
+    EXPECT_EQ(scale, 1.0);
 }
 
 TEST(LocalThickness, AnOpenTubesRadiusIsItsOwn)

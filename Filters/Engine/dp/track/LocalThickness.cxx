@@ -4,6 +4,7 @@
 #include "dp/detail/KdTree.h"
 
 #include <cmath>
+#include <utility>
 
 namespace dp
 {
@@ -88,19 +89,26 @@ std::vector<double> medialRadii(const TriangleMesh& mesh, const double* position
     radius[v] = shrinkBall(tree, positions, v, normal, largest);
   }
   // Single vertices of a noisy surface give small balls: average them over a few rings.
-  for (int pass = 0; pass < smoothing; ++pass)
+  return smoothOverRings(mesh, std::move(radius), smoothing);
+}
+
+std::vector<double> smoothOverRings(const TriangleMesh& mesh, std::vector<double> values,
+                                    int passes)
+{
+  const std::size_t n = mesh.numberOfVertices();
+  for (int pass = 0; pass < passes; ++pass)
   {
     std::vector<double> next(n);
     for (std::size_t v = 0; v < n; ++v)
     {
-      double sum = radius[v];
+      double sum = values[v];
       for (const std::int64_t w : mesh.neighbours(v))
-        sum += radius[static_cast<std::size_t>(w)];
+        sum += values[static_cast<std::size_t>(w)];
       next[v] = sum / static_cast<double>(mesh.neighbours(v).size() + 1);
     }
-    radius.swap(next);
+    values.swap(next);
   }
-  return radius;
+  return values;
 }
 
 } // namespace dp

@@ -39,4 +39,8 @@ enum class MedialSide
 std::vector<double> medialRadii(const TriangleMesh& mesh, const double* positions, double largest,
                                 int smoothing = 3, MedialSide side = MedialSide::Inside);
 
+/** `values` per vertex averaged `passes` times over each vertex's one-ring. */
+std::vector<double> smoothOverRings(const TriangleMesh& mesh, std::vector<double> values,
+                                    int passes);
+
 } // namespace dp

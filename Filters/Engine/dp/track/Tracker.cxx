@@ -97,7 +97,8 @@ void setRegionStiffness(ClothEnergy& cloth, const TriangleMesh& mesh, const doub
     return;
   const std::size_t n = mesh.numberOfVertices();
   const double largest = 0.5 * boundingBoxDiagonal(positions, n);
-  const std::vector<double> inner = medialRadii(mesh, positions, largest);
+  const std::vector<double> ball = medialRadii(mesh, positions, largest, 0);
+  const std::vector<double> inner = smoothOverRings(mesh, ball, 3);
   std::vector<double> sorted = inner;
   const auto rank = sorted.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(n - 1));
   std::nth_element(sorted.begin(), rank, sorted.end());
@@ -106,6 +107,10 @@ void setRegionStiffness(ClothEnergy& cloth, const TriangleMesh& mesh, const doub
   if (softThick)
     for (std::size_t v = 0; v < n; ++v)
     {
+      // Thick only where the ball inside met the other side: where it met nothing (a sheet, a
+      // template open there) the surface is no trunk, and its stiffness is kept.
+      if (!(ball[v] < largest))
+        continue;
       const double s =
           std::clamp((inner[v] / thickness - thick.from) / (thick.to - thick.from), 0.0, 1.0);
       softness[v] = s * s * (3 - 2 * s);

@@ -7,7 +7,7 @@
  *
  *   E_int  the cloth energy (ClothEnergy: stretch, shear, bend; rest state = the template, or a
  *          blend with the last frame, restUpdate), softer in stretch in the template's creases
- *          (CreaseSoftening) and, on request, on its thick parts (ThicknessSoftening);
+ *          (CreaseSoftening) and on its thick parts (ThicknessSoftening);
  *   E_dis  mesh -> points, read from the frame's distance field (DistanceTerm; the paper's term,
  *          with the normal test and an outlier cut-off; distance to the data's tangent planes
  *          and a squared penalty by default);
