@@ -315,4 +315,17 @@ TEST(SurfaceReconstruction, RefusesBadInputWithAMessage)
   o.voxelSize = -1;
   EXPECT_THROW(dp::reconstructSurface(c.points.data(), c.normals.data(), 100, o),
                std::invalid_argument);
+  // A voxel far too small for the data: refused with the voxel size before the band is built
+  // (a million voxels a side would not fit in memory).
+  o.voxelSize = 1e-6;
+  try
+  {
+    dp::reconstructSurface(c.points.data(), c.normals.data(), 100, o);
+    FAIL() << "a 1e-6 voxel accepted";
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("voxel size"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("would exceed"), std::string::npos) << e.what();
+  }
 }

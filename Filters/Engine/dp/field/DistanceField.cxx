@@ -2,9 +2,9 @@
 #include "dp/field/DistanceField.h"
 
 #include "dp/detail/KdTree.h"
+#include "dp/field/PointBand.h"
 
 #include <openvdb/openvdb.h>
-#include <openvdb/tools/Morphology.h>
 #include <openvdb/tools/Prune.h>
 #include <openvdb/tree/LeafManager.h>
 #include <tbb/blocked_range.h>
@@ -93,36 +93,6 @@ void initializeOpenVDB()
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
-// An upper bound on the voxels the build activates: all lie within `reach` voxels
-// (Chebyshev) of a seed voxel, so in blocks of `reach` voxels a side that touch
-// (26-neighbourhood) a block holding a seed. Costs O(seeds log seeds).
-double activeVoxelUpperBound(const IndexTree& seeds, int reach)
-{
-  const int side = std::max(reach, 1);
-  std::vector<std::array<int, 3>> blocks;
-  for (auto it = seeds.cbeginValueOn(); it; ++it)
-  {
-    const Coord c = it.getCoord();
-    blocks.push_back({c.x() >= 0 ? c.x() / side : -((-c.x() + side - 1) / side),
-                      c.y() >= 0 ? c.y() / side : -((-c.y() + side - 1) / side),
-                      c.z() >= 0 ? c.z() / side : -((-c.z() + side - 1) / side)});
-  }
-  std::sort(blocks.begin(), blocks.end());
-  blocks.erase(std::unique(blocks.begin(), blocks.end()), blocks.end());
-  if (reach == 0)
-    return static_cast<double>(blocks.size());
-  std::vector<std::array<int, 3>> dilated;
-  dilated.reserve(blocks.size() * 27);
-  for (const auto& b : blocks)
-    for (int i = -1; i <= 1; ++i)
-      for (int j = -1; j <= 1; ++j)
-        for (int k = -1; k <= 1; ++k)
-          dilated.push_back({b[0] + i, b[1] + j, b[2] + k});
-  std::sort(dilated.begin(), dilated.end());
-  const auto unique = std::unique(dilated.begin(), dilated.end()) - dilated.begin();
-  return static_cast<double>(unique) * std::pow(static_cast<double>(side), 3);
-}
-
 } // namespace
 
 DistanceField::DistanceField() : P(std::make_unique<Impl>()) {}
@@ -162,19 +132,10 @@ void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxe
   IndexTree& tree = Grid->tree();
 
   // Topology: the voxels holding a point, dilated (26-neighbourhood) by `reach`.
-  {
-    auto acc = Grid->getAccessor();
-    for (std::size_t i = 0; i < count; ++i)
-    {
-      const double* p = &Points[3 * i];
-      acc.setValueOn(Coord(static_cast<int>(std::lround(p[0] / Voxel)),
-                           static_cast<int>(std::lround(p[1] / Voxel)),
-                           static_cast<int>(std::lround(p[2] / Voxel))));
-    }
-  }
+  detail::seedPointVoxels(tree, Points.data(), count, Voxel, 0);
   // Memory guard before dilating: nothing proportional to the band is allocated when the
   // settings are absurd.
-  const double bound = activeVoxelUpperBound(tree, reach);
+  const double bound = detail::bandVoxelBound(tree, reach);
   if (bound > static_cast<double>(maxActiveVoxels))
     throw GridTooLarge("a distance field with VoxelSize " + std::to_string(Voxel) +
                        " and BandWidth " + std::to_string(Band) + " needs up to " +
@@ -184,9 +145,7 @@ void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxe
   // The kd-tree builds while the band is dilated.
   tbb::task_group kdBuild;
   kdBuild.run([&] { Tree = std::make_unique<detail::KdTree>(Points.data(), count); });
-  if (reach > 0)
-    openvdb::tools::dilateActiveValues(tree, reach, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                       openvdb::tools::IGNORE_TILES);
+  detail::dilateBand(tree, reach);
   kdBuild.wait();
   fillNearest();
 }

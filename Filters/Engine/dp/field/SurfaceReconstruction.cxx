@@ -3,6 +3,7 @@
 
 #include "dp/detail/KdTree.h"
 #include "dp/detail/Vec3.h"
+#include "dp/field/PointBand.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/IsotropicRemesher.h"
 
@@ -73,12 +74,7 @@ constexpr double NarrowBand = 3.0;      // half-width of the band around the poi
 constexpr int CoarseRatio = 4;          // coarse voxel / fine voxel, for finding the holes
 constexpr double VoxelPerSpacing = 1.5; // the fine voxel, in median point spacings
 
-openvdb::Coord voxelOf(const double* p, double h)
-{
-  return openvdb::Coord(static_cast<int>(std::floor(p[0] / h + 0.5)),
-                        static_cast<int>(std::floor(p[1] / h + 0.5)),
-                        static_cast<int>(std::floor(p[2] / h + 0.5)));
-}
+using detail::voxelOf;
 
 // The value of hole voxels until interpolateHoles gives them one.
 constexpr float Unknown = 1e6f;
@@ -441,17 +437,10 @@ openvdb::FloatGrid::Ptr pointBand(const Input& in, double h, const Reconstructio
 {
   const float background = static_cast<float>(NarrowBand);
   openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(background);
-  {
-    auto acc = grid->getAccessor();
-    for (std::size_t i = 0; i < in.count; ++i)
-      acc.setValueOn(voxelOf(in.points + 3 * i, h), background);
-  }
-  // A quarter of the dilation cube per seed: neighbouring seeds share most of their cubes.
-  const double cube = std::pow(2 * NarrowBand + 1, 3);
-  checkGridSize(static_cast<double>(grid->activeVoxelCount()) * cube / 4, h, options);
-  openvdb::tools::dilateActiveValues(grid->tree(), static_cast<int>(NarrowBand),
-                                     openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                     openvdb::tools::IGNORE_TILES);
+  detail::seedPointVoxels(grid->tree(), in.points, in.count, h, background);
+  const int reach = static_cast<int>(NarrowBand);
+  checkGridSize(detail::bandVoxelBound(grid->tree(), reach), h, options);
+  detail::dilateBand(grid->tree(), reach);
   return grid;
 }
 
@@ -462,7 +451,7 @@ openvdb::FloatGrid::Ptr pointBand(const Input& in, double h, const Reconstructio
 // grow sheets there), so they are interpolated later, harmonically, between the band and the
 // pieces outside it.
 std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input& in, double h,
-                                          double reach)
+                                          double reach, const ReconstructionOptions& options)
 {
   std::vector<openvdb::Coord> holes;
   const double H = CoarseRatio * h;
@@ -470,14 +459,12 @@ std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input&
   if (closing <= 0)
     return holes;
   openvdb::MaskGrid::Ptr cells = openvdb::MaskGrid::create();
-  {
-    auto acc = cells->getAccessor();
-    for (std::size_t i = 0; i < in.count; ++i)
-      acc.setValueOn(voxelOf(in.points + 3 * i, H));
-  }
+  detail::seedPointVoxels(cells->tree(), in.points, in.count, H, true);
+  // The closing's dilation is bounded before it is built: a tiny voxel makes `closing` huge.
+  // (The fine voxels it adds are counted after, with the band's.)
+  checkGridSize(detail::bandVoxelBound(cells->tree(), closing), h, options);
   openvdb::MaskGrid::Ptr closed = cells->deepCopy();
-  openvdb::tools::dilateActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
-                                     openvdb::tools::IGNORE_TILES);
+  detail::dilateBand(closed->tree(), closing);
   openvdb::tools::erodeActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                     openvdb::tools::IGNORE_TILES);
   closed->tree().topologyDifference(cells->tree());
@@ -622,7 +609,7 @@ FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
   const float background = static_cast<float>(NarrowBand);
   openvdb::FloatGrid::Ptr grid = pointBand(in, h, options);
   const double sigma2 = std::pow(std::max(h, in.spacing), 2);
-  const std::vector<openvdb::Coord> holes = addHoleVoxels(*grid, in, h, reach);
+  const std::vector<openvdb::Coord> holes = addHoleVoxels(*grid, in, h, reach, options);
   checkGridSize(static_cast<double>(grid->activeVoxelCount()), h, options);
 
   OutsideBand outside(*grid);
