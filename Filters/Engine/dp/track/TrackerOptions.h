@@ -97,7 +97,8 @@ struct RecoveryOptions
  *  `stretch` and its hinges' bending stiffness by `bend`; in between it blends smoothly.
  *  Measured with the creases' softening (README, Tracking; seed 1, stretch 1 -> 0.3): the
  *  captured human 18.2 / 18.3 / 30.9 / 28.8 -> 16.8 / 16.1 / 26.6 / 27.6 mm (decimated clean /
- *  noisy, reconstructed clean / noisy), the galloping horse better or equal on every row, the
+ *  noisy, reconstructed clean / noisy), the galloping horse better on three rows and
+ *  worse reconstructed/clean (17.5 -> 19.5 mm, a leg drawn toward another on some frames), the
  *  melting horse (far from isometric) up to 10 mm worse: for slow non-rigid motion set
  *  stretch 1. Only vertices whose inner ball meets the surface's other side count as thick: a
  *  sheet, or a template open there, keeps its stiffness.
