@@ -194,6 +194,7 @@ struct FrameRecord
   double time, rmsResidual, maxResidual, milliseconds;
   long long points, iterations;
   double unexplained, unsupported; // shares of the points / of the mesh beyond 3 voxels
+  double largestStretch;           // of a stiff edge, in mean edge lengths (above 2: torn)
   int retries;
   bool failed;
 };
@@ -452,6 +453,7 @@ private:
                         static_cast<long long>(fieldValue(mesh, "Iterations")),
                         fieldValue(mesh, "Unexplained"),
                         fieldValue(mesh, "Unsupported"),
+                        fieldValue(mesh, "LargestStretch"),
                         static_cast<int>(fieldValue(mesh, "Retries")),
                         fieldValue(mesh, "Failed") > 0};
     Records.push_back(r);
@@ -550,7 +552,7 @@ private:
         {"triangles", MeshTriangles}};
     report["boundingBoxDiagonal"] = Diagonal;
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
-    std::vector<double> rms, largest, ms, unexplained, unsupported;
+    std::vector<double> rms, largest, ms, unexplained, unsupported, stretch;
     std::vector<std::size_t> failed;
     int retried = 0;
     for (const FrameRecord& r : Records)
@@ -564,10 +566,12 @@ private:
                           {"milliseconds", r.milliseconds},
                           {"unexplained", r.unexplained},
                           {"unsupported", r.unsupported},
+                          {"largestStretch", r.largestStretch},
                           {"retries", r.retries},
                           {"failed", r.failed}});
       unexplained.push_back(100 * r.unexplained);
       unsupported.push_back(100 * r.unsupported);
+      stretch.push_back(r.largestStretch);
       retried += r.retries > 0 ? 1 : 0;
       if (r.failed)
       {
@@ -606,11 +610,15 @@ private:
                                            {"mesh far from points", unsupported, {140, 86, 75}}},
                                           failed,
                                           "failed frame"};
+    const dp::cli::PlotPanel stretchPanel{"largest stretch, edge lengths (2: torn)",
+                                          {{"stiffest edge's growth", stretch, {214, 39, 40}}},
+                                          failed,
+                                          "failed frame"};
     const dp::cli::PlotPanel timePanel{
         "tracking time, ms", {{"per frame", ms, {44, 160, 44}}}, {}, ""};
     dp::cli::writeFramePlot(plot.string(),
                             "DynamicPoints: " + fs::path(InputName).filename().string(),
-                            {residualPanel, qualityPanel, timePanel});
+                            {residualPanel, qualityPanel, stretchPanel, timePanel});
     std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
   }
 

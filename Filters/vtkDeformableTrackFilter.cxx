@@ -212,6 +212,7 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   addValue("EmptyFrame", r.emptyFrame ? 1 : 0);
   addValue("Unexplained", r.unexplained);
   addValue("Unsupported", r.unsupported);
+  addValue("LargestStretch", r.tear);
   addValue("Retries", r.retries);
   addValue("Failed", r.failed ? 1 : 0);
 }
@@ -333,7 +334,9 @@ bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, vtkPointSet* input)
     vtkWarningMacro(<< "frame " << frame << " failed after " << done.retries
                     << " retries: " << 100 * done.unexplained << "% of its points are far from "
                     << "the mesh and " << 100 * done.unsupported
-                    << "% of the mesh is far from them; it is flagged in the field \"Failed\"");
+                    << "% of the mesh is far from them, and its stiffest edges grew by "
+                    << done.tear << " mean edge lengths (a limb torn beyond 2); it is flagged in "
+                    << "the field \"Failed\"");
   }
   return true;
 }

@@ -22,8 +22,9 @@
  * outlier cut-off). Field data: "FrameIndex", "Iterations", "CoarseIterations", "InternalEnergy",
  * "DistanceEnergy", "Seconds", "EmptyFrame", and the frame's quality: "Unexplained" (share of
  * the points farther than 3 voxels from the mesh), "Unsupported" (share of the mesh farther than
- * that from the points), "Retries", "Failed" (1: the frame still failed after the retries; do
- * not trust it; a warning says so).
+ * that from the points), "LargestStretch" (the most a stiff edge grew beyond its template length,
+ * in mean edge lengths: above 2 a limb was caught by other data and torn), "Retries", "Failed"
+ * (1: the frame still failed after the retries; do not trust it; a warning says so).
  *
  * Time: the output publishes the input's time steps. Asking for time t computes the frames up
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),

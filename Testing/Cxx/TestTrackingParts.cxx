@@ -11,6 +11,7 @@
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
 #include "dp/track/FrameData.h"
+#include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
 #include "dp/track/LocalThickness.h"
@@ -279,6 +280,30 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
   for (const auto& m : flipped.matches())
     matched += m.triangle >= 0;
   EXPECT_EQ(matched, 0u);
+}
+
+TEST(FrameQuality, ATearIsTheLargestStiffEdgeGrowthInMeanEdgeLengths)
+{
+  // A unit square of two triangles: four sides of 1 and a diagonal of sqrt(2).
+  const dp::TriangleMesh mesh({0, 1, 2, 1, 3, 2}, 4);
+  const std::vector<double> rest{0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  const double mean = (4 + std::sqrt(2.0)) / 5;
+  EXPECT_DOUBLE_EQ(dp::largestEdgeGrowth(mesh, rest, rest, {}), 0.0);
+  // Shrinking tears nothing.
+  std::vector<double> shrunk = rest;
+  for (double& c : shrunk)
+    c *= 0.5;
+  EXPECT_DOUBLE_EQ(dp::largestEdgeGrowth(mesh, rest, shrunk, {}), 0.0);
+  // Vertex 3 pulled 3 away: edge 1-3 grows by 3, edge 3-2 by sqrt(10) - 1.
+  std::vector<double> pulled = rest;
+  pulled[3 * 3 + 1] = 4;
+  EXPECT_NEAR(dp::largestEdgeGrowth(mesh, rest, pulled, {}), 3 / mean, 1e-12);
+  // An edge made soft to stretch counts by its stiffness: edge 1-3 at 0.1 leaves edge 3-2.
+  std::vector<double> scales;
+  for (const auto& e : mesh.edges())
+    scales.push_back(std::min(e[0], e[1]) == 1 && std::max(e[0], e[1]) == 3 ? 0.1 : 1.0);
+  EXPECT_NEAR(dp::largestEdgeGrowth(mesh, rest, pulled, scales), (std::sqrt(10.0) - 1) / mean,
+              1e-12);
 }
 
 TEST(DeformationGraph, MovesRigidlyFitsRigidMotionsAndContinuesThem)

@@ -182,14 +182,15 @@ class TestDeformableTrackFilter(TempDirTestCase):
         for t in range(FRAMES):
             f.UpdateTimeStep(t)
             fd = dsa.WrapDataObject(f.GetOutput()).FieldData
-            quality.append({k: fd[k][0] for k in ("Unexplained", "Unsupported", "Retries",
-                                                  "Failed")})
+            quality.append({k: fd[k][0] for k in ("Unexplained", "Unsupported", "LargestStretch",
+                                                  "Retries", "Failed")})
         self.assertEqual(quality[3]["Failed"], 1, quality)
         self.assertEqual(quality[3]["Retries"], 2, quality)
         self.assertGreater(quality[3]["Unexplained"], 0.05, quality)  # the ball: 1500 of 5500
         for t in (0, 1, 2, 4, 5):
             self.assertEqual(quality[t]["Failed"], 0, (t, quality))
             self.assertLess(quality[t]["Unexplained"], 0.01, (t, quality))
+            self.assertLess(quality[t]["LargestStretch"], 2, (t, quality))  # nothing torn
         self.assertIn("frame 3 failed after 2 retries", rec.warning_text)
         self.assertEqual(rec.errors, [])
 

@@ -4,6 +4,9 @@
 #include "dp/track/Parallel.h"
 #include "dp/track/SurfaceLocator.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace dp
 {
 
@@ -35,6 +38,27 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
   for (double m : lonely)
     q.unsupported += m;
   return q;
+}
+
+double largestEdgeGrowth(const TriangleMesh& mesh, const std::vector<double>& rest,
+                         const std::vector<double>& x, const std::vector<double>& scales)
+{
+  auto length = [](const std::vector<double>& p, std::int64_t a, std::int64_t b)
+  {
+    const double d[3] = {p[3 * a] - p[3 * b], p[3 * a + 1] - p[3 * b + 1],
+                         p[3 * a + 2] - p[3 * b + 2]};
+    return std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  };
+  const auto& edges = mesh.edges();
+  double largest = 0, sum = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+  {
+    const double before = length(rest, edges[i][0], edges[i][1]);
+    const double scale = scales.empty() ? 1.0 : std::min(scales[i], 1.0);
+    sum += before;
+    largest = std::max(largest, scale * (length(x, edges[i][0], edges[i][1]) - before));
+  }
+  return edges.empty() ? 0.0 : largest * static_cast<double>(edges.size()) / sum;
 }
 
 } // namespace dp

@@ -9,7 +9,11 @@
  *                surface: data the mesh has let go of (a lost limb shows here, while the paper's
  *                mesh -> points energy stays low);
  *   unsupported  the share of the mesh (by vertex area) farther than `reach` from any point:
- *                mesh where there are no data (holes in the data, or a part in the wrong place).
+ *                mesh where there are no data (holes in the data, or a part in the wrong place);
+ *   tear         the most a stiff edge grew beyond its template length, in mean template edge
+ *                lengths (largestEdgeGrowth): a limb caught by another limb's data as it passes
+ *                is stretched between them in a strip that covers almost nothing, which neither
+ *                share sees.
  *
  * With well-spread points both are shares of surface area. Limits: data the scanner saw but the
  * template lacks (a prop, a second person) count as unexplained; holes as unsupported.
@@ -28,10 +32,19 @@ struct FrameQuality
 {
   double unexplained = 0;
   double unsupported = 0;
+  double tear = 0;
 };
 
 /** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1. */
 FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
                          const std::vector<double>& mass, double reach);
+
+/** The most any edge of `x` grew beyond its length in `rest`, in mean `rest` edge lengths, each
+ *  edge's growth weighed by its stretch stiffness's scale (`scales` per edge, at most 1; empty:
+ *  all 1). The surfaces tracked here (bodies, cloth, a collapse) stay well under two; edges made
+ *  soft to stretch (creases, where a reconstruction joined two parts) may stretch more, and
+ *  count less. */
+double largestEdgeGrowth(const TriangleMesh& mesh, const std::vector<double>& rest,
+                         const std::vector<double>& x, const std::vector<double>& scales);
 
 } // namespace dp

@@ -36,8 +36,9 @@ constexpr double SettledStep = 0.1;
 // The fine level's points -> mesh term: robust scale and reach, in voxels (defaults).
 constexpr double FineCoverageScale = 3.0;
 constexpr double FineCoverageReach = 8.0;
-// A frame whose edges grew beyond their template length by more than this many mean edge lengths
-// has a torn limb: its retries start with the coarse level held stiffer.
+// A frame whose stiff edges grew beyond their template length by more than this many mean edge
+// lengths has a torn limb (FrameQuality::tear): it fails, and its retries start with the coarse
+// level held stiffer.
 constexpr double TearGrowth = 2.0;
 // Robust scale, in voxels, of the distance term that chooses the coarse level's start.
 constexpr double StartChoiceScale = 3.0;
@@ -148,28 +149,6 @@ std::vector<std::array<std::int64_t, 2>> finePairs(const TriangleMesh& mesh)
   return pairs;
 }
 
-// The most any edge has grown beyond its template length, in mean template edge lengths. A
-// limb caught by another's data as it passes stretches a few edges by several edge lengths; the
-// surfaces tracked here (bodies, cloth, a collapse) stay well under two.
-double largestEdgeGrowth(const TriangleMesh& mesh, const std::vector<double>& rest,
-                         const std::vector<double>& x)
-{
-  auto length = [](const std::vector<double>& p, std::int64_t a, std::int64_t b)
-  {
-    const double d[3] = {p[3 * a] - p[3 * b], p[3 * a + 1] - p[3 * b + 1],
-                         p[3 * a + 2] - p[3 * b + 2]};
-    return std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-  };
-  double largest = 0, sum = 0;
-  for (const auto& e : mesh.edges())
-  {
-    const double before = length(rest, e[0], e[1]);
-    sum += before;
-    largest = std::max(largest, length(x, e[0], e[1]) - before);
-  }
-  return mesh.edges().empty() ? 0.0 : largest * static_cast<double>(mesh.edges().size()) / sum;
-}
-
 // The rigid motion (R, t) that moves `from` closest to `to` (Kabsch, weights `mass`).
 void rigidFit(const std::vector<double>& from, const std::vector<double>& to,
               const std::vector<double>& mass, Eigen::Matrix3d& R, Eigen::Vector3d& t)
@@ -226,6 +205,7 @@ struct Tracker::Attempt
   double internalEnergy = 0, distanceEnergy = 0;
   FrameTimings timings;
   double score() const { return quality.unexplained + quality.unsupported; }
+  bool torn() const { return quality.tear > TearGrowth; }
 };
 
 namespace
@@ -357,8 +337,11 @@ bool Tracker::failed(const Attempt& a) const
     unexplained.push_back(q.unexplained);
     unsupported.push_back(q.unsupported);
   }
+  // A limb caught by another's data tears a strip that covers almost nothing: neither share
+  // sees it, the edges' growth does.
   return a.quality.unexplained > usual(unexplained) + Options.recovery.margin ||
-         a.quality.unsupported > usual(unsupported) + Options.recovery.margin;
+         a.quality.unsupported > usual(unsupported) + Options.recovery.margin ||
+         (Options.recovery.stiffRetry && a.torn());
 }
 
 void Tracker::startState(Start start, Attempt& a) const
@@ -444,6 +427,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   clock = std::chrono::steady_clock::now();
   a.quality =
       assessFrame(frame, Mesh, x.data(), Cloth.vertexMass(), Options.recovery.reach * Voxel);
+  a.quality.tear = largestEdgeGrowth(Mesh, Template, x, Cloth.stretchScales());
   a.timings.quality = elapsed(clock);
   a.positions = std::move(x);
   return a;
@@ -574,8 +558,7 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   {
     // Held stiffer only where a limb tore: elsewhere (a collapse, a body whose skin stretches)
     // a stiffer coarse level fits the data worse.
-    const bool torn = Options.recovery.stiffRetry &&
-                      largestEdgeGrowth(Mesh, Template, best.positions) > TearGrowth;
+    const bool torn = Options.recovery.stiffRetry && best.torn();
     for (Start retry : {Start::Stiff, Start::Still, Start::LastGood, Start::Template})
     {
       if ((!P->Graph && (retry == Start::Template || retry == Start::Stiff)) ||
@@ -586,8 +569,12 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
       ++result.retries;
       // Another start must do clearly better to be kept: the scores of two plausible fits
       // differ by noise, and a start from elsewhere breaks the motion's continuity.
-      if (other.score() < 0.7 * best.score() &&
-          other.score() < best.score() - 0.5 * Options.recovery.margin)
+      const bool better = other.score() < 0.7 * best.score() &&
+                          other.score() < best.score() - 0.5 * Options.recovery.margin;
+      // Or it mends a tear and explains the data about as well.
+      const bool mends = torn && best.torn() && !other.torn() &&
+                         other.score() < best.score() + 0.5 * Options.recovery.margin;
+      if (better || mends)
       {
         best = std::move(other);
         kept = retry == Start::Stiff ? 2 : 1;
@@ -620,6 +607,7 @@ void Tracker::keep(Attempt&& best, FrameResult& result)
   result.distanceEnergy = best.distanceEnergy;
   result.unexplained = best.quality.unexplained;
   result.unsupported = best.quality.unsupported;
+  result.tear = best.quality.tear;
   result.timings.prediction = best.timings.prediction;
   result.timings.coarse = best.timings.coarse;
   result.timings.fine = best.timings.fine;

@@ -79,14 +79,17 @@ struct GraphOptions
  *  the data (unsupported), exceeds what is usual in the take (the median of the last frames
  *  kept) by more than `margin`; it is then tried again from other starts and the best attempt
  *  is kept. Relative, so data the template lacks or holes in every frame do not count as
- *  failures, while a lost limb (a few % of the surface) does. */
+ *  failures, while a lost limb (a few % of the surface) does. A torn limb fails too (see
+ *  stiffRetry). */
 struct RecoveryOptions
 {
   bool enabled = true;
   double reach = 3.0;
   double margin = 0.003;
-  // A failed frame with a torn limb (an edge grown beyond its template length by more than two
-  // mean edge lengths) is first tried again with the coarse level's limbs held stiffer.
+  // A frame with a torn limb (a stiff edge grown beyond its template length by more than two
+  // mean edge lengths: caught by another limb's data) fails, is first tried again with the
+  // coarse level's limbs held stiffer, and keeps an attempt without the tear that explains the
+  // data about as well. Off: tears are neither failures nor retried stiffer.
   bool stiffRetry = true;
 };
 
@@ -98,7 +101,8 @@ struct RecoveryOptions
  *  Measured with the creases' softening (README, Tracking; seed 1, stretch 1 -> 0.3): the
  *  captured human 18.2 / 18.3 / 30.9 / 28.8 -> 16.8 / 16.1 / 26.6 / 27.6 mm (decimated clean /
  *  noisy, reconstructed clean / noisy), the galloping horse better on three rows and
- *  worse reconstructed/clean (17.5 -> 19.5 mm, a leg drawn toward another on some frames), the
+ *  worse reconstructed/clean (17.5 -> 19.5 mm, a leg drawn toward another over three frames;
+ *  17.1 mm since a torn limb counts as a failed frame, RecoveryOptions::stiffRetry), the
  *  melting horse (far from isometric) up to 10 mm worse: for slow non-rigid motion set
  *  stretch 1. Only vertices whose inner ball meets the surface's other side count as thick: a
  *  sheet, or a template open there, keeps its stiffness.
