@@ -611,7 +611,7 @@ private:
                                           failed,
                                           "failed frame"};
     const dp::cli::PlotPanel stretchPanel{"largest stretch, edge lengths (2: torn)",
-                                          {{"stiffest edge's growth", stretch, {214, 39, 40}}},
+                                          {{"stiffest edge's growth", stretch, {23, 190, 207}}},
                                           failed,
                                           "failed frame"};
     const dp::cli::PlotPanel timePanel{
