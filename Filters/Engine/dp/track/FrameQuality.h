@@ -35,7 +35,8 @@ struct FrameQuality
   double tear = 0;
 };
 
-/** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1. */
+/** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1.
+ *  The tear needs the rest shape and the stiffnesses: left 0 here (largestEdgeGrowth). */
 FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
                          const std::vector<double>& mass, double reach);
 
