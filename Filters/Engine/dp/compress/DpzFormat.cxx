@@ -12,7 +12,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -288,21 +287,17 @@ void writeCompressedSequence(const std::string& path, const CompressedSequence& 
 {
   const std::vector<std::uint8_t> bytes = encodeCompressedSequence(sequence);
   // Write beside and rename, so a failed write never leaves a half file under the name.
-  const std::string partial = path + ".partial";
-  {
-    std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error(path + ": cannot open for writing");
-    out.write(reinterpret_cast<const char*>(bytes.data()),
-              static_cast<std::streamsize>(bytes.size()));
-    if (!out)
-    {
-      out.close();
-      std::remove(partial.c_str());
-      throw std::runtime_error(path + ": write failed");
-    }
-  }
-  detail::moveIntoPlace(partial, path);
+  detail::writeBesideAndMove(path,
+                             [&](const std::string& partial)
+                             {
+                               std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+                               if (!out)
+                                 throw std::runtime_error(path + ": cannot open for writing");
+                               out.write(reinterpret_cast<const char*>(bytes.data()),
+                                         static_cast<std::streamsize>(bytes.size()));
+                               if (!out)
+                                 throw std::runtime_error(path + ": write failed");
+                             });
 }
 
 CompressedSequence readCompressedSequence(const std::string& path)

@@ -6,6 +6,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <functional>
 #include <string>
 #include <string_view>
 
@@ -22,6 +23,11 @@ void writeWholeFile(const std::string& path, const std::string& bytes);
  *  throws FileError naming `path`: writers write beside and rename, so a failure leaves neither
  *  a half file under the name nor a stray one beside it. */
 void moveIntoPlace(const std::string& partial, const std::string& path);
+
+/** Writes `path` the same way: `write` writes the file it is given (`path` + ".partial"); if it
+ *  throws, that file is removed and the exception passed on, else it is moved into place. */
+void writeBesideAndMove(const std::string& path,
+                        const std::function<void(const std::string& partial)>& write);
 
 std::string toLower(std::string_view s);
 

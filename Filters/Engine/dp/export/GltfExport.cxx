@@ -8,7 +8,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -273,10 +272,7 @@ void writeMeshoptGlb(const std::string& file, const std::string& path, tinygltf:
   std::ofstream out(file, std::ios::binary | std::ios::trunc);
   out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   if (!out)
-  {
-    std::remove(file.c_str());
     throw std::runtime_error(path + ": cannot write the glTF file");
-  }
 }
 
 } // namespace
@@ -299,15 +295,15 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
     addAnimation(model, morph.weights);
 
   // Written beside and renamed, so a failed write never leaves a broken file under the name.
-  const std::string partial = path + ".partial";
-  if (options.meshopt)
-    writeMeshoptGlb(partial, path, model, m.vertices);
-  else if (!tinygltf::TinyGLTF().WriteGltfSceneToFile(&model, partial, true, true, false, true))
-  {
-    std::remove(partial.c_str());
-    throw std::runtime_error(path + ": cannot write the glTF file");
-  }
-  detail::moveIntoPlace(partial, path);
+  detail::writeBesideAndMove(path,
+                             [&](const std::string& partial)
+                             {
+                               if (options.meshopt)
+                                 writeMeshoptGlb(partial, path, model, m.vertices);
+                               else if (!tinygltf::TinyGLTF().WriteGltfSceneToFile(
+                                            &model, partial, true, true, false, true))
+                                 throw std::runtime_error(path + ": cannot write the glTF file");
+                             });
 }
 
 } // namespace dp

@@ -77,6 +77,22 @@ void moveIntoPlace(const std::string& partial, const std::string& path)
   }
 }
 
+void writeBesideAndMove(const std::string& path,
+                        const std::function<void(const std::string& partial)>& write)
+{
+  const std::string partial = path + ".partial";
+  try
+  {
+    write(partial);
+  }
+  catch (...)
+  {
+    std::remove(partial.c_str());
+    throw;
+  }
+  moveIntoPlace(partial, path);
+}
+
 std::string toLower(std::string_view s)
 {
   std::string out(s);
