@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The fixed-pattern block matrix of the Gauss-Newton solver against a dense assembly of the
-// same blocks, and its trace matrix.
+// same blocks, its trace matrix, and the block Cholesky factorisation against a dense one.
+#include "dp/detail/BlockCholesky.h"
 #include "dp/detail/BlockSparseMatrix.h"
 
 #include <gtest/gtest.h>
@@ -81,4 +82,77 @@ TEST(BlockSparseMatrix, RefusesBlocksOutsideThePattern)
   EXPECT_THROW(m.addOuter(0, 2, u, u, 1.0), std::out_of_range);
   EXPECT_THROW(dp::detail::BlockSparseMatrix(2, {{{0, 5}}}), std::out_of_range);
   EXPECT_NO_THROW(m.addOuter(3, 2, u, u, 1.0));
+}
+
+namespace
+{
+// A symmetric positive definite block matrix on a random pattern (a ring plus random pairs, so
+// elimination fills in), assembled both sparse and dense.
+template <int Size>
+void randomSpd(std::size_t blocks, std::mt19937_64& rng,
+               dp::detail::BlockSparseMatrixOf<Size>& sparse, Eigen::MatrixXd& dense)
+{
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(blocks) - 1);
+  std::normal_distribution<double> value;
+  std::vector<std::array<std::int64_t, 2>> pairs;
+  for (std::size_t b = 0; b < blocks; ++b)
+    pairs.push_back({static_cast<std::int64_t>(b), static_cast<std::int64_t>((b + 1) % blocks)});
+  for (std::size_t k = 0; k < 2 * blocks; ++k)
+    pairs.push_back({pick(rng), pick(rng)});
+  sparse = dp::detail::BlockSparseMatrixOf<Size>(blocks, pairs);
+  dense = Eigen::MatrixXd::Zero(Size * blocks, Size * blocks);
+  // Sums of w u u^T over pairs (u spanning both blocks): positive semidefinite, plus a diagonal.
+  for (const auto& p : pairs)
+    for (int k = 0; k < Size; ++k)
+    {
+      Eigen::Matrix<double, Size, 1> u, v;
+      for (int i = 0; i < Size; ++i)
+      {
+        u[i] = value(rng);
+        v[i] = value(rng);
+      }
+      const double w = 1.0 + std::abs(value(rng));
+      Eigen::VectorXd whole = Eigen::VectorXd::Zero(Size * blocks);
+      whole.segment<Size>(Size * p[0]) += u;
+      whole.segment<Size>(Size * p[1]) += v;
+      dense += w * whole * whole.transpose();
+      if (p[0] == p[1])
+      {
+        const Eigen::Matrix<double, Size, 1> s = u + v;
+        sparse.addOuter(p[0], p[0], s.data(), s.data(), w);
+        continue;
+      }
+      sparse.addOuter(p[0], p[0], u.data(), u.data(), w);
+      sparse.addOuter(p[1], p[1], v.data(), v.data(), w);
+      sparse.addOuter(p[0], p[1], u.data(), v.data(), w);
+    }
+  sparse.addToDiagonal(Eigen::VectorXd::Constant(Size * blocks, 0.1));
+  dense.diagonal().array() += 0.1;
+}
+} // namespace
+
+TEST(BlockCholesky, SolvesLikeADenseFactorisation)
+{
+  std::mt19937_64 rng(11);
+  dp::detail::BlockSparseMatrixOf<6> sparse;
+  Eigen::MatrixXd dense;
+  randomSpd<6>(40, rng, sparse, dense);
+  const Eigen::MatrixXd stored = Eigen::MatrixXd(sparse.matrix());
+  ASSERT_LT((Eigen::MatrixXd(stored.selfadjointView<Eigen::Lower>()) - dense).cwiseAbs().maxCoeff(),
+            1e-9);
+  dp::detail::BlockCholeskyOf<6> cholesky;
+  cholesky.analyse(sparse);
+  EXPECT_GT(cholesky.offDiagonalBlocks(), 40u); // the ring and the pairs, with fill
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(6 * 40);
+  const Eigen::VectorXd expected = dense.llt().solve(b);
+  for (int round = 0; round < 2; ++round) // the pattern's analysis serves every factorisation
+  {
+    ASSERT_TRUE(cholesky.factorise(sparse));
+    const Eigen::VectorXd x = cholesky.solve(b);
+    EXPECT_LT((x - expected).norm(), 1e-9 * expected.norm()) << "round " << round;
+    EXPECT_LT((dense * x - b).norm(), 1e-9 * b.norm());
+  }
+  // A matrix that is not positive definite is refused, not factorised into garbage.
+  sparse.addToDiagonal(Eigen::VectorXd::Constant(6 * 40, -1e6));
+  EXPECT_FALSE(cholesky.factorise(sparse));
 }

@@ -307,7 +307,7 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     const double energy = model(state, terms, rigidity, NodeGradient);
     if (!Analysed)
     {
-      Solver.analyzePattern(NodeModel.matrix());
+      Solver.analyse(NodeModel);
       Analysed = true;
     }
     const Eigen::VectorXd diagonal = NodeModel.diagonal();
@@ -318,8 +318,7 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     {
       const Eigen::VectorXd shift = damping * diagonal.array() + floor;
       NodeModel.addToDiagonal(shift);
-      Solver.factorize(NodeModel.matrix());
-      const bool solved = Solver.info() == Eigen::Success;
+      const bool solved = Solver.factorise(NodeModel);
       Eigen::VectorXd delta;
       if (solved)
         delta = Solver.solve(-NodeGradient);

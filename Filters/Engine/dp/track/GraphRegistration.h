@@ -36,16 +36,15 @@
  * from stiff and far-reaching (the data terms see points up to ~24 voxels away, robustly) to
  * supple and local, a few Levenberg-Marquardt steps each, correspondences re-decided every step.
  *
- * Limits: the normal equations are solved exactly by a sparse Cholesky factorisation (6 x nodes
- * unknowns); the schedule's reaches are in voxels of the distance field.
+ * Limits: the normal equations are solved exactly by a sparse Cholesky factorisation of 6 x 6
+ * blocks (6 x nodes unknowns); the schedule's reaches are in voxels of the distance field.
  */
 #pragma once
 
+#include "dp/detail/BlockCholesky.h"
 #include "dp/detail/BlockSparseMatrix.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/EnergyTerm.h"
-
-#include <Eigen/SparseCholesky>
 
 #include <memory>
 #include <vector>
@@ -118,7 +117,7 @@ private:
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
   Eigen::VectorXd NodeGradient;
-  Eigen::SimplicialLDLT<detail::BlockSparseMatrixOf<6>::Matrix, Eigen::Lower> Solver;
+  detail::BlockCholeskyOf<6> Solver;
   bool Analysed = false;
 };
 
