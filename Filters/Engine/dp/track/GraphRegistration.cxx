@@ -294,8 +294,7 @@ double GraphRegistration::model(const DeformationGraph::State& state,
 int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                              double rigidity, int iterations)
 {
-  const std::size_t nv = Graph.mesh().numberOfVertices();
-  std::vector<double> x(3 * nv), trial(3 * nv);
+  std::vector<double> x(3 * Graph.mesh().numberOfVertices());
   double damping = 1e-4;
   int step = 0;
   for (; step < iterations; ++step)
@@ -310,42 +309,8 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
       Solver.analyse(NodeModel);
       Analysed = true;
     }
-    const Eigen::VectorXd diagonal = NodeModel.diagonal();
-    const double floor = 1e-12 * std::max(diagonal.maxCoeff(), 1e-300);
-    bool accepted = false;
     double decrease = 0;
-    for (int attempt = 0; attempt < 8 && !accepted; ++attempt)
-    {
-      const Eigen::VectorXd shift = damping * diagonal.array() + floor;
-      NodeModel.addToDiagonal(shift);
-      const bool solved = Solver.factorise(NodeModel);
-      Eigen::VectorXd delta;
-      if (solved)
-        delta = Solver.solve(-NodeGradient);
-      NodeModel.addToDiagonal(-shift);
-      if (!solved || !delta.allFinite())
-      {
-        damping *= 10;
-        continue;
-      }
-      const double predicted =
-          -(NodeGradient.dot(delta) +
-            0.5 * delta.dot(NodeModel.matrix().selfadjointView<Eigen::Lower>() * delta));
-      const DeformationGraph::State candidate = retract(state, delta);
-      Graph.deform(candidate, trial.data());
-      const double after =
-          evaluateAll(terms, trial.data(), nullptr) + regularisation(candidate, rigidity);
-      decrease = energy - after;
-      if (predicted > 0 && decrease > 0.1 * predicted)
-      {
-        accepted = true;
-        state = candidate;
-        if (decrease > 0.75 * predicted)
-          damping = std::max(damping * 0.3, 1e-9);
-      }
-      else
-        damping *= 10;
-    }
+    const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease);
     if (!accepted || decrease <= Tolerance * std::abs(energy))
     {
       step += accepted;
@@ -353,6 +318,49 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     }
   }
   return step;
+}
+
+bool GraphRegistration::dampedStep(DeformationGraph::State& state,
+                                   const std::vector<EnergyTerm*>& terms, double rigidity,
+                                   double energy, double& damping, double& decrease)
+{
+  // Levenberg-Marquardt on the model just built: a step is kept when E falls by at least a tenth
+  // of what the model promised; otherwise the damping grows tenfold (at most eight tries).
+  std::vector<double> trial(3 * Graph.mesh().numberOfVertices());
+  const Eigen::VectorXd diagonal = NodeModel.diagonal();
+  const double floor = 1e-12 * std::max(diagonal.maxCoeff(), 1e-300);
+  for (int attempt = 0; attempt < 8; ++attempt)
+  {
+    const Eigen::VectorXd shift = damping * diagonal.array() + floor;
+    NodeModel.addToDiagonal(shift);
+    const bool solved = Solver.factorise(NodeModel);
+    Eigen::VectorXd delta;
+    if (solved)
+      delta = Solver.solve(-NodeGradient);
+    NodeModel.addToDiagonal(-shift);
+    if (!solved || !delta.allFinite())
+    {
+      damping *= 10;
+      continue;
+    }
+    const double predicted =
+        -(NodeGradient.dot(delta) +
+          0.5 * delta.dot(NodeModel.matrix().selfadjointView<Eigen::Lower>() * delta));
+    const DeformationGraph::State candidate = retract(state, delta);
+    Graph.deform(candidate, trial.data());
+    const double after =
+        evaluateAll(terms, trial.data(), nullptr) + regularisation(candidate, rigidity);
+    decrease = energy - after;
+    if (predicted > 0 && decrease > 0.1 * predicted)
+    {
+      state = candidate;
+      if (decrease > 0.75 * predicted)
+        damping = std::max(damping * 0.3, 1e-9);
+      return true;
+    }
+    damping *= 10;
+  }
+  return false;
 }
 
 int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTerm& distance,

@@ -101,6 +101,10 @@ private:
   Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::size_t index,
                                int direction) const;
   void reweightEdges(const DeformationGraph::State& state, double robustScale);
+  // One Levenberg-Marquardt step on the model last built (energy E there): true if a step was
+  // kept (state moved, decrease set); the damping carries over between steps.
+  bool dampedStep(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
+                  double rigidity, double energy, double& damping, double& decrease);
   double stretching(const DeformationGraph::State& state, double weight,
                     detail::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
   static DeformationGraph::State retract(const DeformationGraph::State& state,

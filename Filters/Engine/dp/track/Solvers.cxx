@@ -310,6 +310,71 @@ int solveLbfgs(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
   return objective.evaluations;
 }
 
+namespace
+{
+// The paper's provisional determination (PD): a vertex that barely moves is frozen. The distance
+// term's gradient has the same size everywhere, so a settled vertex keeps stepping but goes
+// nowhere: over a window of iterations, it freezes when its net motion is under a quarter of the
+// path it stepped, and wakes when a neighbour moves steadily (net motion over half its path).
+class ProvisionalDetermination
+{
+public:
+  static constexpr int Window = 5;
+
+  ProvisionalDetermination(const TriangleMesh& mesh, const std::vector<double>& x)
+      : Mesh(mesh), Anchor(x), Path(mesh.numberOfVertices(), 0.0),
+        Steady(mesh.numberOfVertices(), 0), Still(mesh.numberOfVertices(), 0)
+  {
+  }
+
+  bool frozen(std::size_t v) const { return Still[v] != 0; }
+  void stepped(std::size_t v, double length) { Path[v] += length; }
+
+  /** At the end of each window: decides who is still and who wakes, from x. */
+  void endWindow(const std::vector<double>& x)
+  {
+    const std::size_t nv = Mesh.numberOfVertices();
+    for (std::size_t v = 0; v < nv; ++v)
+    {
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k)
+        d2 += (x[3 * v + k] - Anchor[3 * v + k]) * (x[3 * v + k] - Anchor[3 * v + k]);
+      const double net = std::sqrt(d2);
+      Steady[v] = Path[v] > 0 && net > 0.5 * Path[v];
+      if (!Still[v] && Path[v] > 0 && net < 0.25 * Path[v])
+        Still[v] = 1;
+    }
+    for (std::size_t v = 0; v < nv; ++v)
+      if (Still[v])
+        for (std::int64_t u : Mesh.neighbours(v))
+          if (Steady[u])
+          {
+            Still[v] = 0; // a neighbour moves: wake up
+            break;
+          }
+    Anchor = x;
+    std::fill(Path.begin(), Path.end(), 0.0);
+  }
+
+  const std::vector<std::uint8_t>& still() const { return Still; }
+
+private:
+  const TriangleMesh& Mesh;
+  std::vector<double> Anchor, Path;
+  std::vector<std::uint8_t> Steady, Still;
+};
+
+// Steepest descent's stop: it compares the energy with the one ten iterations before. Its steps
+// are short (h < 2 / k_max), so its gains are small long before it settles: it stops at a tenth
+// of the relative gain the other solvers stop at.
+bool stalled(std::vector<double>& recent, double energy, double tolerance)
+{
+  recent.push_back(energy);
+  return recent.size() > 10 &&
+         recent[recent.size() - 11] - energy <= 0.1 * tolerance * std::abs(energy);
+}
+} // namespace
+
 int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
                          const TriangleMesh& mesh, double lengthScale,
                          const SolveSettings& settings, std::vector<std::uint8_t>* frozen)
@@ -320,13 +385,7 @@ int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>&
   const double kMax = largestCurvature(terms, x, lengthScale);
   double h = kMax > 0 ? 1.9 / kMax : lengthScale;
   std::vector<double> gradient(x.size()), before;
-  // PD: a vertex that barely moves is frozen. The distance term's gradient has the same size
-  // everywhere, so a settled vertex keeps stepping but goes nowhere: over a window of
-  // iterations, it freezes when its net motion is under a quarter of the path it stepped, and
-  // wakes when a neighbour moves steadily (net motion over half its path).
-  constexpr int window = 5;
-  std::vector<double> anchor = x, path(nv, 0.0);
-  std::vector<std::uint8_t> steady(nv, 0), still(nv, 0);
+  ProvisionalDetermination pd(mesh, x);
   std::vector<double> recent; // energies of the last iterations
   double previous = std::numeric_limits<double>::infinity();
   int iteration = 0;
@@ -336,29 +395,20 @@ int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>&
     double e = evaluateAll(terms, x.data(), gradient.data());
     // h < 2 / k_max holds for the curvature where it was estimated; where the energy rises
     // anyway, take the step back and halve h.
-    int halvings = 0;
-    while (e > previous && halvings < 20 && !before.empty())
+    for (int halvings = 0; e > previous && halvings < 20 && !before.empty(); ++halvings)
     {
       h *= 0.5;
       x = before;
       std::fill(gradient.begin(), gradient.end(), 0.0);
       e = evaluateAll(terms, x.data(), gradient.data());
-      ++halvings;
     }
     previous = e;
     before = x;
-    recent.push_back(e);
-    if (recent.size() > 10)
-    {
-      const double gained = recent[recent.size() - 11] - e;
-      // Steepest descent's steps are short (h < 2 / k_max), so its gains are small long before it
-      // settles: it stops at a tenth of the relative gain the other solvers stop at.
-      if (gained <= 0.1 * settings.tolerance * std::abs(e))
-        break;
-    }
+    if (stalled(recent, e, settings.tolerance))
+      break;
     for (std::size_t v = 0; v < nv; ++v)
     {
-      if (frozen && still[v])
+      if (frozen && pd.frozen(v))
         continue;
       double step2 = 0;
       for (int k = 0; k < 3; ++k)
@@ -367,31 +417,11 @@ int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>&
         x[3 * v + k] -= d;
         step2 += d * d;
       }
-      path[v] += std::sqrt(step2);
+      pd.stepped(v, std::sqrt(step2));
     }
-    if (frozen && iteration % window == window - 1)
-    {
-      for (std::size_t v = 0; v < nv; ++v)
-      {
-        double d2 = 0;
-        for (int k = 0; k < 3; ++k)
-          d2 += (x[3 * v + k] - anchor[3 * v + k]) * (x[3 * v + k] - anchor[3 * v + k]);
-        const double net = std::sqrt(d2);
-        steady[v] = path[v] > 0 && net > 0.5 * path[v];
-        if (!still[v] && path[v] > 0 && net < 0.25 * path[v])
-          still[v] = 1;
-      }
-      for (std::size_t v = 0; v < nv; ++v)
-        if (still[v])
-          for (std::int64_t u : mesh.neighbours(v))
-            if (steady[u])
-            {
-              still[v] = 0; // a neighbour moves: wake up
-              break;
-            }
-      anchor = x;
-      std::fill(path.begin(), path.end(), 0.0);
-    }
+    if (frozen &&
+        iteration % ProvisionalDetermination::Window == ProvisionalDetermination::Window - 1)
+      pd.endWindow(x);
     if (iteration % 25 == 24)
     {
       decideAll(terms, x.data());
@@ -400,7 +430,7 @@ int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>&
     }
   }
   if (frozen)
-    *frozen = still;
+    *frozen = pd.still();
   return iteration + 1;
 }
 
