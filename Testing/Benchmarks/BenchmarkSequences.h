@@ -13,7 +13,8 @@
 namespace dp::bench
 {
 
-/** "tube" or the PLY frames of data/name; nullptr (with a line saying so) when not there. */
+/** "tube" or the PLY (else OBJ) frames of data/name; nullptr (with a line saying so) when not
+ *  there. */
 inline std::unique_ptr<dp::AnimatedMesh> loadAnimation(const std::string& data,
                                                        const std::string& name)
 {
@@ -25,7 +26,14 @@ inline std::unique_ptr<dp::AnimatedMesh> loadAnimation(const std::string& data,
     std::printf("\n== %s: %s not found, skipped\n", name.c_str(), folder.c_str());
     return nullptr;
   }
-  return std::make_unique<dp::MeshSequenceFiles>(dp::FrameSequence::fromDirectory(folder, "*.ply"));
+  // One mesh file per frame: PLY, else OBJ.
+  for (const char* extension : {".ply", ".obj"})
+    for (const auto& entry : std::filesystem::directory_iterator(folder))
+      if (entry.path().extension() == extension)
+        return std::make_unique<dp::MeshSequenceFiles>(
+            dp::FrameSequence::fromDirectory(folder, std::string("*") + extension));
+  std::printf("\n== %s: no .ply or .obj frames in %s, skipped\n", name.c_str(), folder.c_str());
+  return nullptr;
 }
 
 } // namespace dp::bench
