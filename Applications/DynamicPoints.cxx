@@ -29,6 +29,8 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -197,7 +199,26 @@ struct FrameRecord
   double largestStretch;           // of a stiff edge, in mean edge lengths (above 2: torn)
   int retries;
   bool failed;
+  std::array<double, 6> stageMilliseconds; // in the order of StageNames
 };
+
+// Where a frame's time goes (the track filter's field data <Name>Seconds): its data (field,
+// normals, subsample), the kept attempt's stages, and the other attempts.
+constexpr std::array<const char*, 6> StageNames = {"Data", "Prediction", "Coarse",
+                                                   "Fine", "Quality",    "Retry"};
+
+// {"data": ms, "prediction": ms, ...} in report.json.
+nlohmann::json stagesJson(const std::array<double, 6>& milliseconds)
+{
+  nlohmann::json stages = nlohmann::json::object();
+  for (std::size_t k = 0; k < StageNames.size(); ++k)
+  {
+    std::string key = StageNames[k];
+    key[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(key[0])));
+    stages[key] = milliseconds[k];
+  }
+  return stages;
+}
 
 struct Settings
 {
@@ -444,18 +465,22 @@ private:
       largest = std::max(largest, r);
     }
     const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
-    const FrameRecord r{f,
-                        time,
-                        std::sqrt(sum / n),
-                        largest,
-                        1000 * fieldValue(mesh, "Seconds"),
-                        static_cast<long long>(Source->GetOutput()->GetNumberOfPoints()),
-                        static_cast<long long>(fieldValue(mesh, "Iterations")),
-                        fieldValue(mesh, "Unexplained"),
-                        fieldValue(mesh, "Unsupported"),
-                        fieldValue(mesh, "LargestStretch"),
-                        static_cast<int>(fieldValue(mesh, "Retries")),
-                        fieldValue(mesh, "Failed") > 0};
+    FrameRecord r{f,
+                  time,
+                  std::sqrt(sum / n),
+                  largest,
+                  1000 * fieldValue(mesh, "Seconds"),
+                  static_cast<long long>(Source->GetOutput()->GetNumberOfPoints()),
+                  static_cast<long long>(fieldValue(mesh, "Iterations")),
+                  fieldValue(mesh, "Unexplained"),
+                  fieldValue(mesh, "Unsupported"),
+                  fieldValue(mesh, "LargestStretch"),
+                  static_cast<int>(fieldValue(mesh, "Retries")),
+                  fieldValue(mesh, "Failed") > 0,
+                  {}};
+    for (std::size_t k = 0; k < StageNames.size(); ++k)
+      r.stageMilliseconds[k] =
+          1000 * fieldValue(mesh, (std::string(StageNames[k]) + "Seconds").c_str());
     Records.push_back(r);
     if (!S.quiet)
     {
@@ -568,7 +593,8 @@ private:
                           {"unsupported", r.unsupported},
                           {"largestStretch", r.largestStretch},
                           {"retries", r.retries},
-                          {"failed", r.failed}});
+                          {"failed", r.failed},
+                          {"stageMilliseconds", stagesJson(r.stageMilliseconds)}});
       unexplained.push_back(100 * r.unexplained);
       unsupported.push_back(100 * r.unsupported);
       stretch.push_back(r.largestStretch);
@@ -588,6 +614,16 @@ private:
     std::vector<double> sorted = ms;
     std::sort(sorted.begin(), sorted.end());
     report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    std::array<double, 6> stageMedians{};
+    for (std::size_t k = 0; k < StageNames.size(); ++k)
+    {
+      std::vector<double> stage;
+      for (const FrameRecord& r : Records)
+        stage.push_back(r.stageMilliseconds[k]);
+      std::sort(stage.begin(), stage.end());
+      stageMedians[k] = stage.empty() ? 0.0 : stage[stage.size() / 2];
+    }
+    report["medianStageMillisecondsPerFrame"] = stagesJson(stageMedians);
     const fs::path plot = Output / "report.png";
     nlohmann::json outputs = {{"tracked", Pvd.string()}, {"plot", plot.string()}};
     if (!Compression.empty())

@@ -209,6 +209,16 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   addValue("InternalEnergy", r.internalEnergy);
   addValue("DistanceEnergy", r.distanceEnergy);
   addValue("Seconds", r.seconds);
+  // Where the frame's time went: its data, then the kept attempt's stages; the other attempts
+  // (retries) take the rest of the frame's time.
+  const dp::FrameTimings& t = r.timings;
+  const double stages = t.data + t.prediction + t.coarse + t.fine + t.quality;
+  addValue("DataSeconds", t.data);
+  addValue("PredictionSeconds", t.prediction);
+  addValue("CoarseSeconds", t.coarse);
+  addValue("FineSeconds", t.fine);
+  addValue("QualitySeconds", t.quality);
+  addValue("RetrySeconds", r.retries > 0 ? std::max(0.0, r.seconds - stages) : 0.0);
   addValue("EmptyFrame", r.emptyFrame ? 1 : 0);
   addValue("Unexplained", r.unexplained);
   addValue("Unsupported", r.unsupported);

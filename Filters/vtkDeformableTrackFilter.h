@@ -20,11 +20,15 @@
  * (Recovery). Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's
  * points, -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or
  * outlier cut-off). Field data: "FrameIndex", "Iterations", "CoarseIterations", "InternalEnergy",
- * "DistanceEnergy", "Seconds", "EmptyFrame", and the frame's quality: "Unexplained" (share of
- * the points farther than 3 voxels from the mesh), "Unsupported" (share of the mesh farther than
- * that from the points), "LargestStretch" (the most a stiff edge grew beyond its template length,
- * in mean edge lengths: above 2 a limb was caught by other data and torn), "Retries", "Failed"
- * (1: the frame still failed after the retries; do not trust it; a warning says so).
+ * "DistanceEnergy", "Seconds" and where they went ("DataSeconds": field, normals, subsample;
+ * "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds", "QualitySeconds" of the kept
+ * attempt; "RetrySeconds": the other attempts; the stages add up to Seconds but for a little
+ * bookkeeping, an empty frame's time is in Seconds only), "EmptyFrame", and the frame's quality:
+ * "Unexplained" (share of the points farther than 3 voxels from the mesh), "Unsupported" (share
+ * of the mesh farther than that from the points), "LargestStretch" (the most a stiff edge grew
+ * beyond its template length, in mean edge lengths: above 2 a limb was caught by other data and
+ * torn), "Retries", "Failed" (1: the frame still failed after the retries; do not trust it; a
+ * warning says so).
  *
  * Time: the output publishes the input's time steps. Asking for time t computes the frames up
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),

@@ -177,6 +177,16 @@ class TestDefaultRun(TempDirTestCase):
             # Nothing torn, yet the tube bends: its edges do stretch a little.
             self.assertLess(frame["largestStretch"], 2, frame)
             self.assertFalse(frame["failed"], frame)
+            # Where the frame's time went: every stage, within its time.
+            stages = frame["stageMilliseconds"]
+            self.assertEqual(set(stages), {"data", "prediction", "coarse", "fine", "quality",
+                                           "retry"})
+            self.assertTrue(all(v >= 0 for v in stages.values()), frame)
+            self.assertLessEqual(sum(stages.values()), frame["milliseconds"] * (1 + 1e-9), frame)
+            self.assertGreater(stages["fine"], 0, frame)
+        medians = report["medianStageMillisecondsPerFrame"]
+        self.assertEqual(set(medians), set(report["perFrame"][0]["stageMilliseconds"]))
+        self.assertLessEqual(medians["fine"], max(f["milliseconds"] for f in report["perFrame"]))
         self.assertGreater(max(f["largestStretch"] for f in report["perFrame"]), 0)
         self.assertEqual(report["framesFailed"], [])
         self.assertLessEqual(report["compression"]["KGError"], 0.2)
