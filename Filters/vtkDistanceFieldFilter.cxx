@@ -23,6 +23,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <memory>
 #include <type_traits>
 #include <vector>
 
@@ -93,45 +95,62 @@ double boundsOf(const std::vector<double>& xyz, double box[6])
              ? diagonal
              : std::max(1.0, std::abs(box[0]) + std::abs(box[2]) + std::abs(box[4])) * 1e-3;
 }
-// The output's point arrays from the engine's image: the nearest point's id and normal, and the
-// gradient of the distance (the unit vector away from the nearest point).
+// The output's arrays the engine writes into directly (nothing is copied): the distance and the
+// band flag; the nearest point's index is the engine's, turned into the input's ids afterwards.
+struct OutputArrays
+{
+  vtkNew<vtkFloatArray> distance;
+  vtkNew<vtkUnsignedCharArray> inBand;
+  std::unique_ptr<std::uint32_t[]> nearestIndex; // every entry written by the engine
+  std::size_t samples;
+
+  explicit OutputArrays(vtkIdType count)
+      : nearestIndex(new std::uint32_t[static_cast<std::size_t>(count)]),
+        samples(static_cast<std::size_t>(count))
+  {
+    distance->SetName("Distance");
+    distance->SetNumberOfTuples(count);
+    inBand->SetName("InBand");
+    inBand->SetNumberOfTuples(count);
+  }
+  dp::DistanceImageView view()
+  {
+    return {samples, distance->GetPointer(0), nearestIndex.get(), inBand->GetPointer(0)};
+  }
+};
+
+// The output's point arrays from the engine's image: the distance and band flag, the nearest
+// point's id and normal, and the gradient of the distance (the unit vector away from the nearest
+// point).
 void fillArrays(vtkImageData* output, const std::vector<double>& xyz,
                 const std::vector<vtkIdType>& ids, const std::vector<float>& normals,
-                const dp::ImageGrid& grid, const dp::DistanceImage& field)
+                const dp::ImageGrid& grid, OutputArrays& field)
 {
   const vtkIdType samples = static_cast<vtkIdType>(grid.voxelCount());
-  vtkNew<vtkFloatArray> distance;
-  distance->SetName("Distance");
-  distance->SetNumberOfTuples(samples);
-  std::copy(field.distance.begin(), field.distance.end(), distance->GetPointer(0));
+  const dp::DistanceImageView image = field.view();
   vtkNew<vtkFloatArray> gradient;
   gradient->SetName("Gradient");
   gradient->SetNumberOfComponents(3);
   gradient->SetNumberOfTuples(samples);
+  dp::distanceGradient(xyz.data(), grid, image, gradient->GetPointer(0));
   vtkNew<vtkIdTypeArray> nearest;
   nearest->SetName("NearestPointId");
   nearest->SetNumberOfTuples(samples);
-  vtkNew<vtkUnsignedCharArray> inBand;
-  inBand->SetName("InBand");
-  inBand->SetNumberOfTuples(samples);
-  std::copy(field.exact.begin(), field.exact.end(), inBand->GetPointer(0));
-  vtkNew<vtkFloatArray> nearestNormal;
-  nearestNormal->SetName("NearestNormal");
-  nearestNormal->SetNumberOfComponents(3);
-  if (!normals.empty())
-    nearestNormal->SetNumberOfTuples(samples);
-
   static_assert(std::is_same<vtkIdType, long long>::value, "vtkIdType is 64-bit here");
-  dp::distanceGradient(xyz.data(), grid, field, gradient->GetPointer(0));
-  dp::gatherNearest(field, ids.data(), nearest->GetPointer(0));
-  if (!normals.empty())
-    dp::gatherNearest(field, normals.data(), 3, nearestNormal->GetPointer(0));
-  output->GetPointData()->SetScalars(distance);
+  dp::gatherNearest(image, ids.data(), nearest->GetPointer(0));
+  output->GetPointData()->SetScalars(field.distance);
   output->GetPointData()->SetVectors(gradient);
   output->GetPointData()->AddArray(nearest);
-  output->GetPointData()->AddArray(inBand);
+  output->GetPointData()->AddArray(field.inBand);
   if (!normals.empty())
+  {
+    vtkNew<vtkFloatArray> nearestNormal;
+    nearestNormal->SetName("NearestNormal");
+    nearestNormal->SetNumberOfComponents(3);
+    nearestNormal->SetNumberOfTuples(samples);
+    dp::gatherNearest(image, normals.data(), 3, nearestNormal->GetPointer(0));
     output->GetPointData()->AddArray(nearestNormal);
+  }
 }
 } // namespace
 
@@ -195,11 +214,13 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
   this->SetProgressText("Point Distance Field");
   this->UpdateProgress(0.05);
-  dp::DistanceImage field;
+  OutputArrays field(samples);
+  dp::DistanceImageBand band;
   try
   {
-    field = dp::computeDistanceImage(target.xyz.data(), target.ids.size(), grid,
-                                     this->BandWidth > 0 ? this->BandWidth : 3 * largestSpacing);
+    band = dp::computeDistanceImage(target.xyz.data(), target.ids.size(), grid,
+                                    this->BandWidth > 0 ? this->BandWidth : 3 * largestSpacing,
+                                    field.view());
   }
   catch (const std::exception& e)
   {
@@ -226,8 +247,8 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
     a->InsertNextValue(value);
     output->GetFieldData()->AddArray(a);
   };
-  addValue("BandWidth", field.bandWidth);
-  addValue("BandVoxels", static_cast<double>(field.bandVoxels));
+  addValue("BandWidth", band.bandWidth);
+  addValue("BandVoxels", static_cast<double>(band.bandVoxels));
   this->UpdateProgress(1.0);
   return 1;
 }

@@ -17,12 +17,12 @@
 #include "vtkDistanceFieldFilter.h"
 #include "vtkFloatArray.h"
 #include "vtkImageData.h"
+#include "vtkKdTreePointLocator.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
-#include "vtkStaticPointLocator.h"
 #include "vtkUnsignedDistance.h"
 
 #include <tbb/global_control.h>
@@ -379,7 +379,7 @@ void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool wi
     theirsTime = timeIt(theirs);
   }
 
-  vtkNew<vtkStaticPointLocator> locator;
+  vtkNew<vtkKdTreePointLocator> locator; // exact, and quick far from the points too
   locator->SetDataSet(cloud);
   locator->BuildLocator();
   vtkImageData* image = ours->GetOutput();

@@ -8,6 +8,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <random>
@@ -143,6 +144,54 @@ TEST(DistanceImage, SameBitsOnOneThreadAndOnAll)
   EXPECT_EQ(all.exact, one.exact);
   for (std::int64_t p : all.nearest)
     ASSERT_LT(p, 5000); // a duplicate never wins over its original
+}
+
+TEST(DistanceImage, ExactOnAStretchedGridInAnyPointOrderAndIntoTheCallersArrays)
+{
+  // A grid whose axes differ (the band reaches a different number of rows along each), points
+  // partly beyond it, once in their order and once reversed.
+  const std::vector<double> points = spherePoints(3000, 4);
+  dp::ImageGrid grid;
+  grid.dimensions = {37, 23, 17};
+  grid.origin = {-0.55, -0.45, -0.4};
+  grid.spacing = {0.03, 0.045, 0.05};
+  const double band = 0.11;
+  const dp::DistanceImage image = dp::computeDistanceImage(points.data(), 3000, grid, band);
+  const std::vector<double> exact = exactDistances(points, grid);
+  std::size_t inBand = 0;
+  for (std::size_t v = 0; v < exact.size(); ++v)
+  {
+    ASSERT_EQ(image.exact[v], exact[v] <= band ? 1 : 0) << "voxel " << v;
+    if (exact[v] <= band)
+    {
+      ++inBand;
+      ASSERT_NEAR(image.distance[v], exact[v], 1e-6) << "voxel " << v;
+    }
+    ASSERT_GE(image.distance[v], exact[v] - 1e-6) << "voxel " << v;
+  }
+  EXPECT_EQ(image.bandVoxels, inBand);
+  EXPECT_GT(inBand, exact.size() / 10);
+
+  std::vector<double> reversed;
+  for (std::size_t p = 3000; p-- > 0;)
+    reversed.insert(reversed.end(), &points[3 * p], &points[3 * p + 3]);
+  std::vector<float> distance(grid.voxelCount());
+  std::vector<std::uint32_t> nearest(grid.voxelCount());
+  std::vector<std::uint8_t> flags(grid.voxelCount());
+  const dp::DistanceImageBand result =
+      dp::computeDistanceImage(reversed.data(), 3000, grid, band,
+                               {grid.voxelCount(), distance.data(), nearest.data(), flags.data()});
+  EXPECT_EQ(result.bandVoxels, image.bandVoxels);
+  EXPECT_EQ(distance, image.distance);
+  EXPECT_EQ(flags, image.exact);
+  for (std::size_t v = 0; v < nearest.size(); ++v)
+    for (int c = 0; c < 3; ++c) // the same point (no duplicates: indices map one to one)
+      ASSERT_EQ(reversed[3 * nearest[v] + c], points[3 * image.nearest[v] + c]) << "voxel " << v;
+
+  EXPECT_THROW(dp::computeDistanceImage(
+                   points.data(), 3000, grid, band,
+                   {grid.voxelCount() - 1, distance.data(), nearest.data(), flags.data()}),
+               std::invalid_argument);
 }
 
 TEST(DistanceImage, RefusesBadArgumentsNamingTheProblem)

@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -19,7 +18,6 @@ namespace dp
 {
 namespace
 {
-constexpr std::uint64_t NoKey = std::numeric_limits<std::uint64_t>::max();
 constexpr double Infinity = std::numeric_limits<double>::infinity();
 constexpr float FarAway = std::numeric_limits<float>::infinity();
 constexpr std::uint32_t NoPoint = std::numeric_limits<std::uint32_t>::max();
@@ -53,117 +51,202 @@ void validate(const double* points, std::size_t count, const ImageGrid& grid, do
                                   " has a non-finite coordinate");
 }
 
-// (squared distance, index) as one integer whose order is the pair's: a non-negative float's
-// bits grow with its value, so an atomic minimum of keys keeps the nearest point, ties to the
-// lower index.
-std::uint64_t keyOf(double distance2, std::uint32_t index)
+// A per-voxel array, filled in parallel: its pages are first touched by both threads (fresh
+// memory's page faults are a large part of a big image's time), and not twice as a vector's
+// initialisation and then its filling would touch them.
+template <class T>
+std::unique_ptr<T[]> filledArray(std::size_t n, T value)
 {
-  const float d = static_cast<float>(distance2);
-  std::uint32_t bits;
-  std::memcpy(&bits, &d, sizeof bits);
-  return (static_cast<std::uint64_t>(bits) << 32) | index;
-}
-
-void atomicMin(std::atomic<std::uint64_t>& slot, std::uint64_t key)
-{
-  std::uint64_t current = slot.load(std::memory_order_relaxed);
-  while (key < current && !slot.compare_exchange_weak(current, key, std::memory_order_relaxed))
-  {
-  }
-}
-
-// Step 1: every point offers itself to the voxels within the band around it.
-std::unique_ptr<std::atomic<std::uint64_t>[]> splatBand(const double* points, std::size_t count,
-                                                        const ImageGrid& grid, double band)
-{
-  const std::size_t n = grid.voxelCount();
-  std::unique_ptr<std::atomic<std::uint64_t>[]> keys(new std::atomic<std::uint64_t>[n]);
+  std::unique_ptr<T[]> a(new T[n]);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536),
                     [&](const tbb::blocked_range<std::size_t>& r)
-                    {
-                      for (std::size_t v = r.begin(); v < r.end(); ++v)
-                        keys[v].store(NoKey, std::memory_order_relaxed);
-                    });
-  const auto& dim = grid.dimensions;
-  const std::size_t nx = static_cast<std::size_t>(dim[0]);
-  const std::size_t nxy = nx * static_cast<std::size_t>(dim[1]);
-  const double band2 = band * band;
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
-                    [&](const tbb::blocked_range<std::size_t>& r)
-                    {
-                      for (std::size_t p = r.begin(); p < r.end(); ++p)
-                      {
-                        const double* x = points + 3 * p;
-                        int lo[3], hi[3];
-                        bool empty = false;
-                        for (int a = 0; a < 3; ++a)
-                        {
-                          const double from =
-                              std::ceil((x[a] - band - grid.origin[a]) / grid.spacing[a]);
-                          const double to =
-                              std::floor((x[a] + band - grid.origin[a]) / grid.spacing[a]);
-                          lo[a] = static_cast<int>(std::max(from, 0.0));
-                          hi[a] = static_cast<int>(std::min(to, static_cast<double>(dim[a] - 1)));
-                          empty = empty || from > dim[a] - 1 || to < 0;
-                        }
-                        if (empty)
-                          continue;
-                        for (int k = lo[2]; k <= hi[2]; ++k)
-                        {
-                          const double dz = grid.origin[2] + k * grid.spacing[2] - x[2];
-                          for (int j = lo[1]; j <= hi[1]; ++j)
-                          {
-                            const double dy = grid.origin[1] + j * grid.spacing[1] - x[1];
-                            const double dyz = dy * dy + dz * dz;
-                            if (dyz > band2)
-                              continue;
-                            const std::size_t row = static_cast<std::size_t>(k) * nxy + j * nx;
-                            for (int i = lo[0]; i <= hi[0]; ++i)
-                            {
-                              const double dx = grid.origin[0] + i * grid.spacing[0] - x[0];
-                              const double d2 = dx * dx + dyz;
-                              if (d2 <= band2)
-                                atomicMin(keys[row + static_cast<std::size_t>(i)],
-                                          keyOf(std::sqrt(d2), static_cast<std::uint32_t>(p)));
-                            }
-                          }
-                        }
-                      }
-                    });
-  return keys;
+                    { std::fill(a.get() + r.begin(), a.get() + r.end(), value); });
+  return a;
 }
 
-// Seeds: the voxels the points fall in (their nearest point is exact: within half a diagonal).
-// Points outside the image have no seed; a kd-tree finds them beyond the band.
-struct PointsByVoxel
+// The points grouped by the image row (y, z) they are nearest (clamped into the image: a point
+// beyond it is only ever nearer to the rows than it is counted), by a counting sort, as a copy in
+// that order: the band's pass reads the rows around each slice, contiguously. Also the seeds (the
+// voxels the points fall in: their nearest point is exact, within half a diagonal) and the points
+// outside the image (no seed: a kd-tree finds them beyond the band).
+struct RowPoint
 {
+  double x, y, z;
+  std::uint32_t index; // in the input
+  std::int32_t column; // the voxel nearest along x, clamped into the image
+};
+struct PlacedPoints
+{
+  std::vector<std::size_t> first; // points of row r: [first[r], first[r + 1])
+  std::vector<RowPoint> rows;     // in row order
   std::vector<std::size_t> seeds;
   std::vector<double> outside; // x y z of the points outside the image
   std::vector<std::uint32_t> outsideIndex;
 };
 
-PointsByVoxel sortPoints(const double* points, std::size_t count, const ImageGrid& grid)
+PlacedPoints placePoints(const double* points, std::size_t count, const ImageGrid& grid)
 {
-  PointsByVoxel out;
+  const auto& dim = grid.dimensions;
+  const std::size_t nx = static_cast<std::size_t>(dim[0]), ny = static_cast<std::size_t>(dim[1]);
+  struct Place
+  {
+    std::uint32_t row;
+    std::int32_t column;
+    bool inside;
+  };
+  std::vector<Place> place(count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    {
+                      for (std::size_t p = r.begin(); p < r.end(); ++p)
+                      {
+                        std::size_t index[3];
+                        bool inside = true;
+                        for (int a = 0; a < 3; ++a)
+                        {
+                          const double c =
+                              std::round((points[3 * p + a] - grid.origin[a]) / grid.spacing[a]);
+                          inside = inside && c >= 0 && c <= dim[a] - 1;
+                          index[a] = static_cast<std::size_t>(std::clamp(c, 0.0, dim[a] - 1.0));
+                        }
+                        place[p] = {static_cast<std::uint32_t>(index[1] + index[2] * ny),
+                                    static_cast<std::int32_t>(index[0]), inside};
+                      }
+                    });
+  PlacedPoints out;
+  out.first.assign(ny * static_cast<std::size_t>(dim[2]) + 1, 0);
+  for (const Place& q : place)
+    ++out.first[q.row + 1];
+  for (std::size_t r = 1; r < out.first.size(); ++r)
+    out.first[r] += out.first[r - 1];
+  std::vector<std::size_t> next(out.first.begin(), out.first.end() - 1);
+  out.rows.resize(count);
   for (std::size_t p = 0; p < count; ++p)
   {
-    std::size_t voxel = 0, stride = 1;
-    bool inside = true;
-    for (int a = 0; a < 3; ++a)
-    {
-      const double c = std::round((points[3 * p + a] - grid.origin[a]) / grid.spacing[a]);
-      inside = inside && c >= 0 && c <= grid.dimensions[a] - 1;
-      voxel += inside ? static_cast<std::size_t>(c) * stride : 0;
-      stride *= static_cast<std::size_t>(grid.dimensions[a]);
-    }
-    if (inside)
-      out.seeds.push_back(voxel);
+    const double* x = points + 3 * p;
+    const Place& q = place[p];
+    out.rows[next[q.row]++] = {x[0], x[1], x[2], static_cast<std::uint32_t>(p), q.column};
+    if (q.inside)
+      out.seeds.push_back(static_cast<std::size_t>(q.column) + nx * q.row);
     else
     {
-      out.outside.insert(out.outside.end(), points + 3 * p, points + 3 * p + 3);
+      out.outside.insert(out.outside.end(), x, x + 3);
       out.outsideIndex.push_back(static_cast<std::uint32_t>(p));
     }
   }
+  return out;
+}
+
+// The nearest point within the band so far of each voxel of one slice (z) of the image: the
+// squared distance starts at the band's, so a voxel only takes points within the band.
+struct SliceBest
+{
+  // Per voxel, the pair (squared distance in single precision, point index) as one integer
+  // whose order is the pair's (a non-negative float's bits grow with its value): one comparison
+  // keeps the nearer point, ties to the lower index.
+  std::vector<std::uint64_t> key;
+  bool any = false;
+
+  static std::uint64_t keyOf(double distance2, std::uint32_t index)
+  {
+    const float d = static_cast<float>(distance2);
+    std::uint32_t bits;
+    std::memcpy(&bits, &d, sizeof bits);
+    return (static_cast<std::uint64_t>(bits) << 32) | index;
+  }
+  void reset(std::size_t voxels, double band2)
+  {
+    key.assign(voxels, keyOf(band2, NoPoint)); // beyond the band: no point
+    any = false;
+  }
+  std::uint32_t pointOf(std::size_t voxel) const
+  {
+    return static_cast<std::uint32_t>(key[voxel] & 0xffffffffu);
+  }
+
+  // Offers q to the voxels of row `first` (at x = xs) from q's own column outward, while within
+  // the band: the distance grows either way from there (no square root or rounding to find the
+  // ends). The order of the offers does not matter.
+  void offerToRow(const RowPoint& q, double dyz, double band2, const std::vector<double>& xs,
+                  std::size_t first)
+  {
+    const int nx = static_cast<int>(xs.size());
+    std::uint64_t* row = key.data() + first;
+    auto offer = [&](int i)
+    {
+      const double dx = xs[i] - q.x;
+      const double d2 = dx * dx + dyz;
+      if (d2 > band2)
+        return false;
+      const std::uint64_t k = keyOf(d2, q.index);
+      if (k < row[i])
+      {
+        row[i] = k;
+        any = true;
+      }
+      return true;
+    };
+    for (int i = q.column; i < nx && offer(i); ++i)
+    {
+    }
+    for (int i = q.column - 1; i >= 0 && offer(i); --i)
+    {
+    }
+  }
+};
+
+// Step 1, the exact band: each slice of voxels takes, voxel by voxel, the nearest of the points
+// within `band` (ties to the lower index), reading the point rows whose band can reach it: a
+// point is read once per slice it reaches, and one task writes each slice, so the result does not
+// depend on the threads. NoPoint beyond the band.
+std::unique_ptr<std::uint32_t[]> bandPoints(const PlacedPoints& placed, const ImageGrid& grid,
+                                            double band)
+{
+  const auto& dim = grid.dimensions;
+  const std::size_t nx = static_cast<std::size_t>(dim[0]);
+  const std::size_t sliceSize = nx * static_cast<std::size_t>(dim[1]);
+  std::unique_ptr<std::uint32_t[]> out = filledArray(grid.voxelCount(), NoPoint);
+  const double band2 = band * band;
+  // A point's row is its nearest one, so it reaches rows within band / spacing + 1/2 of it.
+  const int reachY = static_cast<int>(band / grid.spacing[1] + 0.5 + 1e-6);
+  const int reachZ = static_cast<int>(band / grid.spacing[2] + 0.5 + 1e-6);
+  std::vector<double> xs(nx); // the voxels' x
+  for (std::size_t i = 0; i < nx; ++i)
+    xs[i] = grid.origin[0] + static_cast<double>(i) * grid.spacing[0];
+  tbb::parallel_for(
+      tbb::blocked_range<int>(0, dim[2], 1),
+      [&](const tbb::blocked_range<int>& r)
+      {
+        SliceBest slice;
+        for (int k = r.begin(); k < r.end(); ++k)
+        {
+          slice.reset(sliceSize, band2);
+          const double z = grid.origin[2] + k * grid.spacing[2];
+          for (int sk = std::max(0, k - reachZ); sk <= std::min(dim[2] - 1, k + reachZ); ++sk)
+            for (int sj = 0; sj < dim[1]; ++sj)
+            {
+              const std::size_t sourceRow = static_cast<std::size_t>(sk) * dim[1] + sj;
+              const int fromJ = std::max(0, sj - reachY), toJ = std::min(dim[1] - 1, sj + reachY);
+              for (std::size_t at = placed.first[sourceRow]; at < placed.first[sourceRow + 1]; ++at)
+              {
+                const RowPoint& q = placed.rows[at];
+                const double dz2 = (z - q.z) * (z - q.z);
+                if (dz2 > band2)
+                  continue;
+                for (int j = fromJ; j <= toJ; ++j)
+                {
+                  const double dy = grid.origin[1] + j * grid.spacing[1] - q.y;
+                  const double dyz = dy * dy + dz2;
+                  if (dyz <= band2)
+                    slice.offerToRow(q, dyz, band2, xs, static_cast<std::size_t>(j) * nx);
+                }
+              }
+            }
+          if (slice.any)
+            for (std::size_t v = 0; v < sliceSize; ++v)
+              out[static_cast<std::size_t>(k) * sliceSize + v] = slice.pointOf(v);
+        }
+      });
   return out;
 }
 
@@ -175,7 +258,7 @@ struct LineScratch
 {
   std::vector<float> f, h, z;
   std::vector<int> v;
-  std::vector<std::uint32_t> point;
+  std::vector<std::uint32_t> winner; // the point of the envelope's parabola k
 };
 
 void transformLine(float* g, std::uint32_t* point, int length, float w, LineScratch& s)
@@ -184,7 +267,7 @@ void transformLine(float* g, std::uint32_t* point, int length, float w, LineScra
   s.h.resize(length);
   s.v.resize(length);
   s.z.resize(length + 1);
-  s.point.assign(point, point + length);
+  s.winner.resize(length);
   const float inverse = 1.0f / w;
   int k = -1;
   for (int q = 0; q < length; ++q)
@@ -206,6 +289,7 @@ void transformLine(float* g, std::uint32_t* point, int length, float w, LineScra
     ++k;
     s.v[k] = q;
     s.z[k] = cut;
+    s.winner[k] = point[q];
   }
   if (k < 0)
     return; // no seed on this line yet: everything stays far away
@@ -218,16 +302,18 @@ void transformLine(float* g, std::uint32_t* point, int length, float w, LineScra
     const int q = s.v[j];
     const float step = static_cast<float>(p - q);
     g[p] = w * (s.f[q] + step * step);
-    point[p] = s.point[q];
+    point[p] = s.winner[j];
   }
 }
 
 // Lines along y or z are strided: a block of Block neighbouring lines (along x) is copied into
 // contiguous buffers, transformed and copied back, so each cache line read serves all of them.
-constexpr std::size_t Block = 16;
+constexpr std::size_t Block = 32;
 
-void transformStridedAxis(std::vector<float>& g, std::vector<std::uint32_t>& point,
-                          const std::size_t dim[3], int axis, float w)
+// `last`: the transform's last axis, whose distances are not needed after it; its voxels in the
+// band then take their band point instead of their seed's (the nearest point they know of).
+void transformStridedAxis(float* g, std::uint32_t* point, const std::size_t dim[3], int axis,
+                          float w, const std::uint32_t* band = nullptr)
 {
   const std::size_t nx = dim[0], stride = axis == 1 ? dim[0] : dim[0] * dim[1];
   const std::size_t length = dim[axis], other = axis == 1 ? dim[2] : dim[1];
@@ -244,38 +330,48 @@ void transformStridedAxis(std::vector<float>& g, std::vector<std::uint32_t>& poi
                         const std::size_t width = std::min(Block, nx - x0);
                         // The first voxel of the block's lines: x0 in row o of the other axis.
                         const std::size_t first = x0 + o * (axis == 1 ? dim[0] * dim[1] : dim[0]);
+                        bool seeded = false;
                         for (std::size_t q = 0; q < length; ++q)
                           for (std::size_t b = 0; b < width; ++b)
                           {
                             lineG[b * length + q] = g[first + q * stride + b];
                             linePoint[b * length + q] = point[first + q * stride + b];
+                            seeded = seeded || lineG[b * length + q] != FarAway;
                           }
-                        for (std::size_t b = 0; b < width; ++b)
+                        if (!seeded && !band)
+                          continue; // no seed reaches these lines yet: they stay far away
+                        for (std::size_t b = 0; seeded && b < width; ++b)
                           transformLine(&lineG[b * length], &linePoint[b * length],
                                         static_cast<int>(length), w, scratch);
                         for (std::size_t q = 0; q < length; ++q)
                           for (std::size_t b = 0; b < width; ++b)
                           {
-                            g[first + q * stride + b] = lineG[b * length + q];
-                            point[first + q * stride + b] = linePoint[b * length + q];
+                            const std::size_t v = first + q * stride + b;
+                            if (band)
+                              point[v] = band[v] != NoPoint ? band[v] : linePoint[b * length + q];
+                            else
+                            {
+                              g[v] = lineG[b * length + q];
+                              point[v] = linePoint[b * length + q];
+                            }
                           }
                       }
                     });
 }
 
 // Step 2: the exact distance transform of the seed voxels (in voxel-centre distances), axis by
-// axis; each voxel ends with the point of its nearest seed (NoPoint when there is none).
-std::vector<std::uint32_t> nearestSeedPoints(const std::vector<std::size_t>& seeds,
-                                             const std::atomic<std::uint64_t>* keys,
-                                             const ImageGrid& grid)
+// axis; each voxel ends with the point of its nearest seed (NoPoint when there is none), or its
+// band point in the band.
+std::unique_ptr<std::uint32_t[]> nearestSeedPoints(const std::vector<std::size_t>& seeds,
+                                                   const std::uint32_t* band, const ImageGrid& grid)
 {
   const std::size_t n = grid.voxelCount();
-  std::vector<float> g(n, FarAway);
-  std::vector<std::uint32_t> point(n, NoPoint);
+  const std::unique_ptr<float[]> g = filledArray(n, FarAway);
+  std::unique_ptr<std::uint32_t[]> point = filledArray(n, NoPoint);
   for (std::size_t v : seeds)
   {
     g[v] = 0;
-    point[v] = static_cast<std::uint32_t>(keys[v].load(std::memory_order_relaxed) & 0xffffffffu);
+    point[v] = band[v];
   }
   const std::size_t dim[3] = {static_cast<std::size_t>(grid.dimensions[0]),
                               static_cast<std::size_t>(grid.dimensions[1]),
@@ -289,8 +385,10 @@ std::vector<std::uint32_t> nearestSeedPoints(const std::vector<std::size_t>& see
                         transformLine(&g[line * dim[0]], &point[line * dim[0]],
                                       static_cast<int>(dim[0]), w0, scratch);
                     });
-  transformStridedAxis(g, point, dim, 1, static_cast<float>(grid.spacing[1] * grid.spacing[1]));
-  transformStridedAxis(g, point, dim, 2, static_cast<float>(grid.spacing[2] * grid.spacing[2]));
+  transformStridedAxis(g.get(), point.get(), dim, 1,
+                       static_cast<float>(grid.spacing[1] * grid.spacing[1]));
+  transformStridedAxis(g.get(), point.get(), dim, 2,
+                       static_cast<float>(grid.spacing[2] * grid.spacing[2]), band);
   return point;
 }
 
@@ -346,25 +444,29 @@ void forEachVoxel(const ImageGrid& grid, Visit&& visit)
       });
 }
 
-// Step 3: each voxel's nearest point: from the band (exact), else its nearest seed's point, or
-// a point outside the image when nearer.
-void assignVoxels(const float* points, const ImageGrid& grid,
-                  const std::atomic<std::uint64_t>* keys, const std::vector<std::uint32_t>& seed,
-                  const detail::KdTree* outsideTree, const std::vector<std::uint32_t>& outsideIndex,
-                  DistanceImage& out)
+// Step 3: each voxel's nearest point. In the band, its own (exact). Beyond it, the nearest of
+// the points it and its six neighbours know of (`known`: their band point, else their nearest
+// seed's): the seed nearest to a voxel's centre need not hold the point nearest to it, and a
+// neighbour's often does; and a point outside the image when nearer.
+void assignVoxels(const float* points, const ImageGrid& grid, const std::uint32_t* band,
+                  const std::uint32_t* known, const detail::KdTree* outsideTree,
+                  const std::vector<std::uint32_t>& outsideIndex, const DistanceImageView& out)
 {
   forEachVoxel(grid,
-               [&](std::size_t v, const float* x, const std::size_t*)
+               [&](std::size_t v, const float* x, const std::size_t* around)
                {
                  Candidate c;
-                 const std::uint64_t key = keys[v].load(std::memory_order_relaxed);
-                 out.exact[v] = key != NoKey ? 1 : 0;
-                 if (key != NoKey)
-                   c.offer(points, static_cast<std::uint32_t>(key & 0xffffffffu), x);
-                 else
+                 out.exact[v] = band[v] != NoPoint ? 1 : 0;
+                 if (known[v] != NoPoint)
+                   c.offer(points, known[v], x);
+                 if (!out.exact[v])
                  {
-                   if (seed[v] != NoPoint)
-                     c.offer(points, seed[v], x);
+                   for (int a = 0; a < 6; ++a)
+                   {
+                     const std::uint32_t p = known[around[a]];
+                     if (p != NoPoint && p != c.index)
+                       c.offer(points, p, x);
+                   }
                    if (outsideTree)
                    {
                      const double q[3] = {x[0], x[1], x[2]};
@@ -376,60 +478,49 @@ void assignVoxels(const float* points, const ImageGrid& grid,
                });
 }
 
-// Step 4: beyond the band, each voxel also tries the points its six neighbours found (read from
-// a copy, so the order of the voxels does not matter): the seed nearest to a voxel's centre need
-// not hold the point nearest to it, and a neighbour's often does.
-void refineBeyondBand(const float* points, const ImageGrid& grid, DistanceImage& out)
-{
-  const std::vector<std::uint32_t> found = out.nearest;
-  forEachVoxel(grid,
-               [&](std::size_t v, const float* x, const std::size_t* around)
-               {
-                 if (out.exact[v])
-                   return;
-                 Candidate c;
-                 c.offer(points, found[v], x);
-                 for (int a = 0; a < 6; ++a)
-                   if (found[around[a]] != c.index)
-                     c.offer(points, found[around[a]], x);
-                 out.nearest[v] = c.index;
-                 out.distance[v] = static_cast<float>(std::sqrt(c.distance2));
-               });
-}
-
 } // namespace
+
+DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
+                                       const ImageGrid& grid, double bandWidth,
+                                       const DistanceImageView& out)
+{
+  validate(points, count, grid, bandWidth);
+  if (out.voxels != grid.voxelCount() || !out.distance || !out.nearest || !out.exact)
+    throw std::invalid_argument("distance image: the output holds " + std::to_string(out.voxels) +
+                                " voxels, the grid " + std::to_string(grid.voxelCount()));
+  const auto& h = grid.spacing;
+  const double halfDiagonal = 0.5 * std::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
+  DistanceImageBand result;
+  result.bandWidth = std::max(bandWidth, halfDiagonal * (1 + 1e-9));
+  const PlacedPoints placed = placePoints(points, count, grid);
+  const std::unique_ptr<std::uint32_t[]> band = bandPoints(placed, grid, result.bandWidth);
+  const std::unique_ptr<std::uint32_t[]> known = nearestSeedPoints(placed.seeds, band.get(), grid);
+  std::unique_ptr<detail::KdTree> outsideTree;
+  if (!placed.outsideIndex.empty())
+    outsideTree =
+        std::make_unique<detail::KdTree>(placed.outside.data(), placed.outsideIndex.size());
+  const std::vector<float> single(points, points + 3 * count);
+  assignVoxels(single.data(), grid, band.get(), known.get(), outsideTree.get(), placed.outsideIndex,
+               out);
+  result.bandVoxels = out.voxels - static_cast<std::size_t>(
+                                       std::count(band.get(), band.get() + out.voxels, NoPoint));
+  return result;
+}
 
 DistanceImage computeDistanceImage(const double* points, std::size_t count, const ImageGrid& grid,
                                    double bandWidth)
 {
-  validate(points, count, grid, bandWidth);
-  const auto& h = grid.spacing;
-  const double halfDiagonal = 0.5 * std::sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2]);
-  DistanceImage out;
-  out.bandWidth = std::max(bandWidth, halfDiagonal * (1 + 1e-9));
-  const std::unique_ptr<std::atomic<std::uint64_t>[]> keys =
-      splatBand(points, count, grid, out.bandWidth);
-
-  const PointsByVoxel sorted = sortPoints(points, count, grid);
-  const std::vector<std::uint32_t> seed = nearestSeedPoints(sorted.seeds, keys.get(), grid);
-  std::unique_ptr<detail::KdTree> outsideTree;
-  if (!sorted.outsideIndex.empty())
-    outsideTree =
-        std::make_unique<detail::KdTree>(sorted.outside.data(), sorted.outsideIndex.size());
-
-  const std::size_t n = grid.voxelCount();
-  out.distance.resize(n);
-  out.nearest.resize(n);
-  out.exact.resize(n);
-  const std::vector<float> single(points, points + 3 * count);
-  assignVoxels(single.data(), grid, keys.get(), seed, outsideTree.get(), sorted.outsideIndex, out);
-  refineBeyondBand(single.data(), grid, out);
-  for (std::uint8_t e : out.exact)
-    out.bandVoxels += e;
-  return out;
+  validate(points, count, grid, bandWidth); // before the arrays are sized from the grid
+  DistanceImage image;
+  image.distance.resize(grid.voxelCount());
+  image.nearest.resize(grid.voxelCount());
+  image.exact.resize(grid.voxelCount());
+  static_cast<DistanceImageBand&>(image) =
+      computeDistanceImage(points, count, grid, bandWidth, image.view());
+  return image;
 }
 
-void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImage& image,
+void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImageView& image,
                       float* out)
 {
   forEachVoxel(grid,
@@ -442,10 +533,11 @@ void distanceGradient(const double* points, const ImageGrid& grid, const Distanc
                });
 }
 
-void gatherNearest(const DistanceImage& image, const float* perPoint, int components, float* out)
+void gatherNearest(const DistanceImageView& image, const float* perPoint, int components,
+                   float* out)
 {
   const std::size_t m = static_cast<std::size_t>(components);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.nearest.size(), 4096),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.voxels, 4096),
                     [&](const tbb::blocked_range<std::size_t>& r)
                     {
                       for (std::size_t v = r.begin(); v < r.end(); ++v)
@@ -454,9 +546,9 @@ void gatherNearest(const DistanceImage& image, const float* perPoint, int compon
                     });
 }
 
-void gatherNearest(const DistanceImage& image, const long long* perPoint, long long* out)
+void gatherNearest(const DistanceImageView& image, const long long* perPoint, long long* out)
 {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.nearest.size(), 4096),
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, image.voxels, 4096),
                     [&](const tbb::blocked_range<std::size_t>& r)
                     {
                       for (std::size_t v = r.begin(); v < r.end(); ++v)

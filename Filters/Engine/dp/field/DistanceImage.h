@@ -8,22 +8,26 @@
  *        DistanceField instead: it only needs the voxels the mesh touches.
  *
  * Two steps, each linear in its input:
- * 1. The exact band. Every point visits the voxels within `bandWidth` of it and each voxel keeps
- *    the nearest one (an atomic minimum of the pair (distance, point index), so the result is the
- *    same in any order and on any number of threads). A voxel whose nearest point lies within the
- *    band gets that point exactly.
+ * 1. The exact band. The points are sorted into the image's rows (a counting sort); each slice of
+ *    voxels then reads the rows whose points can reach it, and every such point offers itself to
+ *    the slice's voxels within `bandWidth` of it, walking each row outward from its own column; a
+ *    voxel keeps the nearest offer (ties to the lower point index). One task writes each slice,
+ *    so the result is the same in any input order and on any number of threads. A voxel whose
+ *    nearest point lies within the band gets that point exactly.
  * 2. Beyond the band, a vector distance transform: the exact Euclidean distance transform of the
  *    seed voxels (those holding a point) by separable lower envelopes of parabolas (Felzenszwalb &
  *    Huttenlocher, "Distance Transforms of Sampled Functions", 2012: one pass per axis, the
  *    image's lines in parallel) gives each voxel its nearest seed, and the voxel takes that
- *    seed's nearest point; a last pass lets each voxel take a face neighbour's point when nearer.
+ *    seed's nearest point (its band point in the band); a last pass lets each voxel beyond the
+ *    band take the point a face neighbour knows of when nearer.
  * The distance is to a real input point, so it is never below the true distance, and above it by a
  * fraction of a voxel (RMS about 0.1 voxel).
  *
  * Limits: the band is at least half a voxel diagonal (seeds must be exact). Points outside the
  * image are found beyond the band by a kd-tree (slower: one query per such voxel). Up to
  * 2^32 - 1 points and 2^31 - 1 voxels; the caller bounds the voxel count (memory: 9 bytes per
- * voxel in the result, about 30 while computing). Distances are in single precision.
+ * voxel in the result, about 21 while computing, plus 32 per point). Distances are in single
+ * precision.
  */
 #pragma once
 
@@ -49,13 +53,34 @@ struct ImageGrid
   }
 };
 
-struct DistanceImage
+/** A distance image's arrays, in storage its caller owns (e.g. VTK arrays, so that nothing is
+ *  copied): `voxels` entries each. */
+struct DistanceImageView
 {
-  std::vector<float> distance;        // per voxel, to `nearest`
-  std::vector<std::uint32_t> nearest; // per voxel: index of its nearest point
-  std::vector<std::uint8_t> exact;    // per voxel: 1 within the band (the distance is exact)
-  double bandWidth = 0;               // the band used (at least half a voxel diagonal)
-  std::size_t bandVoxels = 0;         // voxels with exact = 1
+  std::size_t voxels = 0;
+  float* distance = nullptr;        // per voxel, to `nearest`
+  std::uint32_t* nearest = nullptr; // per voxel: index of its nearest point
+  std::uint8_t* exact = nullptr;    // per voxel: 1 within the band (the distance is exact)
+};
+
+/** What computeDistanceImage reports besides the arrays. */
+struct DistanceImageBand
+{
+  double bandWidth = 0;       // the band used (at least half a voxel diagonal)
+  std::size_t bandVoxels = 0; // voxels with exact = 1
+};
+
+/** A distance image in its own storage. */
+struct DistanceImage : DistanceImageBand
+{
+  std::vector<float> distance;
+  std::vector<std::uint32_t> nearest;
+  std::vector<std::uint8_t> exact;
+
+  DistanceImageView view()
+  {
+    return {distance.size(), distance.data(), nearest.data(), exact.data()};
+  }
 };
 
 /**
@@ -65,15 +90,20 @@ struct DistanceImage
  */
 DistanceImage computeDistanceImage(const double* points, std::size_t count, const ImageGrid& grid,
                                    double bandWidth);
+/** The same into `out`, whose arrays hold grid.voxelCount() entries (checked). */
+DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
+                                       const ImageGrid& grid, double bandWidth,
+                                       const DistanceImageView& out);
 
 /** The distance's gradient at every voxel: the unit vector away from its nearest point (zero on
  *  a point); `out` holds 3 floats per voxel. In parallel. */
-void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImage& image,
+void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImageView& image,
                       float* out);
 
 /** Per voxel, the `components` values its nearest point has in `perPoint` (e.g. normals). */
-void gatherNearest(const DistanceImage& image, const float* perPoint, int components, float* out);
+void gatherNearest(const DistanceImageView& image, const float* perPoint, int components,
+                   float* out);
 /** Per voxel, its nearest point's entry in `perPoint` (e.g. ids). */
-void gatherNearest(const DistanceImage& image, const long long* perPoint, long long* out);
+void gatherNearest(const DistanceImageView& image, const long long* perPoint, long long* out);
 
 } // namespace dp
