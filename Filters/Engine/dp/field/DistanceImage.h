@@ -26,7 +26,7 @@
  * Limits: the band is at least half a voxel diagonal (seeds must be exact). Points outside the
  * image are found beyond the band by a kd-tree (slower: one query per such voxel). Up to
  * 2^32 - 1 points and 2^31 - 1 voxels; the caller bounds the voxel count (memory: 9 bytes per
- * voxel in the result, about 21 while computing, plus 32 per point). Distances are in single
+ * voxel in the result, about 21 while computing, plus about 56 per point). Distances are in single
  * precision.
  */
 #pragma once
