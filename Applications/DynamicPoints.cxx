@@ -207,6 +207,15 @@ struct FrameRecord
 constexpr std::array<const char*, 6> StageNames = {"Data", "Prediction", "Coarse",
                                                    "Fine", "Quality",    "Retry"};
 
+// The upper median (0 for none): report.json's per-frame medians.
+double medianOf(std::vector<double> values)
+{
+  if (values.empty())
+    return 0.0;
+  std::sort(values.begin(), values.end());
+  return values[values.size() / 2];
+}
+
 // {"data": ms, "prediction": ms, ...} in report.json.
 nlohmann::json stagesJson(const std::array<double, 6>& milliseconds)
 {
@@ -611,17 +620,14 @@ private:
     report["perFrame"] = perFrame;
     report["framesRetried"] = retried;
     report["framesFailed"] = failedFrames;
-    std::vector<double> sorted = ms;
-    std::sort(sorted.begin(), sorted.end());
-    report["medianMillisecondsPerFrame"] = sorted.empty() ? 0.0 : sorted[sorted.size() / 2];
+    report["medianMillisecondsPerFrame"] = medianOf(ms);
     std::array<double, 6> stageMedians{};
     for (std::size_t k = 0; k < StageNames.size(); ++k)
     {
       std::vector<double> stage;
       for (const FrameRecord& r : Records)
         stage.push_back(r.stageMilliseconds[k]);
-      std::sort(stage.begin(), stage.end());
-      stageMedians[k] = stage.empty() ? 0.0 : stage[stage.size() / 2];
+      stageMedians[k] = medianOf(std::move(stage));
     }
     report["medianStageMillisecondsPerFrame"] = stagesJson(stageMedians);
     const fs::path plot = Output / "report.png";

@@ -22,13 +22,9 @@ constexpr double Infinity = std::numeric_limits<double>::infinity();
 constexpr float FarAway = std::numeric_limits<float>::infinity();
 constexpr std::uint32_t NoPoint = std::numeric_limits<std::uint32_t>::max();
 
-void validate(const double* points, std::size_t count, const ImageGrid& grid, double bandWidth)
+// The grid's checks (before anything is sized from it), then the points' and the band's.
+void validateGrid(const ImageGrid& grid)
 {
-  if (count == 0 || !points)
-    throw std::invalid_argument("distance image: no points");
-  if (count > std::numeric_limits<std::uint32_t>::max())
-    throw std::invalid_argument("distance image: " + std::to_string(count) +
-                                " points, more than 2^32 - 1");
   for (int k = 0; k < 3; ++k)
   {
     if (grid.dimensions[k] < 1)
@@ -42,6 +38,16 @@ void validate(const double* points, std::size_t count, const ImageGrid& grid, do
   if (grid.voxelCount() > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max()))
     throw std::invalid_argument("distance image: " + std::to_string(grid.voxelCount()) +
                                 " voxels, more than 2^31 - 1");
+}
+
+void validate(const double* points, std::size_t count, const ImageGrid& grid, double bandWidth)
+{
+  if (count == 0 || !points)
+    throw std::invalid_argument("distance image: no points");
+  if (count > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("distance image: " + std::to_string(count) +
+                                " points, more than 2^32 - 1");
+  validateGrid(grid);
   if (!(bandWidth >= 0) || !std::isfinite(bandWidth))
     throw std::invalid_argument("distance image: band width " + std::to_string(bandWidth) +
                                 " (>= 0 wanted)");
@@ -220,7 +226,8 @@ std::unique_ptr<std::uint32_t[]> bandPoints(const PlacedPoints& placed, const Im
         SliceBest slice;
         for (int k = r.begin(); k < r.end(); ++k)
         {
-          slice.reset(sliceSize, band2);
+          if (slice.any || slice.key.empty())
+            slice.reset(sliceSize, band2); // a slice no point improved is still as reset
           const double z = grid.origin[2] + k * grid.spacing[2];
           for (int sk = std::max(0, k - reachZ); sk <= std::min(dim[2] - 1, k + reachZ); ++sk)
             for (int sj = 0; sj < dim[1]; ++sj)
@@ -310,8 +317,8 @@ void transformLine(float* g, std::uint32_t* point, int length, float w, LineScra
 // contiguous buffers, transformed and copied back, so each cache line read serves all of them.
 constexpr std::size_t Block = 32;
 
-// `last`: the transform's last axis, whose distances are not needed after it; its voxels in the
-// band then take their band point instead of their seed's (the nearest point they know of).
+// With `band` (the transform's last axis, whose distances are not needed after it), the voxels in
+// the band take their band point instead of their seed's: the nearest point they know of.
 void transformStridedAxis(float* g, std::uint32_t* point, const std::size_t dim[3], int axis,
                           float w, const std::uint32_t* band = nullptr)
 {
@@ -510,7 +517,7 @@ DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
 DistanceImage computeDistanceImage(const double* points, std::size_t count, const ImageGrid& grid,
                                    double bandWidth)
 {
-  validate(points, count, grid, bandWidth); // before the arrays are sized from the grid
+  validateGrid(grid); // before the arrays are sized from it; the rest is checked below
   DistanceImage image;
   image.distance.resize(grid.voxelCount());
   image.nearest.resize(grid.voxelCount());
