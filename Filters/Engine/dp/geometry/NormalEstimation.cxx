@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <queue>
 #include <utility>
 
 namespace dp
@@ -70,12 +69,18 @@ NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k
 // reliable edges first, and last a step along the normal: from one side of a thin gap to the
 // other (a hand on the body, touching thighs), where the normals are opposite but |n_i . n_j|
 // alone would call the edge the surest of all.
+//
+// The queue holds one entry per point not yet reached: its cheapest edge from the tree so far,
+// lowered as the tree grows (an indexed heap). Points leave it in the order of their edges'
+// (weight, from, to), the order a queue of every edge would give, in a heap of at most one entry
+// per point instead of one per edge.
 class SpanningTreeOrientation
 {
 public:
   SpanningTreeOrientation(const double* points, const NeighbourGraph& graph,
                           std::vector<float>& normals, std::vector<std::uint32_t>* parts)
-      : Points(points), Graph(graph), Normals(normals), Parts(parts), Done(graph.degree.size(), 0)
+      : Points(points), Graph(graph), Normals(normals), Parts(parts), Done(graph.degree.size(), 0),
+        Best(graph.degree.size()), Slot(graph.degree.size(), NotQueued)
   {
   }
 
@@ -89,26 +94,30 @@ public:
     if (Normals[3 * seed] < 0)
       flip(seed);
     Done[seed] = 1;
-    push(seed);
-    while (!Queue.empty())
+    offerNeighbours(seed);
+    while (!Heap.empty())
     {
-      const auto [from, to] = Queue.top().second;
-      const float cost = Queue.top().first;
-      Queue.pop();
-      if (Done[to])
-        continue;
+      const std::uint32_t to = popCheapest();
+      const std::uint32_t from = Best[to].from;
       if (dot(from, to) < 0)
         flip(to);
       Done[to] = 1;
       // Orientation carried across a sharp turn of the normals is the least sure: a new part.
       if (Parts)
-        (*Parts)[to] = cost > WeakOrientation ? ++Part : (*Parts)[from];
-      push(to);
+        (*Parts)[to] = Best[to].weight > WeakOrientation ? ++Part : (*Parts)[from];
+      offerNeighbours(to);
     }
     ++Part;
   }
 
 private:
+  static constexpr std::uint32_t NotQueued = ~0u;
+  struct Edge
+  {
+    float weight;
+    std::uint32_t from;
+  };
+
   float dot(std::size_t a, std::size_t b) const
   {
     return Normals[3 * a] * Normals[3 * b] + Normals[3 * a + 1] * Normals[3 * b + 1] +
@@ -131,14 +140,84 @@ private:
     for (int c = 0; c < 3; ++c)
       Normals[3 * i + c] = -Normals[3 * i + c];
   }
-  void push(std::uint32_t from)
+  // Whether point a's edge leaves the queue before point b's: by (weight, from, to).
+  bool before(std::uint32_t a, std::uint32_t b) const
+  {
+    const Edge &ea = Best[a], &eb = Best[b];
+    return ea.weight < eb.weight ||
+           (ea.weight == eb.weight && (ea.from < eb.from || (ea.from == eb.from && a < b)));
+  }
+  void offerNeighbours(std::uint32_t from)
   {
     for (std::size_t j = 0; j < Graph.degree[from]; ++j)
     {
       const std::uint32_t to = Graph.ids[from * Graph.k + j];
-      if (!Done[to])
-        Queue.push({weight(from, to), {from, to}});
+      if (Done[to])
+        continue;
+      const Edge offer{weight(from, to), from};
+      if (Slot[to] == NotQueued)
+      {
+        Best[to] = offer;
+        Slot[to] = static_cast<std::uint32_t>(Heap.size());
+        Heap.push_back(to);
+        siftUp(Slot[to]);
+      }
+      else if (offer.weight < Best[to].weight ||
+               (offer.weight == Best[to].weight && offer.from < Best[to].from))
+      {
+        Best[to] = offer;
+        siftUp(Slot[to]);
+      }
     }
+  }
+  std::uint32_t popCheapest()
+  {
+    const std::uint32_t top = Heap.front();
+    Slot[top] = NotQueued;
+    const std::uint32_t last = Heap.back();
+    Heap.pop_back();
+    if (!Heap.empty())
+    {
+      Heap[0] = last;
+      Slot[last] = 0;
+      siftDown(0);
+    }
+    return top;
+  }
+  void place(std::size_t slot, std::uint32_t point)
+  {
+    Heap[slot] = point;
+    Slot[point] = static_cast<std::uint32_t>(slot);
+  }
+  void siftUp(std::size_t slot)
+  {
+    const std::uint32_t point = Heap[slot];
+    while (slot > 0)
+    {
+      const std::size_t parent = (slot - 1) / 2;
+      if (!before(point, Heap[parent]))
+        break;
+      place(slot, Heap[parent]);
+      slot = parent;
+    }
+    place(slot, point);
+  }
+  void siftDown(std::size_t slot)
+  {
+    const std::uint32_t point = Heap[slot];
+    for (;;)
+    {
+      std::size_t child = 2 * slot + 1;
+      if (child >= Heap.size())
+        break;
+      if (child + 1 < Heap.size() && before(Heap[child + 1], Heap[child]))
+        ++child;
+      if (!before(Heap[child], point))
+        break;
+      place(slot, Heap[child]);
+      slot = child;
+    }
+    place(slot, point);
   }
 
   const double* Points;
@@ -146,8 +225,9 @@ private:
   std::vector<float>& Normals;
   std::vector<std::uint32_t>* Parts;
   std::vector<char> Done;
-  using Edge = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>; // weight, (from, to)
-  std::priority_queue<Edge, std::vector<Edge>, std::greater<Edge>> Queue;
+  std::vector<Edge> Best;          // per queued point: its cheapest edge from the tree
+  std::vector<std::uint32_t> Slot; // per point: its place in Heap, or NotQueued
+  std::vector<std::uint32_t> Heap; // queued points, a binary heap ordered by before()
   std::uint32_t Part = 0;
 };
 } // namespace
