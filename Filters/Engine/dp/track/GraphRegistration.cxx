@@ -48,6 +48,12 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
   resetReference();
   NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
+  for (const auto& edge : graph.edges())
+    for (int direction = 0; direction < 2; ++direction)
+    {
+      const std::int64_t j = edge[direction], k = edge[1 - direction];
+      EdgeSlots.push_back({NodeModel.slotOf(j, j), NodeModel.slotOf(k, k), NodeModel.slotOf(j, k)});
+    }
   // The node block each (vertex block, node of a, node of b) adds to, found once.
   VertexModel.forEachBlock(
       [&](std::int64_t a, std::int64_t b, const double*, int)
@@ -75,24 +81,43 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       const auto& edge = edges[index];
       const std::int64_t j = edge[direction], k = edge[1 - direction];
       const double c = scale * (EdgeWeight.empty() ? 1.0 : EdgeWeight[2 * index + direction]);
-      const Eigen::Vector3d r = edgeResidual(state, index, direction);
       const Eigen::Vector3d arm = state.rotation[j] * Arms[2 * index + direction];
+      const Eigen::Vector3d r = arm + Eigen::Vector3d(Graph.nodePosition(j)) +
+                                state.translation[j] - Eigen::Vector3d(Graph.nodePosition(k)) -
+                                state.translation[k];
       e += 0.5 * c * r.squaredNorm();
-      if (!hessian)
-        continue;
-      // de/d(w_j, t_j) = [-[arm]x, I]; de/d(w_k, t_k) = [0, -I].
-      Matrix36 Jj, Jk;
-      Jj << -crossMatrix(arm), Eigen::Matrix3d::Identity();
-      Jk << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity();
-      const Matrix66 jj = c * Jj.transpose() * Jj, kk = c * Jk.transpose() * Jk,
-                     jk = c * Jj.transpose() * Jk;
-      hessian->addBlock(hessian->slotOf(j, j), jj.data());
-      hessian->addBlock(hessian->slotOf(k, k), kk.data());
-      hessian->addBlock(hessian->slotOf(j, k), jk.data());
-      gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
-      gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
+      if (hessian)
+        addBendingModel(EdgeSlots[2 * index + direction], j, k, c, arm, r, *hessian, *gradient);
     }
   return StretchWeight > 0 ? e + stretching(state, StretchWeight * scale, hessian, gradient) : e;
+}
+
+void GraphRegistration::addBendingModel(const BendingSlots& slots, std::int64_t j, std::int64_t k,
+                                        double c, const Eigen::Vector3d& arm,
+                                        const Eigen::Vector3d& r,
+                                        detail::BlockSparseMatrixOf<6>& hessian,
+                                        Eigen::VectorXd& gradient)
+{
+  // e = R_j a + g_j + t_j - g_k - t_k: de/d(w_j, t_j) = J_j = [-[arm]x, I], de/d(w_k, t_k) =
+  // [0, -I], so c J^T J is, with A = [arm]x (A^T = -A, A^T A = |arm|^2 I - arm arm^T):
+  //   (j, j) = c [A^T A, A; A^T, I],  (k, k) = c [0, 0; 0, I],  (j, k) = c [0, -A; 0, -I].
+  const Eigen::Matrix3d A = crossMatrix(arm);
+  Matrix66 jj = Matrix66::Zero(), kk = Matrix66::Zero(), jk = Matrix66::Zero();
+  jj.topLeftCorner<3, 3>() =
+      c * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
+  jj.topRightCorner<3, 3>() = c * A;
+  jj.bottomLeftCorner<3, 3>() = -c * A;
+  jj.bottomRightCorner<3, 3>() = c * Eigen::Matrix3d::Identity();
+  kk.bottomRightCorner<3, 3>() = c * Eigen::Matrix3d::Identity();
+  jk.topRightCorner<3, 3>() = -c * A;
+  jk.bottomRightCorner<3, 3>() = -c * Eigen::Matrix3d::Identity();
+  hessian.addBlock(slots.jj, jj.data());
+  hessian.addBlock(slots.kk, kk.data());
+  hessian.addBlock(slots.jk, jk.data());
+  // J_j^T r = [arm x r; r] (A^T r = -arm x r, negated by J's -A), J_k^T r = [0; -r].
+  gradient.segment<3>(6 * j) += c * arm.cross(r);
+  gradient.segment<3>(6 * j + 3) += c * r;
+  gradient.segment<3>(6 * k + 3) -= c * r;
 }
 
 double GraphRegistration::stretching(const DeformationGraph::State& state, double weight,
