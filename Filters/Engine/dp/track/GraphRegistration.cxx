@@ -162,56 +162,55 @@ void GraphRegistration::project(const DeformationGraph::State& state,
                                 const Eigen::VectorXd& vertexGradient,
                                 Eigen::VectorXd& nodeGradient)
 {
-  // B_aj = w_aj [-[R_j (v_a - g_j)]x, I]: how vertex a moves with node j's rotation and
-  // translation. H_nodes += B_a^T H_ab B_b over the vertex model's blocks, g_nodes += B_a^T g_a.
-  const std::size_t nv = Graph.mesh().numberOfVertices();
-  std::vector<std::size_t> first(nv + 1, 0);
-  for (std::size_t v = 0; v < nv; ++v)
-    first[v + 1] =
-        first[v] + static_cast<std::size_t>(Graph.influencesEnd(v) - Graph.influencesBegin(v));
-  std::vector<Matrix36> B(first[nv]);
-  for (std::size_t v = 0; v < nv; ++v)
-  {
-    const Eigen::Vector3d rest(Graph.rest() + 3 * v);
-    std::size_t slot = first[v];
-    for (auto i = Graph.influencesBegin(v); i != Graph.influencesEnd(v); ++i, ++slot)
-    {
-      const Eigen::Vector3d g(Graph.nodePosition(static_cast<std::size_t>(i->node)));
-      B[slot] << -i->weight * crossMatrix(state.rotation[i->node] * (rest - g)),
-          i->weight * Eigen::Matrix3d::Identity();
-      nodeGradient.segment<6>(6 * i->node) +=
-          B[slot].transpose() * vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
-    }
-  }
+  // B_aj = w_aj [-U_aj, I] with U_aj = [R_j (v_a - g_j)]x: how vertex a moves with node j's
+  // rotation and translation. The data terms' model is block diagonal here (M_a per vertex), so
+  // H_nodes(j, k) += B_aj^T M_a B_ak over the pairs of nodes a blends, and g_nodes(j) += B_aj^T
+  // g_a, written out: B_aj^T M B_ak = w_aj w_ak [-U_aj M U_ak, U_aj M; -M U_ak, M].
   std::size_t next = 0; // into ProjectionSlots, in the order forEachBlock visits the blocks
+  std::vector<Eigen::Matrix3d> U;
   VertexModel.forEachBlock(
-      [&](std::int64_t a, std::int64_t b, const double* block, int stride)
+      [&](std::int64_t a, std::int64_t, const double* block, int stride)
       {
-        const std::size_t na = first[a + 1] - first[a], nb = first[b + 1] - first[b];
+        const auto v = static_cast<std::size_t>(a);
+        const auto* influence = Graph.influencesBegin(v);
+        const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influence);
         const std::size_t slots = next;
-        next += na * nb;
+        next += n * n;
+        U.resize(std::max(U.size(), n));
+        const Eigen::Vector3d rest(Graph.rest() + 3 * v);
+        const Eigen::Vector3d g = vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
+        for (std::size_t p = 0; p < n; ++p)
+        {
+          const auto j = static_cast<std::size_t>(influence[p].node);
+          const Eigen::Vector3d u =
+              state.rotation[j] * (rest - Eigen::Vector3d(Graph.nodePosition(j)));
+          U[p] = crossMatrix(u);
+          nodeGradient.segment<3>(static_cast<Eigen::Index>(6 * j)) +=
+              influence[p].weight * u.cross(g);
+          nodeGradient.segment<3>(static_cast<Eigen::Index>(6 * j + 3)) += influence[p].weight * g;
+        }
         Eigen::Matrix3d M;
         for (int c = 0; c < 3; ++c)
           for (int r = 0; r < 3; ++r)
             M(r, c) = block[c * stride + r];
         if (M.isZero(0.0))
           return;
-        const auto ia = Graph.influencesBegin(static_cast<std::size_t>(a));
-        const auto ib = Graph.influencesBegin(static_cast<std::size_t>(b));
-        for (std::size_t p = 0; p < na; ++p)
+        for (std::size_t p = 0; p < n; ++p)
         {
-          const Eigen::Matrix<double, 6, 3> left = B[first[a] + p].transpose() * M;
-          for (std::size_t q = 0; q < nb; ++q)
+          const Eigen::Matrix3d UM = U[p] * M;
+          for (std::size_t q = 0; q < n; ++q)
           {
-            const std::int64_t j = ia[p].node, k = ib[q].node;
-            if (a == b && j > k)
-              continue; // a diagonal vertex block visits (j, k) and (k, j) alike: add each once
-            Matrix66 m = left * B[first[b] + q];
-            // Off the diagonal the vertex block stands for (a, b) and (b, a): m goes to (j, k)
-            // and m^T to (k, j); for j == k both land on one diagonal block.
-            if (a != b && j == k)
-              m += m.transpose().eval();
-            NodeModel.addBlock(ProjectionSlots[slots + p * nb + q], m.data());
+            // A diagonal vertex block visits (j, k) and (k, j) alike: add each once.
+            if (influence[p].node > influence[q].node)
+              continue;
+            const double w = influence[p].weight * influence[q].weight;
+            const Eigen::Matrix3d MU = M * U[q];
+            Matrix66 m;
+            m.topLeftCorner<3, 3>() = -w * (UM * U[q]);
+            m.topRightCorner<3, 3>() = w * UM;
+            m.bottomLeftCorner<3, 3>() = -w * MU;
+            m.bottomRightCorner<3, 3>() = w * M;
+            NodeModel.addBlock(ProjectionSlots[slots + p * n + q], m.data());
           }
         }
       });
