@@ -95,12 +95,14 @@ double boundsOf(const std::vector<double>& xyz, double box[6])
              ? diagonal
              : std::max(1.0, std::abs(box[0]) + std::abs(box[2]) + std::abs(box[4])) * 1e-3;
 }
-// The output's arrays the engine writes into directly (nothing is copied): the distance and the
-// band flag; the nearest point's index is the engine's, turned into the input's ids afterwards.
+// The output's arrays the engine writes into directly (nothing is copied): the distance, its
+// gradient (the unit vector away from the nearest point) and the band flag; the nearest point's
+// index is the engine's, turned into the input's ids afterwards.
 struct OutputArrays
 {
   vtkNew<vtkFloatArray> distance;
   vtkNew<vtkUnsignedCharArray> inBand;
+  vtkNew<vtkFloatArray> gradient;
   std::unique_ptr<std::uint32_t[]> nearestIndex; // every entry written by the engine
   std::size_t samples;
 
@@ -112,34 +114,31 @@ struct OutputArrays
     distance->SetNumberOfTuples(count);
     inBand->SetName("InBand");
     inBand->SetNumberOfTuples(count);
+    gradient->SetName("Gradient");
+    gradient->SetNumberOfComponents(3);
+    gradient->SetNumberOfTuples(count);
   }
   dp::DistanceImageView view()
   {
-    return {samples, distance->GetPointer(0), nearestIndex.get(), inBand->GetPointer(0)};
+    return {samples, distance->GetPointer(0), nearestIndex.get(), inBand->GetPointer(0),
+            gradient->GetPointer(0)};
   }
 };
 
-// The output's point arrays from the engine's image: the distance and band flag, the nearest
-// point's id and normal, and the gradient of the distance (the unit vector away from the nearest
-// point).
-void fillArrays(vtkImageData* output, const std::vector<double>& xyz,
-                const std::vector<vtkIdType>& ids, const std::vector<float>& normals,
-                const dp::ImageGrid& grid, OutputArrays& field)
+// The output's point arrays from the engine's image: its own, and the nearest point's id and
+// normal.
+void fillArrays(vtkImageData* output, const std::vector<vtkIdType>& ids,
+                const std::vector<float>& normals, OutputArrays& field)
 {
-  const vtkIdType samples = static_cast<vtkIdType>(grid.voxelCount());
+  const auto samples = static_cast<vtkIdType>(field.samples);
   const dp::DistanceImageView image = field.view();
-  vtkNew<vtkFloatArray> gradient;
-  gradient->SetName("Gradient");
-  gradient->SetNumberOfComponents(3);
-  gradient->SetNumberOfTuples(samples);
-  dp::distanceGradient(xyz.data(), grid, image, gradient->GetPointer(0));
   vtkNew<vtkIdTypeArray> nearest;
   nearest->SetName("NearestPointId");
   nearest->SetNumberOfTuples(samples);
   static_assert(std::is_same<vtkIdType, long long>::value, "vtkIdType is 64-bit here");
   dp::gatherNearest(image, ids.data(), nearest->GetPointer(0));
   output->GetPointData()->SetScalars(field.distance);
-  output->GetPointData()->SetVectors(gradient);
+  output->GetPointData()->SetVectors(field.gradient);
   output->GetPointData()->AddArray(nearest);
   output->GetPointData()->AddArray(field.inBand);
   if (!normals.empty())
@@ -239,7 +238,7 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   output->SetExtent(extent);
   output->SetOrigin(grid.origin.data());
   output->SetSpacing(grid.spacing.data());
-  fillArrays(output, target.xyz, target.ids, normals, grid, field);
+  fillArrays(output, target.ids, normals, field);
   auto addValue = [output](const char* name, double value)
   {
     vtkNew<vtkDoubleArray> a;

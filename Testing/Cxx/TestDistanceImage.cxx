@@ -178,15 +178,25 @@ TEST(DistanceImage, ExactOnAStretchedGridInAnyPointOrderAndIntoTheCallersArrays)
   std::vector<float> distance(grid.voxelCount());
   std::vector<std::uint32_t> nearest(grid.voxelCount());
   std::vector<std::uint8_t> flags(grid.voxelCount());
-  const dp::DistanceImageBand result =
-      dp::computeDistanceImage(reversed.data(), 3000, grid, band,
-                               {grid.voxelCount(), distance.data(), nearest.data(), flags.data()});
+  std::vector<float> gradient(3 * grid.voxelCount(), -7.0f);
+  const dp::DistanceImageBand result = dp::computeDistanceImage(
+      reversed.data(), 3000, grid, band,
+      {grid.voxelCount(), distance.data(), nearest.data(), flags.data(), gradient.data()});
   EXPECT_EQ(result.bandVoxels, image.bandVoxels);
   EXPECT_EQ(distance, image.distance);
   EXPECT_EQ(flags, image.exact);
   for (std::size_t v = 0; v < nearest.size(); ++v)
+  {
     for (int c = 0; c < 3; ++c) // the same point (no duplicates: indices map one to one)
       ASSERT_EQ(reversed[3 * nearest[v] + c], points[3 * image.nearest[v] + c]) << "voxel " << v;
+    // The gradient: the unit vector from the nearest point to the voxel's centre (in single
+    // precision: coordinates rounded by 6e-8 make an error of about that over the distance).
+    const auto x = voxelCentre(grid, v);
+    const double* p = &reversed[3 * nearest[v]];
+    for (int c = 0; c < 3; ++c)
+      ASSERT_NEAR(gradient[3 * v + c], (x[c] - p[c]) / distance[v], 1e-6 + 2e-7 / distance[v])
+          << "voxel " << v;
+  }
 
   EXPECT_THROW(dp::computeDistanceImage(
                    points.data(), 3000, grid, band,

@@ -57,16 +57,22 @@ void validate(const double* points, std::size_t count, const ImageGrid& grid, do
                                   " has a non-finite coordinate");
 }
 
-// A per-voxel array, filled in parallel: its pages are first touched by both threads (fresh
-// memory's page faults are a large part of a big image's time), and not twice as a vector's
-// initialisation and then its filling would touch them.
+// Per-voxel arrays are filled in parallel: their pages are first touched by both threads (fresh
+// memory's page faults are a large part of a big image's time), and only once (not as a vector's
+// initialisation and then again by its filling).
+template <class T>
+void fillInParallel(T* a, std::size_t n, T value)
+{
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536),
+                    [&](const tbb::blocked_range<std::size_t>& r)
+                    { std::fill(a + r.begin(), a + r.end(), value); });
+}
+
 template <class T>
 std::unique_ptr<T[]> filledArray(std::size_t n, T value)
 {
   std::unique_ptr<T[]> a(new T[n]);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 65536),
-                    [&](const tbb::blocked_range<std::size_t>& r)
-                    { std::fill(a.get() + r.begin(), a.get() + r.end(), value); });
+  fillInParallel(a.get(), n, value);
   return a;
 }
 
@@ -205,13 +211,12 @@ struct SliceBest
 // within `band` (ties to the lower index), reading the point rows whose band can reach it: a
 // point is read once per slice it reaches, and one task writes each slice, so the result does not
 // depend on the threads. NoPoint beyond the band.
-std::unique_ptr<std::uint32_t[]> bandPoints(const PlacedPoints& placed, const ImageGrid& grid,
-                                            double band)
+void bandPoints(const PlacedPoints& placed, const ImageGrid& grid, double band, std::uint32_t* out)
 {
   const auto& dim = grid.dimensions;
   const std::size_t nx = static_cast<std::size_t>(dim[0]);
   const std::size_t sliceSize = nx * static_cast<std::size_t>(dim[1]);
-  std::unique_ptr<std::uint32_t[]> out = filledArray(grid.voxelCount(), NoPoint);
+  fillInParallel(out, grid.voxelCount(), NoPoint);
   const double band2 = band * band;
   // A point's row is its nearest one, so it reaches rows within band / spacing + 1/2 of it.
   const int reachY = static_cast<int>(band / grid.spacing[1] + 0.5 + 1e-6);
@@ -254,7 +259,6 @@ std::unique_ptr<std::uint32_t[]> bandPoints(const PlacedPoints& placed, const Im
               out[static_cast<std::size_t>(k) * sliceSize + v] = slice.pointOf(v);
         }
       });
-  return out;
 }
 
 // One axis of the separable transform on one line, in place: g[p] <- min_q g[q] + w (p - q)^2
@@ -367,13 +371,14 @@ void transformStridedAxis(float* g, std::uint32_t* point, const std::size_t dim[
 }
 
 // Step 2: the exact distance transform of the seed voxels (in voxel-centre distances), axis by
-// axis; each voxel ends with the point of its nearest seed (NoPoint when there is none), or its
-// band point in the band.
+// axis, in `g` (one float per voxel, the caller's scratch); each voxel ends with the point of its
+// nearest seed (NoPoint when there is none), or its band point in the band.
 std::unique_ptr<std::uint32_t[]> nearestSeedPoints(const std::vector<std::size_t>& seeds,
-                                                   const std::uint32_t* band, const ImageGrid& grid)
+                                                   const std::uint32_t* band, const ImageGrid& grid,
+                                                   float* g)
 {
   const std::size_t n = grid.voxelCount();
-  const std::unique_ptr<float[]> g = filledArray(n, FarAway);
+  fillInParallel(g, n, FarAway);
   std::unique_ptr<std::uint32_t[]> point = filledArray(n, NoPoint);
   for (std::size_t v : seeds)
   {
@@ -389,12 +394,12 @@ std::unique_ptr<std::uint32_t[]> nearestSeedPoints(const std::vector<std::size_t
                     {
                       LineScratch scratch;
                       for (std::size_t line = r.begin(); line < r.end(); ++line)
-                        transformLine(&g[line * dim[0]], &point[line * dim[0]],
+                        transformLine(g + line * dim[0], &point[line * dim[0]],
                                       static_cast<int>(dim[0]), w0, scratch);
                     });
-  transformStridedAxis(g.get(), point.get(), dim, 1,
+  transformStridedAxis(g, point.get(), dim, 1,
                        static_cast<float>(grid.spacing[1] * grid.spacing[1]));
-  transformStridedAxis(g.get(), point.get(), dim, 2,
+  transformStridedAxis(g, point.get(), dim, 2,
                        static_cast<float>(grid.spacing[2] * grid.spacing[2]), band);
   return point;
 }
@@ -451,10 +456,11 @@ void forEachVoxel(const ImageGrid& grid, Visit&& visit)
       });
 }
 
-// Step 3: each voxel's nearest point. In the band, its own (exact). Beyond it, the nearest of
-// the points it and its six neighbours know of (`known`: their band point, else their nearest
-// seed's): the seed nearest to a voxel's centre need not hold the point nearest to it, and a
-// neighbour's often does; and a point outside the image when nearer.
+// Step 3: each voxel's nearest point. In the band, its own (exact; `band` may be out.nearest,
+// read at each voxel before it is written). Beyond it, the nearest of the points it and its six
+// neighbours know of (`known`: their band point, else their nearest seed's): the seed nearest to
+// a voxel's centre need not hold the point nearest to it, and a neighbour's often does; and a
+// point outside the image when nearer. Then the distance, and the gradient when asked for.
 void assignVoxels(const float* points, const ImageGrid& grid, const std::uint32_t* band,
                   const std::uint32_t* known, const detail::KdTree* outsideTree,
                   const std::vector<std::uint32_t>& outsideIndex, const DistanceImageView& out)
@@ -480,8 +486,15 @@ void assignVoxels(const float* points, const ImageGrid& grid, const std::uint32_
                      c.offer(points, outsideIndex[outsideTree->nearest(q)], x);
                    }
                  }
+                 const float d = std::sqrt(c.distance2);
                  out.nearest[v] = c.index;
-                 out.distance[v] = static_cast<float>(std::sqrt(c.distance2));
+                 out.distance[v] = d;
+                 if (!out.gradient)
+                   return;
+                 const float* p = points + 3 * static_cast<std::size_t>(c.index);
+                 const float inverse = d > 0 ? 1.0f / d : 0.0f;
+                 for (int k = 0; k < 3; ++k)
+                   out.gradient[3 * v + k] = (x[k] - p[k]) * inverse;
                });
 }
 
@@ -500,17 +513,19 @@ DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
   DistanceImageBand result;
   result.bandWidth = std::max(bandWidth, halfDiagonal * (1 + 1e-9));
   const PlacedPoints placed = placePoints(points, count, grid);
-  const std::unique_ptr<std::uint32_t[]> band = bandPoints(placed, grid, result.bandWidth);
-  const std::unique_ptr<std::uint32_t[]> known = nearestSeedPoints(placed.seeds, band.get(), grid);
+  // The caller's arrays hold the band's points and the transform's squared distances until the
+  // last pass writes them: no image-sized scratch of their own.
+  const std::uint32_t* band = out.nearest;
+  bandPoints(placed, grid, result.bandWidth, out.nearest);
+  const std::unique_ptr<std::uint32_t[]> known =
+      nearestSeedPoints(placed.seeds, band, grid, out.distance);
   std::unique_ptr<detail::KdTree> outsideTree;
   if (!placed.outsideIndex.empty())
     outsideTree =
         std::make_unique<detail::KdTree>(placed.outside.data(), placed.outsideIndex.size());
   const std::vector<float> single(points, points + 3 * count);
-  assignVoxels(single.data(), grid, band.get(), known.get(), outsideTree.get(), placed.outsideIndex,
-               out);
-  result.bandVoxels = out.voxels - static_cast<std::size_t>(
-                                       std::count(band.get(), band.get() + out.voxels, NoPoint));
+  assignVoxels(single.data(), grid, band, known.get(), outsideTree.get(), placed.outsideIndex, out);
+  result.bandVoxels = static_cast<std::size_t>(std::count(out.exact, out.exact + out.voxels, 1));
   return result;
 }
 
@@ -525,19 +540,6 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
   static_cast<DistanceImageBand&>(image) =
       computeDistanceImage(points, count, grid, bandWidth, image.view());
   return image;
-}
-
-void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImageView& image,
-                      float* out)
-{
-  forEachVoxel(grid,
-               [&](std::size_t v, const float* x, const std::size_t*)
-               {
-                 const double* p = points + 3 * image.nearest[v];
-                 const double d = image.distance[v];
-                 for (int c = 0; c < 3; ++c)
-                   out[3 * v + c] = d > 0 ? static_cast<float>((x[c] - p[c]) / d) : 0.0f;
-               });
 }
 
 void gatherNearest(const DistanceImageView& image, const float* perPoint, int components,

@@ -26,8 +26,9 @@
  * Limits: the band is at least half a voxel diagonal (seeds must be exact). Points outside the
  * image are found beyond the band by a kd-tree (slower: one query per such voxel). Up to
  * 2^32 - 1 points and 2^31 - 1 voxels; the caller bounds the voxel count (memory: 9 bytes per
- * voxel in the result, about 21 while computing, plus about 56 per point). Distances are in single
- * precision.
+ * voxel in the result, 12 more with the gradient, and 4 more while computing, as the result's own
+ * arrays hold the band and the transform until the last pass; plus about 56 per point). Distances
+ * and gradients are in single precision.
  */
 #pragma once
 
@@ -61,6 +62,9 @@ struct DistanceImageView
   float* distance = nullptr;        // per voxel, to `nearest`
   std::uint32_t* nearest = nullptr; // per voxel: index of its nearest point
   std::uint8_t* exact = nullptr;    // per voxel: 1 within the band (the distance is exact)
+  // Optional (null: not computed): 3 per voxel, the distance's gradient, the unit vector away from
+  // the nearest point (zero on a point).
+  float* gradient = nullptr;
 };
 
 /** What computeDistanceImage reports besides the arrays. */
@@ -94,11 +98,6 @@ DistanceImage computeDistanceImage(const double* points, std::size_t count, cons
 DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
                                        const ImageGrid& grid, double bandWidth,
                                        const DistanceImageView& out);
-
-/** The distance's gradient at every voxel: the unit vector away from its nearest point (zero on
- *  a point); `out` holds 3 floats per voxel. In parallel. */
-void distanceGradient(const double* points, const ImageGrid& grid, const DistanceImageView& image,
-                      float* out);
 
 /** Per voxel, the `components` values its nearest point has in `perPoint` (e.g. normals). */
 void gatherNearest(const DistanceImageView& image, const float* perPoint, int components,
