@@ -157,6 +157,30 @@ void SurfaceLocator::refit(const double* positions)
   // Children are stored after their parents: a reverse sweep sees children first.
   for (auto n = static_cast<std::int32_t>(Nodes.size()) - 1; n >= 0; --n)
     boxOf(n);
+  // Each triangle's bounding sphere, in the leaves' order: centre rounded to float, radius
+  // measured from that centre and rounded up, so the sphere still holds the triangle.
+  const auto& tri = Mesh->triangles();
+  Spheres.resize(Order.size());
+  for (std::size_t i = 0; i < Order.size(); ++i)
+  {
+    const std::int64_t* t = &tri[3 * static_cast<std::size_t>(Order[i])];
+    Sphere& s = Spheres[i];
+    for (int k = 0; k < 3; ++k)
+      s.centre[k] = static_cast<float>(
+          (Positions[3 * t[0] + k] + Positions[3 * t[1] + k] + Positions[3 * t[2] + k]) / 3.0);
+    double r2 = 0;
+    for (int c = 0; c < 3; ++c)
+    {
+      double d2 = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        const double d = Positions[3 * t[c] + k] - s.centre[k];
+        d2 += d * d;
+      }
+      r2 = std::max(r2, d2);
+    }
+    s.radius = std::nextafter(static_cast<float>(std::sqrt(r2) * (1 + 1e-12)), HUGE_VALF);
+  }
 }
 
 void SurfaceLocator::boxOf(std::int32_t n)
@@ -202,6 +226,19 @@ double SurfaceLocator::boxDistance2(const Node& n, const double p[3]) const
   return d2;
 }
 
+bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
+{
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k)
+  {
+    const double d = p[k] - s.centre[k];
+    d2 += d * d;
+  }
+  const double gap = std::sqrt(d2) - s.radius;
+  // A relative margin for the rounding of the lines above: never skip a triangle that might win.
+  return gap > 0 && gap * gap > bound2 * (1 + 1e-9);
+}
+
 SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistance,
                                             std::int64_t hint) const
 {
@@ -235,6 +272,8 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
     {
       for (std::int32_t i = node.first; i < node.first + node.count; ++i)
       {
+        if (outside(Spheres[static_cast<std::size_t>(i)], p, bound))
+          continue; // its bounding sphere is no nearer than the best so far
         const std::int64_t t = Order[i];
         double w[3], c[3];
         const double d2 =
