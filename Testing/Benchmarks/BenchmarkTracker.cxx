@@ -245,14 +245,17 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
 {
   std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
               frames, S.points);
-  std::printf("%10s %12s %14s %12s %14s\n", "vertices", "ms/frame", "ms/1k vertices", "iterations",
-              "vertex RMS %");
+  std::printf("%10s %12s %14s %12s %14s %12s %12s\n", "vertices", "ms/frame", "ms/1k vertices",
+              "iterations", "vertex RMS %", "resident MiB", "KiB/vertex");
   for (std::size_t target : ScalingSizes)
   {
     dp::BendingTube::Options shape;
     shape.segments = static_cast<std::size_t>(std::lround(std::sqrt(target / 1.67)));
     shape.rings = (target + shape.segments - 1) / shape.segments;
     const dp::BendingTube tube(shape);
+    // What the tracker holds while it works: resident memory from before it is made to after its
+    // last frame (its mesh, energies, graph and solvers, and the last frame's data).
+    const double residentBefore = dp::bench::residentMiB();
     dp::Tracker tracker(dp::TriangleMesh(tube.triangles(), tube.numberOfVertices()),
                         tube.positions(0), options);
     dp::SamplerOptions sampling;
@@ -278,10 +281,12 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
       sum += e / static_cast<double>(truth.size() / 3);
     }
     const double median = dp::bench::median(ms);
-    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%%\n", tube.numberOfVertices(), median,
-                1e3 * median / static_cast<double>(tube.numberOfVertices()),
+    const double resident = dp::bench::residentMiB() - residentBefore;
+    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%% %12.1f %12.2f\n", tube.numberOfVertices(),
+                median, 1e3 * median / static_cast<double>(tube.numberOfVertices()),
                 iterations / static_cast<double>(frames),
-                100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal);
+                100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal, resident,
+                1024 * resident / static_cast<double>(tube.numberOfVertices()));
     std::fflush(stdout);
   }
 }
