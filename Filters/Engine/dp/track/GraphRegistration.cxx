@@ -48,12 +48,6 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
   resetReference();
   NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
-  for (const auto& edge : graph.edges())
-    for (int direction = 0; direction < 2; ++direction)
-    {
-      const std::int64_t j = edge[direction], k = edge[1 - direction];
-      EdgeSlots.push_back({NodeModel.slotOf(j, j), NodeModel.slotOf(k, k), NodeModel.slotOf(j, k)});
-    }
   // The node block each (vertex block, node of a, node of b) adds to, found once.
   VertexModel.forEachBlock(
       [&](std::int64_t a, std::int64_t b, const double*, int)
@@ -81,43 +75,24 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       const auto& edge = edges[index];
       const std::int64_t j = edge[direction], k = edge[1 - direction];
       const double c = scale * (EdgeWeight.empty() ? 1.0 : EdgeWeight[2 * index + direction]);
+      const Eigen::Vector3d r = edgeResidual(state, index, direction);
       const Eigen::Vector3d arm = state.rotation[j] * Arms[2 * index + direction];
-      const Eigen::Vector3d r = arm + Eigen::Vector3d(Graph.nodePosition(j)) +
-                                state.translation[j] - Eigen::Vector3d(Graph.nodePosition(k)) -
-                                state.translation[k];
       e += 0.5 * c * r.squaredNorm();
-      if (hessian)
-        addBendingModel(EdgeSlots[2 * index + direction], j, k, c, arm, r, *hessian, *gradient);
+      if (!hessian)
+        continue;
+      // de/d(w_j, t_j) = [-[arm]x, I]; de/d(w_k, t_k) = [0, -I].
+      Matrix36 Jj, Jk;
+      Jj << -crossMatrix(arm), Eigen::Matrix3d::Identity();
+      Jk << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity();
+      const Matrix66 jj = c * Jj.transpose() * Jj, kk = c * Jk.transpose() * Jk,
+                     jk = c * Jj.transpose() * Jk;
+      hessian->addBlock(hessian->slotOf(j, j), jj.data());
+      hessian->addBlock(hessian->slotOf(k, k), kk.data());
+      hessian->addBlock(hessian->slotOf(j, k), jk.data());
+      gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
+      gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
     }
   return StretchWeight > 0 ? e + stretching(state, StretchWeight * scale, hessian, gradient) : e;
-}
-
-void GraphRegistration::addBendingModel(const BendingSlots& slots, std::int64_t j, std::int64_t k,
-                                        double c, const Eigen::Vector3d& arm,
-                                        const Eigen::Vector3d& r,
-                                        detail::BlockSparseMatrixOf<6>& hessian,
-                                        Eigen::VectorXd& gradient)
-{
-  // e = R_j a + g_j + t_j - g_k - t_k: de/d(w_j, t_j) = J_j = [-[arm]x, I], de/d(w_k, t_k) =
-  // [0, -I], so c J^T J is, with A = [arm]x (A^T = -A, A^T A = |arm|^2 I - arm arm^T):
-  //   (j, j) = c [A^T A, A; A^T, I],  (k, k) = c [0, 0; 0, I],  (j, k) = c [0, -A; 0, -I].
-  const Eigen::Matrix3d A = crossMatrix(arm);
-  Matrix66 jj = Matrix66::Zero(), kk = Matrix66::Zero(), jk = Matrix66::Zero();
-  jj.topLeftCorner<3, 3>() =
-      c * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
-  jj.topRightCorner<3, 3>() = c * A;
-  jj.bottomLeftCorner<3, 3>() = -c * A;
-  jj.bottomRightCorner<3, 3>() = c * Eigen::Matrix3d::Identity();
-  kk.bottomRightCorner<3, 3>() = c * Eigen::Matrix3d::Identity();
-  jk.topRightCorner<3, 3>() = -c * A;
-  jk.bottomRightCorner<3, 3>() = -c * Eigen::Matrix3d::Identity();
-  hessian.addBlock(slots.jj, jj.data());
-  hessian.addBlock(slots.kk, kk.data());
-  hessian.addBlock(slots.jk, jk.data());
-  // J_j^T r = [arm x r; r] (A^T r = -arm x r, negated by J's -A), J_k^T r = [0; -r].
-  gradient.segment<3>(6 * j) += c * arm.cross(r);
-  gradient.segment<3>(6 * j + 3) += c * r;
-  gradient.segment<3>(6 * k + 3) -= c * r;
 }
 
 double GraphRegistration::stretching(const DeformationGraph::State& state, double weight,
@@ -162,55 +137,56 @@ void GraphRegistration::project(const DeformationGraph::State& state,
                                 const Eigen::VectorXd& vertexGradient,
                                 Eigen::VectorXd& nodeGradient)
 {
-  // B_aj = w_aj [-U_aj, I] with U_aj = [R_j (v_a - g_j)]x: how vertex a moves with node j's
-  // rotation and translation. The data terms' model is block diagonal here (M_a per vertex), so
-  // H_nodes(j, k) += B_aj^T M_a B_ak over the pairs of nodes a blends, and g_nodes(j) += B_aj^T
-  // g_a, written out: B_aj^T M B_ak = w_aj w_ak [-U_aj M U_ak, U_aj M; -M U_ak, M].
+  // B_aj = w_aj [-[R_j (v_a - g_j)]x, I]: how vertex a moves with node j's rotation and
+  // translation. H_nodes += B_a^T H_ab B_b over the vertex model's blocks, g_nodes += B_a^T g_a.
+  const std::size_t nv = Graph.mesh().numberOfVertices();
+  std::vector<std::size_t> first(nv + 1, 0);
+  for (std::size_t v = 0; v < nv; ++v)
+    first[v + 1] =
+        first[v] + static_cast<std::size_t>(Graph.influencesEnd(v) - Graph.influencesBegin(v));
+  std::vector<Matrix36> B(first[nv]);
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    const Eigen::Vector3d rest(Graph.rest() + 3 * v);
+    std::size_t slot = first[v];
+    for (auto i = Graph.influencesBegin(v); i != Graph.influencesEnd(v); ++i, ++slot)
+    {
+      const Eigen::Vector3d g(Graph.nodePosition(static_cast<std::size_t>(i->node)));
+      B[slot] << -i->weight * crossMatrix(state.rotation[i->node] * (rest - g)),
+          i->weight * Eigen::Matrix3d::Identity();
+      nodeGradient.segment<6>(6 * i->node) +=
+          B[slot].transpose() * vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
+    }
+  }
   std::size_t next = 0; // into ProjectionSlots, in the order forEachBlock visits the blocks
-  std::vector<Eigen::Matrix3d> U;
   VertexModel.forEachBlock(
-      [&](std::int64_t a, std::int64_t, const double* block, int stride)
+      [&](std::int64_t a, std::int64_t b, const double* block, int stride)
       {
-        const auto v = static_cast<std::size_t>(a);
-        const auto* influence = Graph.influencesBegin(v);
-        const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influence);
+        const std::size_t na = first[a + 1] - first[a], nb = first[b + 1] - first[b];
         const std::size_t slots = next;
-        next += n * n;
-        U.resize(std::max(U.size(), n));
-        const Eigen::Vector3d rest(Graph.rest() + 3 * v);
-        const Eigen::Vector3d g = vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
-        for (std::size_t p = 0; p < n; ++p)
-        {
-          const auto j = static_cast<std::size_t>(influence[p].node);
-          const Eigen::Vector3d u =
-              state.rotation[j] * (rest - Eigen::Vector3d(Graph.nodePosition(j)));
-          U[p] = crossMatrix(u);
-          nodeGradient.segment<3>(static_cast<Eigen::Index>(6 * j)) +=
-              influence[p].weight * u.cross(g);
-          nodeGradient.segment<3>(static_cast<Eigen::Index>(6 * j + 3)) += influence[p].weight * g;
-        }
+        next += na * nb;
         Eigen::Matrix3d M;
         for (int c = 0; c < 3; ++c)
           for (int r = 0; r < 3; ++r)
             M(r, c) = block[c * stride + r];
         if (M.isZero(0.0))
           return;
-        for (std::size_t p = 0; p < n; ++p)
+        const auto ia = Graph.influencesBegin(static_cast<std::size_t>(a));
+        const auto ib = Graph.influencesBegin(static_cast<std::size_t>(b));
+        for (std::size_t p = 0; p < na; ++p)
         {
-          const Eigen::Matrix3d UM = U[p] * M;
-          for (std::size_t q = 0; q < n; ++q)
+          const Eigen::Matrix<double, 6, 3> left = B[first[a] + p].transpose() * M;
+          for (std::size_t q = 0; q < nb; ++q)
           {
-            // A diagonal vertex block visits (j, k) and (k, j) alike: add each once.
-            if (influence[p].node > influence[q].node)
-              continue;
-            const double w = influence[p].weight * influence[q].weight;
-            const Eigen::Matrix3d MU = M * U[q];
-            Matrix66 m;
-            m.topLeftCorner<3, 3>() = -w * (UM * U[q]);
-            m.topRightCorner<3, 3>() = w * UM;
-            m.bottomLeftCorner<3, 3>() = -w * MU;
-            m.bottomRightCorner<3, 3>() = w * M;
-            NodeModel.addBlock(ProjectionSlots[slots + p * n + q], m.data());
+            const std::int64_t j = ia[p].node, k = ib[q].node;
+            if (a == b && j > k)
+              continue; // a diagonal vertex block visits (j, k) and (k, j) alike: add each once
+            Matrix66 m = left * B[first[b] + q];
+            // Off the diagonal the vertex block stands for (a, b) and (b, a): m goes to (j, k)
+            // and m^T to (k, j); for j == k both land on one diagonal block.
+            if (a != b && j == k)
+              m += m.transpose().eval();
+            NodeModel.addBlock(ProjectionSlots[slots + p * nb + q], m.data());
           }
         }
       });

@@ -105,16 +105,6 @@ private:
   // kept (state moved, decrease set); the damping carries over between steps.
   bool dampedStep(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                   double rigidity, double energy, double& damping, double& decrease);
-  // Where the bending model of one directed edge (j, k) adds: blocks (j, j), (k, k), (j, k).
-  struct BendingSlots
-  {
-    detail::BlockSparseMatrixOf<6>::Slot jj, kk, jk;
-  };
-  // The Gauss-Newton model of c / 2 |e|^2 for the directed edge (j, k) with rotated arm R_j a_jk
-  // and residual e (regularisation()).
-  static void addBendingModel(const BendingSlots& slots, std::int64_t j, std::int64_t k, double c,
-                              const Eigen::Vector3d& arm, const Eigen::Vector3d& r,
-                              detail::BlockSparseMatrixOf<6>& hessian, Eigen::VectorXd& gradient);
   double stretching(const DeformationGraph::State& state, double weight,
                     detail::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
   static DeformationGraph::State retract(const DeformationGraph::State& state,
@@ -130,7 +120,6 @@ private:
   detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
-  std::vector<BendingSlots> EdgeSlots;                               // per directed edge
   Eigen::VectorXd NodeGradient;
   detail::BlockCholeskyOf<6> Solver;
   bool Analysed = false;
