@@ -34,6 +34,7 @@ struct vtkDeformableTrackFilter::Internals
   std::unique_ptr<dp::Tracker> Tracker; // made at the first frame
   vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
   std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
+  std::size_t ProgressFrames = 0;       // what the request under way counts its frames out of
 
   void clear()
   {
@@ -370,14 +371,18 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
   if (in.Cache.size() <= target)
   {
     const std::size_t frame = in.Cache.size();
-    this->ShowProgressOf(frame, target);
+    if (!request->Has(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING()))
+      in.ProgressFrames = frame == target ? this->GetNumberOfInputFrames() : target + 1;
+    this->ShowProgressOf(frame, false);
+    this->UpdateProgress(0.0); // the new text while the frame is under way
     vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
     if ((!in.Tracker && !this->MakeTracker(inputVector, input)) || !this->TrackFrame(frame, input))
     {
       ContinueExecuting(request, false);
       return 0;
     }
-    this->UpdateProgress(1.0); // of this frame: the whole work's (frame + 1) / needed
+    this->ShowProgressOf(frame, true);
+    this->UpdateProgress(1.0); // the whole work's (frame + 1) / needed
     ContinueExecuting(request, in.Cache.size() <= target && !this->GetAbortExecute());
   }
   else
@@ -403,18 +408,24 @@ void vtkDeformableTrackFilter::SetAbortExecute(vtkTypeBool abort)
   this->AbortExecute = abort;
 }
 
-void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, std::size_t target)
+void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, bool done)
 {
-  // Progress over what the work needs: up to the requested frame, or, when a consumer walks the
-  // take one new frame per request (a writer, the compressor, playing), over the whole take.
-  // The shift and scale map this frame's own 0..1 (and the executive's, around each request)
-  // onto that whole, so the bar rises instead of reading 100 % after every frame.
-  const std::size_t needed = target == frame ? this->GetNumberOfInputFrames() : target + 1;
+  // Progress over what the request needs (ProgressFrames): up to the requested frame, or, when a
+  // consumer walks the take one new frame per request (a writer, the compressor, playing), over
+  // the whole take.
+  // While the frame runs, the shift and scale map its own 0..1 (and the executive's) onto its
+  // share, so the bar rises instead of reading 100 % after every frame. Once it is done, every
+  // later event (the executive's around the next request, an answer from the cache) holds the
+  // bar at the frame's end instead of dipping back to its start.
+  const std::size_t needed = std::max(this->Internal->ProgressFrames, frame + 1);
   const std::string text =
       "Deformable Track: frame " + std::to_string(frame + 1) + " of " + std::to_string(needed);
   this->SetProgressText(text.c_str());
-  const double share = 1.0 / static_cast<double>(needed);
-  this->SetProgressShiftScale(static_cast<double>(frame) * share, share);
+  const double total = static_cast<double>(needed);
+  if (done)
+    this->SetProgressShiftScale(static_cast<double>(frame + 1) / total, 0.0);
+  else
+    this->SetProgressShiftScale(static_cast<double>(frame) / total, 1.0 / total);
 }
 
 void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)

@@ -290,8 +290,8 @@ private:
   bool MakeTracker(vtkInformationVector** inputVector, vtkPointSet* frame0);
   /** Tracks the next frame into the cache, with its warnings. */
   bool TrackFrame(std::size_t frame, vtkPointSet* input);
-  /** Progress text and scale for computing `frame` of a request for `target`. */
-  void ShowProgressOf(std::size_t frame, std::size_t target);
+  /** Progress text, shift and scale while computing `frame`, or once it is done. */
+  void ShowProgressOf(std::size_t frame, bool done);
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;
   void operator=(const vtkDeformableTrackFilter&) = delete;
 

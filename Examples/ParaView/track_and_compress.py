@@ -1,5 +1,5 @@
 """ParaView: the whole job as a user would click it, as a script for pvpython, pvbatch
-(also under mpirun) or the GUI (`paraview --script=...`): open a point sequence, track it
+(also under mpirun) or the GUI (`paraview --dr --script=...`): open a point sequence, track it
 (Filters > DynamicPoints > Deformable Track), compress it (PCA Compress), save it as .dpz and
 .glb (File > Save Data), show the tracked mesh coloured by its distance to the points over the points, play it
 over time, and save a screenshot of the middle frame.
@@ -17,6 +17,22 @@ from paraview.simple import (ColorBy, Delete, GetActiveViewOrCreate, GetColorTra
                              SaveData, SaveScreenshot, Show, servermanager)
 
 
+def print_progress(proxy):
+    """pvpython and pvbatch draw no progress bar: print the text the GUI's bar would show each time
+    it changes ("Deformable Track: frame 3 of 12 (17%)"), from the algorithm's ProgressEvent.
+    Under MPI only the first process prints."""
+    if servermanager.vtkProcessModule.GetProcessModule().GetPartitionId() != 0:
+        return
+    shown = []
+
+    def show(algorithm, _event):
+        text = algorithm.GetProgressText()
+        if text and (not shown or shown[-1] != text):
+            shown.append(text)
+            print(f"{text} ({algorithm.GetProgress():.0%})", flush=True)
+    proxy.GetClientSideObject().AddObserver("ProgressEvent", show)
+
+
 def main(plugin, series, output, in_gui=False):
     LoadPlugin(plugin, remote=False, ns=globals())
     os.makedirs(output, exist_ok=True)
@@ -26,6 +42,8 @@ def main(plugin, series, output, in_gui=False):
     track.TemplateVertices = 600
     compress = PCACompress(Input=track)  # noqa: F821
     compress.ErrorTarget = 0.2
+    if not in_gui:  # the GUI has its progress bar
+        print_progress(track)
 
     view = GetActiveViewOrCreate("RenderView")
     cloud = Show(points, view)

@@ -1,9 +1,13 @@
-"""Shared helpers for the Python tests: where the build put things, and an error recorder."""
+"""Shared helpers for the Python tests: where the build put things, an error recorder, and an X
+server with its windows (for the ParaView GUI tests)."""
+import contextlib
 import json
 import os
 import shutil
+import struct
 import subprocess
 import tempfile
+import time
 import unittest
 
 from vtkmodules.vtkCommonCore import vtkCommand
@@ -82,6 +86,101 @@ def blender_open_tracked(glb, blend):
         raise AssertionError(f"open_tracked.py failed on {glb}:\n{result.stdout[-2000:]}\n"
                              f"{result.stderr[-2000:]}")
     return result.stdout
+
+
+@contextlib.contextmanager
+def x_display(size="1600x1200"):
+    """An Xvfb server of our own, announced ready through -displayfd (xvfb-run's readiness wait
+    proved racy on a loaded machine). The pipe stays open while the server runs: Xvfb may write
+    to it again, and dies ("Cannot write display number") if it is closed."""
+    ready_read, ready_write = os.pipe()
+    server = subprocess.Popen(["Xvfb", "-displayfd", str(ready_write), "-screen", "0",
+                               size + "x24", "-nolisten", "tcp", "-noreset"],
+                              pass_fds=(ready_write,), stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL, start_new_session=True)
+    os.close(ready_write)
+    try:
+        display = os.read(ready_read, 64).decode().strip()
+        if not display.isdigit():
+            raise AssertionError(f"Xvfb did not start ({display!r})")
+        yield ":" + display
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+        os.close(ready_read)
+
+
+class XWindows:
+    """The windows of an X display, driven as a user would (xdotool: x11 keyboard and window
+    sizes) and photographed (xwd). Xvfb has no window manager, so a dialog may open below the
+    main window: find it by title and photograph it alone."""
+
+    def __init__(self, display):
+        self.env = dict(os.environ, DISPLAY=display)
+        for program in ("xdotool", "xwd"):
+            if not shutil.which(program):
+                raise AssertionError(f"{program} not found: Utilities/dp.sh test installs it")
+
+    def run(self, *args):
+        return subprocess.run(list(map(str, args)), capture_output=True, text=True,
+                              env=self.env, timeout=60)
+
+    def visible(self, title):
+        """Ids of the visible windows whose title matches the regular expression TITLE."""
+        result = self.run("xdotool", "search", "--onlyvisible", "--name", title)
+        return [int(w) for w in result.stdout.split()]
+
+    def wait_for(self, title, timeout=120):
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            found = self.visible(title)
+            if found:
+                return found[0]
+            time.sleep(0.5)
+        raise AssertionError(f"no window titled {title!r} after {timeout} s")
+
+    def key(self, window, *keys):
+        """Presses KEYS in WINDOW, focused first (events sent to an unfocused window are
+        dropped by Qt)."""
+        self.run("xdotool", "windowfocus", window)
+        time.sleep(0.5)
+        self.run("xdotool", "key", *keys)
+
+    def type(self, text):
+        self.run("xdotool", "type", "--delay", 20, text)
+
+    def resize(self, window, width, height):
+        self.run("xdotool", "windowsize", window, width, height)
+
+    def photograph(self, window, png):
+        """Writes WINDOW (or "root": the whole screen) as a PNG; returns it as rows x columns x
+        RGB (numpy)."""
+        import numpy as np
+        from vtkmodules.util.numpy_support import numpy_to_vtk
+        from vtkmodules.vtkCommonDataModel import vtkImageData
+        from vtkmodules.vtkIOImage import vtkPNGWriter
+        target = ["-root"] if window == "root" else ["-id", str(window)]
+        raw = subprocess.run(["xwd", "-silent", *target], capture_output=True, env=self.env,
+                             timeout=60, check=True).stdout
+        # XWD: a header of big-endian 32-bit fields, the window name, the colour map, then
+        # ZPixmap rows of 32-bit pixels (blue, green, red, pad in LSB-first byte order).
+        header = struct.unpack(">25I", raw[:100])
+        size, width, height, lsb_first = header[0], header[4], header[5], header[7] == 0
+        bits, row_bytes, colours = header[11], header[12], header[19]
+        if bits != 32:
+            raise AssertionError(f"xwd wrote {bits} bits per pixel; 32 expected")
+        rows = np.frombuffer(raw, np.uint8, height * row_bytes, size + 12 * colours)
+        pixels = rows.reshape(height, row_bytes)[:, :width * 4].reshape(height, width, 4)
+        rgb = np.ascontiguousarray(pixels[:, :, [2, 1, 0]] if lsb_first else pixels[:, :, 1:])
+        image = vtkImageData()
+        image.SetDimensions(width, height, 1)
+        flat = np.ascontiguousarray(rgb[::-1].reshape(-1, 3))  # VTK's rows go bottom-up
+        image.GetPointData().SetScalars(numpy_to_vtk(flat, deep=True))
+        writer = vtkPNGWriter()
+        writer.SetFileName(png)
+        writer.SetInputData(image)
+        writer.Write()
+        return rgb
 
 
 class MessageRecorder:

@@ -35,7 +35,7 @@ def main():
         assert len(set(expected)) > 1, expected
 
         reader = OpenDataFile(os.path.join(tmp, "points.series"))
-        assert reader is not None and reader.GetXMLName() == "PointSequenceReader", reader
+        assert reader is not None and reader.GetXMLName() == "DynamicPointsSequenceReader", reader
         assert list(reader.TimestepValues) == [0.0, 0.5, 1.0, 1.5, 2.0], reader.TimestepValues
         doc = reader.GetProperty("FrameInterval").GetDocumentation().GetDescription()
         assert "positive" in doc, doc
@@ -49,6 +49,16 @@ def main():
             assert data.GetNumberOfPoints() == count, (t, data.GetNumberOfPoints(), count)
             assert data.GetPointData().GetNormals() is not None
 
+        # The first of the readers ParaView offers for a frame file (its Open Data With dialog
+        # preselects it, and OpenDataFile takes it), ahead of ParaView's PLY, PTS and XYZ ones.
+        ply = OpenDataFile([os.path.join(tmp, f) for f in frames])
+        assert ply.GetXMLName() == "DynamicPointsSequenceReader", ply.GetXMLName()
+        factory = servermanager.vtkSMProxyManager.GetProxyManager().GetReaderFactory()
+        offered = factory.GetReaders(os.path.join(tmp, frames[0]),
+                                     servermanager.ActiveConnection.Session)
+        assert offered.GetString(1) == "DynamicPointsSequenceReader", offered.GetString(1)
+        assert "PLYReader" in [offered.GetString(i)
+                               for i in range(1, offered.GetNumberOfStrings(), 3)]
         # The file dialog passes a numbered group as a list; the folder proxy takes a pattern.
         listed = ns["PointSequenceReader"](FileNames=[os.path.join(tmp, f) for f in frames])
         listed.UpdatePipeline(4.0)

@@ -1,6 +1,5 @@
 """The examples do the whole job as documented (C++, Python, pvpython, pvbatch, the ParaView GUI,
 and pvbatch on two MPI processes), and what they write reads back."""
-import contextlib
 import filecmp
 import os
 import shutil
@@ -15,33 +14,11 @@ from vtkmodules.vtkIOImage import vtkPNGReader
 from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
 import dynamicpoints
-from dp_testing import BIN_DIR, PLUGIN, TempDirTestCase, run_tool
+from dp_testing import BIN_DIR, PLUGIN, TempDirTestCase, run_tool, x_display
 
 EXAMPLES = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Examples")
 PARAVIEW_EXAMPLE = os.path.join(EXAMPLES, "ParaView", "track_and_compress.py")
 FRAMES = 12
-
-
-@contextlib.contextmanager
-def x_display():
-    """An Xvfb server of our own, announced ready through -displayfd (xvfb-run's readiness wait
-    proved racy on a loaded machine). The pipe stays open while the server runs: Xvfb may write
-    to it again, and dies ("Cannot write display number") if it is closed."""
-    ready_read, ready_write = os.pipe()
-    server = subprocess.Popen(["Xvfb", "-displayfd", str(ready_write), "-screen", "0",
-                               "1280x1024x24", "-nolisten", "tcp", "-noreset"],
-                              pass_fds=(ready_write,), stdout=subprocess.DEVNULL,
-                              stderr=subprocess.DEVNULL, start_new_session=True)
-    os.close(ready_write)
-    try:
-        display = os.read(ready_read, 64).decode().strip()
-        if not display.isdigit():
-            raise AssertionError(f"Xvfb did not start ({display!r})")
-        yield ":" + display
-    finally:
-        server.terminate()
-        server.wait(timeout=30)
-        os.close(ready_read)
 
 
 def read_dpz(path):
@@ -127,6 +104,9 @@ class TestExamples(TempDirTestCase):
     def test_paraview_example_gives_the_same_result_in_pvpython_and_pvbatch(self):
         result = self.paraview_example("pvpython", self.path("pvpython"))
         self.assertIn(f"{FRAMES} frames tracked", result.stdout)
+        # pvpython has no progress bar: the example prints the tracker's progress texts.
+        for k in (1, FRAMES):
+            self.assertIn(f"Deformable Track: frame {k} of {FRAMES} (", result.stdout)
         self.paraview_example("pvbatch", self.path("pvbatch"))
         self.assertTrue(filecmp.cmp(self.path("pvpython", "tracked.dpz"),
                                     self.path("pvbatch", "tracked.dpz"), shallow=False))
@@ -148,7 +128,8 @@ class TestExamples(TempDirTestCase):
         # The real GUI under Xvfb: the plugin loads, the pipeline runs, a screenshot is written.
         output = self.path("gui")
         os.makedirs(self.path("home"))  # fresh settings, as on a new machine
-        self.run_paraview([shutil.which("paraview"), "--script=" + PARAVIEW_EXAMPLE, "--exit"],
+        self.run_paraview([shutil.which("paraview"), "--dr", "--script=" + PARAVIEW_EXAMPLE,
+                           "--exit"],
                           output, env={"DP_PLUGIN": PLUGIN, "DP_SERIES": self.series,
                                        "DP_OUTPUT": output, "HOME": self.path("home")})
         self.paraview_example("pvbatch", self.path("pvbatch"))
