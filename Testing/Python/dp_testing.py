@@ -183,6 +183,29 @@ class XWindows:
         return rgb
 
 
+def blender_addon_import(glb, blend, user_folder):
+    """Installs Utilities/blender/dynamicpoints_import.py as a user does (Preferences > Add-ons >
+    Install, then enable) into a fresh Blender user folder, imports GLB into Blender's default
+    scene with File > Import > DynamicPoints animation (.glb) (batch mode) and saves BLEND;
+    returns Blender's output."""
+    addon = os.path.join(UTILITIES, "blender", "dynamicpoints_import.py")
+    script = "\n".join([
+        "import bpy",
+        f"bpy.ops.preferences.addon_install(filepath={addon!r})",
+        "bpy.ops.preferences.addon_enable(module='dynamicpoints_import')",
+        f"result = bpy.ops.import_scene.dynamicpoints_glb(filepath={glb!r})",
+        "assert 'FINISHED' in result, result",
+        f"bpy.ops.wm.save_as_mainfile(filepath={blend!r})"])
+    result = subprocess.run(
+        [shutil.which("blender") or "blender", "-b", "--factory-startup", "--python-exit-code",
+         "1", "--python-expr", script], capture_output=True, text=True, timeout=300,
+        env=dict(os.environ, BLENDER_USER_SCRIPTS=user_folder))
+    if result.returncode != 0 or not os.path.exists(blend):
+        raise AssertionError(f"the add-on's import failed on {glb}:\n{result.stdout[-2000:]}\n"
+                             f"{result.stderr[-2000:]}")
+    return result.stdout
+
+
 class MessageRecorder:
     """Collects ErrorEvent / WarningEvent texts of a VTK object instead of printing them."""
 

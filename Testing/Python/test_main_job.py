@@ -17,8 +17,8 @@ from vtkmodules.vtkIOImage import vtkPNGReader
 from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
 import dynamicpoints
-from dp_testing import (PLUGIN, TempDirTestCase, blender_open_tracked, blender_report, run_tool,
-                        tool, validate_gltf)
+from dp_testing import (PLUGIN, TempDirTestCase, blender_addon_import, blender_open_tracked,
+                        blender_report, run_tool, tool, validate_gltf)
 
 FRAMES = 30  # the built-in sequence
 
@@ -159,6 +159,19 @@ class TestDefaultRun(TempDirTestCase):
             played = np.array(report["positions"][str(t)])
             self.assertEqual(played.shape, original[t].shape)
             self.assertLess(np.abs(played - original[t]).max(), 0.02 * diagonal, f"frame {t}")
+
+    def test_the_blender_add_on_imports_the_gltf_file_ready_to_play(self):
+        # Installed as a user installs it, then File > Import > DynamicPoints animation (.glb)
+        # into Blender's default scene (its cube, light and camera stay).
+        blend = self.path("addon.blend")
+        blender_addon_import(self.output("tracked.glb"), blend, self.path("blender-user"))
+        report = blender_report(blend, (FRAMES - 1,))
+        self.assertEqual(report["scene_frames"], [0, FRAMES - 1])
+        self.assertEqual((report["frames"], report["fps"]), (FRAMES, 24))
+        self.assertGreater(report["morph_targets"], 0)
+        played = np.array(report["positions"][str(FRAMES - 1)])
+        diagonal = json.load(open(self.output("report.json")))["boundingBoxDiagonal"]
+        self.assertLess(np.abs(played - self.tracked()[FRAMES - 1]).max(), 0.02 * diagonal)
 
     def test_the_report_holds_every_frame_and_the_compression(self):
         with open(self.output("report.json")) as f:
