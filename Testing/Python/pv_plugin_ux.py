@@ -80,6 +80,10 @@ def check_panel(ns):
     assert set(shown) - {"Input", "Template"} <= set(grouped), (shown, groups)
     assert len(shown) <= 12, shown
     assert "TemplateVertices" in shown and "Recovery" in shown, shown
+    # The optional template is chosen in the panel (a list of the pipeline's sources and
+    # "(none)"), not only through Edit > Change Input.
+    assert groups["Template"] == ["Template", "TemplateVertices"], groups
+    assert track.GetProperty("Template").SMProperty.GetPanelWidget() == "input_selector"
     for name in ("ProvisionalDetermination", "Tolerance", "VoxelSize", "FailureMargin"):
         assert name not in shown, name
 

@@ -21,7 +21,9 @@ else:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     bpy.ops.import_scene.gltf(filepath=path, import_shading="SMOOTH")
 scene = bpy.context.scene
-meshes = [o for o in scene.objects if o.type == "MESH"]
+# The animated mesh first (a scene may hold others, e.g. Blender's default cube).
+meshes = sorted((o for o in scene.objects if o.type == "MESH"),
+                key=lambda o: o.data.shape_keys is None)
 report = {"file": path, "mesh_objects": len(meshes)}
 if meshes:
     obj = meshes[0]
