@@ -4,6 +4,7 @@
 // (.dpz), the glTF animation (.glb) and a report (JSON + PNG plot). The work is done by the
 // VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkPCACompressFilter;
 // this file only drives it, writes the files and talks to the user.
+#include "Batch.h"
 #include "CommandLine.h"
 #include "FramePlot.h"
 
@@ -46,7 +47,7 @@ namespace
 {
 namespace fs = std::filesystem;
 
-const char* const Usage = R"(Usage: dynamicpoints [OPTIONS] [INPUT]
+const char* const Usage = R"(Usage: dynamicpoints [OPTIONS] [INPUT ...]
 
 Turns a time series of point clouds into one deforming triangle mesh of fixed
 connectivity, tracked frame by frame; then compresses it and writes it for ParaView, VTK
@@ -56,6 +57,10 @@ INPUT is a folder of point files (one per frame), a ParaView .series file, or on
 file. Readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk.
 Without INPUT, the built-in sample sequence is generated first: a bending, twisting tube,
 30 frames of 20000 random surface points with normals, written to OUTPUT/input/.
+With several INPUTs (a batch of takes), each is done as alone into OUTPUT/<name>/ (its
+folder's name; a .series file's folder's; a file's stem), and OUTPUT/batch.json says how
+each ended. Started by mpirun (mpirun -np N dynamicpoints ...), the inputs are spread over
+the N processes, largest first; each input's files are the same as from one process.
 
 Written to OUTPUT:
   tracked.pvd, tracked/*.vtp  the tracked mesh, one file per frame (open the .pvd in
@@ -83,7 +88,9 @@ Options:
   -h, --help          show this help
 
 Exit status: 0 when every output was written; 1 when a frame or an output failed (the
-frames tracked before it stay readable); 2 for a bad command line; 130 when interrupted.
+frames tracked before it stay readable; in a batch: an input failed, named on stderr and
+in batch.json, the others' outputs written); 2 for a bad command line; 130 when
+interrupted.
 )";
 
 volatile std::sig_atomic_t Interrupted = 0;
@@ -231,6 +238,7 @@ nlohmann::json stagesJson(const std::array<double, 6>& milliseconds)
 
 struct Settings
 {
+  std::vector<std::string> inputs; // as given; a batch when more than one
   std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
   int vertices = 1000;
   long long frames = 0; // 0: all
@@ -266,11 +274,11 @@ Settings parse(int argc, char** argv, bool& help)
       s.meshopt = true;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
-    else if (s.input.empty())
-      s.input = arg;
     else
-      throw UsageError("more than one INPUT given ('" + s.input + "', '" + arg + "')");
+      s.inputs.push_back(arg);
   }
+  if (s.inputs.size() == 1)
+    s.input = s.inputs.front();
   return s;
 }
 
@@ -685,27 +693,167 @@ private:
   nlohmann::json Compression;
 };
 
-int run(int argc, char** argv)
+// One input's whole job; an error it did not foresee is its failure, not the batch's.
+int runJob(const Settings& settings)
+{
+  try
+  {
+    return MainJob(settings).run();
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "dynamicpoints: error: " << (settings.input.empty() ? "" : settings.input + ": ")
+              << e.what() << "\n";
+    return 1;
+  }
+}
+
+std::string outcome(int status)
+{
+  return status == 0 ? "done" : status == 130 ? "interrupted" : "failed";
+}
+
+// What OUTPUT/<name>/report.json says of a finished input, for the batch's report.
+nlohmann::json summaryOf(const fs::path& folder)
+{
+  std::ifstream file(folder / "report.json");
+  nlohmann::json report = nlohmann::json::parse(file, nullptr, false);
+  if (report.is_discarded() || !report.is_object())
+    return nlohmann::json::object();
+  nlohmann::json summary = {{"report", (folder / "report.json").string()}};
+  for (const char* key : {"frames", "framesFailed", "medianMillisecondsPerFrame", "wallSeconds"})
+    if (report.contains(key))
+      summary[key] = report[key];
+  return summary;
+}
+
+// Rank 0: OUTPUT/batch.json (every input in the order given: where its outputs are, which
+// process did it, how it ended, what its own report says) and a line naming the failures.
+int reportBatch(const Settings& base, const std::vector<dp::cli::BatchInput>& inputs,
+                const std::vector<std::string>& outcomes, int processes, double wallSeconds)
+{
+  nlohmann::json entries = nlohmann::json::array();
+  for (const dp::cli::BatchInput& input : inputs)
+    entries.push_back({{"input", input.path},
+                       {"output", (fs::path(base.output) / input.name).string()},
+                       {"bytes", input.bytes}});
+  for (const std::string& text : outcomes)
+    for (const nlohmann::json& done : nlohmann::json::parse(text))
+    {
+      nlohmann::json& entry = entries[done["index"].get<std::size_t>()];
+      for (const char* key : {"turn", "exitStatus", "result", "process", "seconds"})
+        entry[key] = done[key];
+      entry.update(summaryOf(entry["output"].get<std::string>()));
+    }
+  std::vector<std::string> failed;
+  int status = 0;
+  for (const nlohmann::json& entry : entries)
+  {
+    const int exit = entry.value("exitStatus", 1);
+    if (exit != 0)
+      failed.push_back(entry["input"].get<std::string>() + " (" +
+                       entry.value("result", std::string("failed")) + ")");
+    status = std::max(status, exit == 130 ? 130 : exit != 0 ? 1 : 0);
+  }
+  fs::create_directories(base.output);
+  const fs::path path = fs::path(base.output) / "batch.json";
+  writeAtomically(
+      path,
+      nlohmann::json{{"inputs", entries}, {"processes", processes}, {"wallSeconds", wallSeconds}}
+              .dump(1) +
+          "\n");
+  std::cout << "Batch: " << inputs.size() << " inputs on " << processes << " process(es), "
+            << inputs.size() - failed.size() << " done in " << std::lround(wallSeconds)
+            << " s; report " << path.string() << "\n";
+  if (!failed.empty())
+  {
+    std::cerr << "dynamicpoints: " << failed.size() << " of " << inputs.size()
+              << " inputs did not finish:";
+    for (const std::string& f : failed)
+      std::cerr << "\n  " << f;
+    std::cerr << "\n";
+  }
+  return status;
+}
+
+// Several inputs: each into OUTPUT/<name>/ as a run on it alone would write it, spread over the
+// MPI ranks (largest first, to whoever is free); rank 0 writes OUTPUT/batch.json and says which
+// inputs failed.
+int runBatch(const Settings& base, dp::cli::Ranks& ranks)
+{
+  const auto started = std::chrono::steady_clock::now();
+  const std::vector<dp::cli::BatchInput> inputs = dp::cli::describeBatch(base.inputs);
+  const std::vector<std::size_t> order = dp::cli::largestFirst(inputs);
+  const bool alone = ranks.size() == 1;
+  nlohmann::json mine = nlohmann::json::array();
+  ranks.shareCounter();
+  // Whoever is free takes the next input, largest first: the processes end about together
+  // however unequal the takes are (their sizes on disk do not tell their work).
+  for (int next = ranks.takeNext(); next < static_cast<int>(order.size()); next = ranks.takeNext())
+  {
+    const std::size_t index = order[static_cast<std::size_t>(next)];
+    const dp::cli::BatchInput& input = inputs[index];
+    Settings s = base;
+    s.input = input.path;
+    s.output = (fs::path(base.output) / input.name).string();
+    s.quiet = base.quiet || !alone; // several processes' tables would interleave
+    int status = 130;
+    const auto start = std::chrono::steady_clock::now();
+    if (!Interrupted)
+    {
+      if (alone)
+        std::cout << "== " << input.name << " (" << next + 1 << " of " << inputs.size()
+                  << "): " << input.path << "\n";
+      status = runJob(s);
+    }
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!alone)
+      std::cout << "[process " << ranks.rank() << "] " << input.name << ": " << outcome(status)
+                << " in " << std::lround(seconds) << " s" << std::endl;
+    mine.push_back({{"index", index},
+                    {"turn", next},
+                    {"exitStatus", status},
+                    {"result", Interrupted && status == 130 ? "interrupted" : outcome(status)},
+                    {"process", ranks.rank()},
+                    {"seconds", seconds}});
+  }
+  const std::vector<std::string> all = ranks.gather(mine.dump());
+  int status = 0;
+  if (ranks.rank() == 0)
+    status = reportBatch(
+        base, inputs, all, ranks.size(),
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  return ranks.broadcast(status);
+}
+
+int run(int argc, char** argv, dp::cli::Ranks& ranks)
 {
   bool help = false;
   Settings settings = parse(argc, argv, help);
   if (help)
   {
-    std::cout << Usage;
+    if (ranks.rank() == 0)
+      std::cout << Usage;
     return 0;
   }
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
-  return MainJob(std::move(settings)).run();
+  if (settings.inputs.size() > 1)
+    return runBatch(settings, ranks);
+  // One input: one process does it (under mpirun the others end at once; mpirun's exit status
+  // is the first non-zero one).
+  return ranks.rank() == 0 ? runJob(settings) : 0;
 }
 
 } // namespace
 
 int main(int argc, char** argv)
 {
+  dp::cli::Ranks ranks(&argc, &argv);
   try
   {
-    return run(argc, argv);
+    return run(argc, argv, ranks);
   }
   catch (const dp::cli::UsageError& e)
   {
