@@ -781,7 +781,7 @@ int reportBatch(const Settings& base, const std::vector<dp::cli::BatchInput>& in
 // inputs failed.
 int runBatch(const Settings& base, dp::cli::Ranks& ranks)
 {
-  const auto started = std::chrono::steady_clock::now();
+  const auto batchStart = std::chrono::steady_clock::now();
   const std::vector<dp::cli::BatchInput> inputs = dp::cli::describeBatch(base.inputs);
   const std::vector<std::size_t> order = dp::cli::largestFirst(inputs);
   const bool alone = ranks.size() == 1;
@@ -798,8 +798,9 @@ int runBatch(const Settings& base, dp::cli::Ranks& ranks)
     s.output = (fs::path(base.output) / input.name).string();
     s.quiet = base.quiet || !alone; // several processes' tables would interleave
     int status = 130;
+    const bool started = !Interrupted; // after Ctrl-C the rest are not started
     const auto start = std::chrono::steady_clock::now();
-    if (!Interrupted)
+    if (started)
     {
       if (alone)
         std::cout << "== " << input.name << " (" << next + 1 << " of " << inputs.size()
@@ -814,16 +815,26 @@ int runBatch(const Settings& base, dp::cli::Ranks& ranks)
     mine.push_back({{"index", index},
                     {"turn", next},
                     {"exitStatus", status},
-                    {"result", Interrupted && status == 130 ? "interrupted" : outcome(status)},
+                    {"result", started ? outcome(status) : "not started"},
                     {"process", ranks.rank()},
                     {"seconds", seconds}});
   }
   const std::vector<std::string> all = ranks.gather(mine.dump());
   int status = 0;
   if (ranks.rank() == 0)
-    status = reportBatch(
-        base, inputs, all, ranks.size(),
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count());
+  {
+    try // every process waits for this status: no exception may skip the broadcast
+    {
+      status = reportBatch(
+          base, inputs, all, ranks.size(),
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - batchStart).count());
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "dynamicpoints: error: the batch's report: " << e.what() << "\n";
+      status = 1;
+    }
+  }
   return ranks.broadcast(status);
 }
 

@@ -54,7 +54,10 @@ struct Settings
   bool verbose = false;
   std::string
       oracle; // "previous": start each frame at the true previous frame; "same": at the truth
-  std::string dumpFolder;                   // write the tracked frames (PLY) here
+  std::string dumpFolder; // write the tracked frames (PLY) here
+  // The first frame tracked: the template (frame 0's shape) registered straight to it, as a
+  // chunk of a long sequence tracked on its own would start (issue 17's design measurement).
+  std::size_t startFrame = 0;
   std::string csvFile;                      // per-frame figures
   dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
 };
@@ -142,7 +145,8 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   Run run;
   Jitter jitter;
   double vertexSum = 0, surfaceSum = 0, uncoveredSum = 0, seconds = 0;
-  for (std::size_t f = 0; f < frames; ++f)
+  const std::size_t first = std::min(S.startFrame, frames - 1);
+  for (std::size_t f = first; f < frames; ++f)
   {
     const std::vector<double> truthMesh = mesh.positions(f);
     const dp::PointCloud cloud = dp::sampleSurface(truthMesh, mesh.triangles(), sampling, f);
@@ -171,7 +175,7 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
     surfaceSum += figures.surfaceSquaredSum;
     uncoveredSum += figures.uncovered;
     run.largestVertexError = std::max(run.largestVertexError, figures.largestVertexError);
-    if (figures.uncovered > run.uncoveredWorst || f == 0)
+    if (figures.uncovered > run.uncoveredWorst || f == first)
     {
       run.uncoveredWorst = figures.uncovered;
       run.worstFrame = f;
@@ -227,13 +231,14 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
     if (!S.dumpFolder.empty())
       dumpFrame(S.dumpFolder + "/" + label, f, r.positions, truth, t.triangles, cloud);
   }
-  const double samples = static_cast<double>(frames * t.vertices());
-  run.frames = frames;
+  const std::size_t tracked = frames - first;
+  const double samples = static_cast<double>(tracked * t.vertices());
+  run.frames = tracked;
   run.vertexRms = std::sqrt(vertexSum / samples);
   run.surfaceRms = std::sqrt(surfaceSum / samples);
-  run.uncoveredMean = uncoveredSum / static_cast<double>(frames);
+  run.uncoveredMean = uncoveredSum / static_cast<double>(tracked);
   run.jitter = jitter.ratio();
-  run.msPerFrame = 1e3 * seconds / static_cast<double>(frames);
+  run.msPerFrame = 1e3 * seconds / static_cast<double>(tracked);
   return run;
 }
 
@@ -327,6 +332,7 @@ const char* Usage =
     "             [--no-stiff-retry]\n"
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
+    "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
 } // namespace
@@ -453,6 +459,8 @@ int main(int argc, char** argv)
         S.reconstruction.holeReach = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
       else if (arg == "--oracle")
         S.oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
+      else if (arg == "--start-frame")
+        S.startFrame = parseCount(arg, optionValue(argc, argv, i), 0, 100000);
       else if (arg == "--verbose")
         S.verbose = true;
       else if (arg == "--csv")
