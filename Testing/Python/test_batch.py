@@ -11,6 +11,9 @@ import unittest
 
 from dp_testing import run_tool, tool
 
+EXAMPLE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "Examples",
+                       "ParaView", "track_takes.py")
+
 OPTIONS = ["--vertices", "300", "--quiet"]
 
 
@@ -87,6 +90,27 @@ class TestBatch(unittest.TestCase):
             for output in ("tracked.dpz", "tracked.glb"):
                 self.assertTrue(filecmp.cmp(self.out("one", name, output),
                                             self.out("two", name, output), shallow=False),
+                                (name, output))
+
+    def test_pvbatch_spreads_the_takes_over_its_ranks_with_the_main_jobs_bytes(self):
+        # The documented pvbatch script: every rank runs it and takes whole takes.
+        takes = [self.take("long"), self.take("mid"), self.take("broken")]
+        result = subprocess.run(
+            [shutil.which("mpirun"), "-np", "2", "--oversubscribe", "--allow-run-as-root",
+             shutil.which("pvbatch"), "--symmetric", EXAMPLE, "--vertices", "300",
+             self.out("pvbatch"), *takes],
+            capture_output=True, text=True, timeout=600,
+            env=dict(os.environ, PYTHONPATH=os.environ.get("PYTHONPATH", "")))
+        self.assertEqual(result.returncode, 1, result.stdout + result.stderr)
+        self.assertIn("1 of 3 takes failed", result.stderr)
+        self.assertIn(self.take("broken"), result.stderr)
+        ranks = {line.split("]")[0] for line in result.stdout.splitlines()
+                 if line.startswith("[rank ")}
+        self.assertEqual(ranks, {"[rank 0", "[rank 1"}, result.stdout)
+        for name in ("long", "mid"):
+            for output in ("tracked.dpz", "tracked.glb"):
+                self.assertTrue(filecmp.cmp(self.out("one", name, output),
+                                            self.out("pvbatch", name, output), shallow=False),
                                 (name, output))
 
     def test_inputs_of_the_same_name_get_their_own_folders(self):
