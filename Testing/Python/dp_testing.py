@@ -146,7 +146,10 @@ class XWindows:
         time.sleep(0.5)
         self.run("xdotool", "key", *keys)
 
-    def type(self, text):
+    def type(self, window, text):
+        """Types TEXT into WINDOW, focused first."""
+        self.run("xdotool", "windowfocus", window)
+        time.sleep(0.5)
         self.run("xdotool", "type", "--delay", 20, text)
 
     def resize(self, window, width, height):

@@ -144,7 +144,7 @@ class TestParaViewGuiOpen(ParaViewGuiCase):
         self.x.key(self.main, "ctrl+o")
         dialog = self.x.wait_for("^Open File")
         time.sleep(1)
-        self.x.type(os.path.join(self.frames, "frame_0000.ply"))
+        self.x.type(dialog, os.path.join(self.frames, "frame_0000.ply"))
         self.x.key(dialog, "Return")
         # Two readers can read .ply: ParaView asks, with ours preselected (its first reader:
         # pv_point_sequence.py checks the order); Return takes it.
