@@ -260,14 +260,22 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
       bound = std::nextafter(d2, HUGE_VAL);
     }
   }
-  std::int32_t stack[128];
+  // Each entry keeps its box's squared distance, measured when it was pushed: the bound may have
+  // shrunk since, and the test needs no second measurement.
+  struct Entry
+  {
+    std::int32_t node;
+    double distance2;
+  };
+  Entry stack[128];
   int top = 0;
-  stack[top++] = 0;
+  stack[top++] = {0, boxDistance2(Nodes[0], p)};
   while (top > 0)
   {
-    const Node& node = Nodes[stack[--top]];
-    if (boxDistance2(node, p) >= bound)
+    const Entry entry = stack[--top];
+    if (entry.distance2 >= bound)
       continue;
+    const Node& node = Nodes[entry.node];
     if (node.count > 0)
     {
       for (std::int32_t i = node.first; i < node.first + node.count; ++i)
@@ -295,16 +303,13 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
     const double dl = boxDistance2(Nodes[left], p), dr = boxDistance2(Nodes[right], p);
     if (top + 2 > 128)
       continue; // cannot happen for trees of fewer than 2^60 triangles
-    if (dl < dr)
-    {
-      stack[top++] = right;
-      stack[top++] = left;
-    }
-    else
-    {
-      stack[top++] = left;
-      stack[top++] = right;
-    }
+    // (A child already beyond the bound never will be nearer: the bound only shrinks.)
+    const Entry nearer = dl < dr ? Entry{left, dl} : Entry{right, dr};
+    const Entry farther = dl < dr ? Entry{right, dr} : Entry{left, dl};
+    if (farther.distance2 < bound)
+      stack[top++] = farther;
+    if (nearer.distance2 < bound)
+      stack[top++] = nearer;
   }
   return best;
 }
