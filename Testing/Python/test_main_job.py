@@ -342,7 +342,6 @@ class TestBadInput(TempDirTestCase):
     def test_wrong_options_exit_2_with_a_hint(self):
         for args, message in ((["--bogus"], "unknown option '--bogus'"),
                               (["--output"], "option --output needs a value"),
-                              (["a", "b"], "more than one INPUT"),
                               (["--vertices", "5"], "is outside [20"),
                               (["--frames", "x"], "is not a whole number"),
                               (["--error-target", "-1"], "is outside"),
