@@ -7,11 +7,12 @@ own engine). Every rank runs this script (--symmetric); the takes are handed out
         mpirun -np 2 pvbatch --symmetric Examples/ParaView/track_takes.py [--vertices N] \\
         OUTPUT TAKE...
 
-TAKE: a folder of point files or a .series file; --vertices: of the template reconstructed
-from each take's first frame (default 1000, as the main job's). Written: OUTPUT/<name>/tracked.dpz and
-tracked.glb (<name>: the folder's name, a .series file's folder's; repeated names get -2, -3),
-the same bytes as the main job writes for that take; one line per take. The exit status is 1
-when a take failed (named on stderr), after the others are written.
+TAKE: a folder of point files, a .series file or one point file; --vertices: of the template
+reconstructed from each take's first frame (default 1000, as the main job's). Written:
+OUTPUT/<name>/tracked.dpz and tracked.glb (<name>: the folder's name, a .series file's
+folder's, a file's stem; repeated names get -2, -3), the same bytes as the main job writes for
+that take; one line per take. The exit status is 1 when a take failed (named on stderr), after
+the others are written.
 
 The work per take runs in the VTK classes of the `dynamicpoints` Python module (the build's
 lib/python3/dist-packages), not through ParaView proxies: a proxy's pipeline is data-parallel
@@ -27,14 +28,25 @@ import dynamicpoints
 
 
 def describe(paths):
-    """(path, name, bytes) per take, names made unique in the order given."""
+    """(path, name, bytes) per take, as the main job names and weighs its inputs: a folder by
+    its name and files, a .series file by its folder's, another file by its stem and size;
+    repeated names get -2, -3 in the order given."""
+    def files_in(folder):
+        return sum(os.path.getsize(os.path.join(folder, f)) for f in os.listdir(folder)
+                   if os.path.isfile(os.path.join(folder, f)))
+
     takes, seen = [], {}
     for path in paths:
         path = os.path.normpath(path)
-        folder = path if os.path.isdir(path) else os.path.dirname(os.path.abspath(path))
-        name = os.path.basename(folder) or "input"
-        size = sum(os.path.getsize(os.path.join(folder, f)) for f in os.listdir(folder)
-                   if os.path.isfile(os.path.join(folder, f))) if os.path.isdir(folder) else 0
+        if os.path.isdir(path):
+            name, size = os.path.basename(path), files_in(path)
+        elif path.endswith(".series"):
+            folder = os.path.dirname(os.path.abspath(path))
+            name, size = os.path.basename(folder), files_in(folder)
+        else:
+            name = os.path.splitext(os.path.basename(path))[0]
+            size = os.path.getsize(path) if os.path.isfile(path) else 0
+        name = name if name not in ("", ".", "..") else "input"
         seen[name] = seen.get(name, 0) + 1
         takes.append((path, name if seen[name] == 1 else f"{name}-{seen[name]}", size))
     return takes

@@ -76,16 +76,22 @@ def blender_report(path, frames=()):
     return json.loads(lines[-1][len("DP-REPORT "):])
 
 
-def blender_open_tracked(glb, blend):
-    """Runs Utilities/blender/open_tracked.py as a user would (batch mode), saving BLEND."""
+def run_blender(what, blend, arguments, env=None):
+    """Runs Blender in batch mode with a factory setup and ARGUMENTS, which must write BLEND;
+    returns its output, or fails naming WHAT."""
     result = subprocess.run(
         [shutil.which("blender") or "blender", "-b", "--factory-startup", "--python-exit-code",
-         "1", "-P", os.path.join(UTILITIES, "blender", "open_tracked.py"), "--", glb, "--save",
-         blend], capture_output=True, text=True, timeout=300)
+         "1", *arguments], capture_output=True, text=True, timeout=300, env=env)
     if result.returncode != 0 or not os.path.exists(blend):
-        raise AssertionError(f"open_tracked.py failed on {glb}:\n{result.stdout[-2000:]}\n"
-                             f"{result.stderr[-2000:]}")
+        raise AssertionError(f"{what} failed:\n{result.stdout[-2000:]}\n{result.stderr[-2000:]}")
     return result.stdout
+
+
+def blender_open_tracked(glb, blend):
+    """Runs Utilities/blender/open_tracked.py as a user would (batch mode), saving BLEND."""
+    script = os.path.join(UTILITIES, "blender", "open_tracked.py")
+    return run_blender(f"open_tracked.py on {glb}", blend,
+                       ["-P", script, "--", glb, "--save", blend])
 
 
 @contextlib.contextmanager
@@ -199,14 +205,8 @@ def blender_addon_import(glb, blend, user_folder):
         f"result = bpy.ops.import_scene.dynamicpoints_glb(filepath={glb!r})",
         "assert 'FINISHED' in result, result",
         f"bpy.ops.wm.save_as_mainfile(filepath={blend!r})"])
-    result = subprocess.run(
-        [shutil.which("blender") or "blender", "-b", "--factory-startup", "--python-exit-code",
-         "1", "--python-expr", script], capture_output=True, text=True, timeout=300,
-        env=dict(os.environ, BLENDER_USER_SCRIPTS=user_folder))
-    if result.returncode != 0 or not os.path.exists(blend):
-        raise AssertionError(f"the add-on's import failed on {glb}:\n{result.stdout[-2000:]}\n"
-                             f"{result.stderr[-2000:]}")
-    return result.stdout
+    return run_blender(f"the add-on's import of {glb}", blend, ["--python-expr", script],
+                       env=dict(os.environ, BLENDER_USER_SCRIPTS=user_folder))
 
 
 class MessageRecorder:
