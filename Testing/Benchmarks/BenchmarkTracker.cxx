@@ -250,8 +250,9 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
 {
   std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
               frames, S.points);
-  std::printf("%10s %12s %14s %12s %14s %12s %12s\n", "vertices", "ms/frame", "ms/1k vertices",
-              "iterations", "vertex RMS %", "resident MiB", "KiB/vertex");
+  std::printf("%10s %12s %14s %12s %14s %12s %12s %28s\n", "vertices", "ms/frame", "ms/1k vertices",
+              "iterations", "vertex RMS %", "resident MiB", "KiB/vertex",
+              "data/coarse/fine/other ms");
   for (std::size_t target : ScalingSizes)
   {
     dp::BendingTube::Options shape;
@@ -266,7 +267,7 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
     dp::SamplerOptions sampling;
     sampling.pointsPerFrame = S.points;
     sampling.normals = S.givenNormals;
-    std::vector<double> ms;
+    std::vector<double> ms, dataMs, coarseMs, fineMs, otherMs;
     double iterations = 0, sum = 0;
     const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
     for (std::size_t f = 0; f <= frames; ++f)
@@ -278,6 +279,10 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
       if (f == 0)
         continue; // the first frame starts at the data
       ms.push_back(1e3 * r.seconds);
+      dataMs.push_back(1e3 * r.timings.data);
+      coarseMs.push_back(1e3 * r.timings.coarse);
+      fineMs.push_back(1e3 * r.timings.fine);
+      otherMs.push_back(1e3 * (r.seconds - r.timings.data - r.timings.coarse - r.timings.fine));
       iterations += r.iterations;
       const std::vector<double> truth = tube.positions(f);
       double e = 0;
@@ -287,11 +292,14 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
     }
     const double median = dp::bench::median(ms);
     const double resident = dp::bench::residentMiB() - residentBefore;
-    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%% %12.1f %12.2f\n", tube.numberOfVertices(),
-                median, 1e3 * median / static_cast<double>(tube.numberOfVertices()),
+    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%% %12.1f %12.2f %8.0f/%.0f/%.0f/%.0f\n",
+                tube.numberOfVertices(), median,
+                1e3 * median / static_cast<double>(tube.numberOfVertices()),
                 iterations / static_cast<double>(frames),
                 100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal, resident,
-                1024 * resident / static_cast<double>(tube.numberOfVertices()));
+                1024 * resident / static_cast<double>(tube.numberOfVertices()),
+                dp::bench::median(dataMs), dp::bench::median(coarseMs),
+                dp::bench::median(fineMs), dp::bench::median(otherMs));
     std::fflush(stdout);
   }
 }
