@@ -298,8 +298,8 @@ void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
                 iterations / static_cast<double>(frames),
                 100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal, resident,
                 1024 * resident / static_cast<double>(tube.numberOfVertices()),
-                dp::bench::median(dataMs), dp::bench::median(coarseMs),
-                dp::bench::median(fineMs), dp::bench::median(otherMs));
+                dp::bench::median(dataMs), dp::bench::median(coarseMs), dp::bench::median(fineMs),
+                dp::bench::median(otherMs));
     std::fflush(stdout);
   }
 }
