@@ -6,13 +6,12 @@
  *   GaussNewtonSolver (default): Levenberg-Marquardt. Each iteration re-linearises the terms and
  *     assembles their Gauss-Newton models into a matrix of fixed sparsity pattern (the terms'
  *     couplings); each step is an inexact Newton step, conjugate gradients preconditioned by
- *     the factorised matrix of its 3x3 blocks' traces (a third of the unknowns), factorised once
- *     per solve at its first model and applied to a vertex's three coordinates at once. A step
- *     is kept when E falls by at least a tenth of what the model promised; where one vertex's
- *     distance term breaks that promise (it sits between two parts of the data), that vertex
- *     alone is damped. A solve ends when E's relative decrease falls under the tolerance or no
- * vertex moves a tenth of a voxel; the terms' discrete choices (normal test) are then decided again
- *     at the new shape (twice at most).
+ *     the factorised matrix of its 3x3 blocks' traces (a third of the unknowns), applied to a
+ *     vertex's three coordinates at once. A step is kept when E falls by at least a tenth of what
+ *     the model promised; where one vertex's distance term breaks that promise (it sits between
+ *     two parts of the data), that vertex alone is damped. A solve ends when E's relative
+ *     decrease falls under the tolerance or no vertex moves a tenth of a voxel; the terms'
+ *     discrete choices (normal test) are then decided again at the new shape (twice at most).
  *   solveLbfgs: quasi-Newton (libLBFGS, More-Thuente line search), two passes with the choices
  *     decided again between them.
  *   solveSteepestDescent: the paper's solver (eq. 2-3): x <- x - h grad E, h = 1.9 / k_max with
