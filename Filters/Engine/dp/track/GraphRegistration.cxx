@@ -34,6 +34,11 @@ struct Stage
 constexpr Stage Schedule[] = {{10.0, 24.0}, {3.0, 12.0}, {3.0, 6.0}};
 // A solve ends when a step gains less than this share of the energy.
 constexpr double Tolerance = 1e-6;
+// Levenberg-Marquardt's damping (relative to the diagonal) at a solve's start, and the least a
+// rejected step is tried again with: on captured takes the step changes by a few per cent at
+// 1e-1 and not visibly below 1e-2 (jumping), so smaller retries only repeat the rejected step.
+constexpr double StartDamping = 1e-4;
+constexpr double RetryDamping = 1e-2;
 // The stretch term: the share of an edge's length that may change freely (skin over a joint).
 constexpr double StretchFreedom = 0.1;
 } // namespace
@@ -295,7 +300,7 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
                              double rigidity, int iterations)
 {
   std::vector<double> x(3 * Graph.mesh().numberOfVertices());
-  double damping = 1e-4;
+  double damping = StartDamping;
   int step = 0;
   for (; step < iterations; ++step)
   {
@@ -325,7 +330,10 @@ bool GraphRegistration::dampedStep(DeformationGraph::State& state,
                                    double energy, double& damping, double& decrease)
 {
   // Levenberg-Marquardt on the model just built: a step is kept when E falls by at least a tenth
-  // of what the model promised; otherwise the damping grows tenfold (at most eight tries).
+  // of what the model promised; otherwise the damping grows tenfold, to at least RetryDamping
+  // (each try costs a factorisation), at most eight tries. A rejected step whose model promised
+  // less than the solve's tolerance ends the tries: more damping only promises less, so no step
+  // could count as progress.
   std::vector<double> trial(3 * Graph.mesh().numberOfVertices());
   const Eigen::VectorXd diagonal = NodeModel.diagonal();
   const double floor = 1e-12 * std::max(diagonal.maxCoeff(), 1e-300);
@@ -358,7 +366,9 @@ bool GraphRegistration::dampedStep(DeformationGraph::State& state,
         damping = std::max(damping * 0.3, 1e-9);
       return true;
     }
-    damping *= 10;
+    if (predicted <= Tolerance * std::abs(energy))
+      return false;
+    damping = std::max(damping * 10, RetryDamping);
   }
   return false;
 }

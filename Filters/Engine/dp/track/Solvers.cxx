@@ -16,6 +16,10 @@ namespace
 // Relative residual at which conjugate gradients stop (an inexact Newton step: tighter solves
 // cost more than the extra iterations they save).
 constexpr double StepTolerance = 0.3;
+// The least global damping (relative to the mean diagonal) a rejected step is tried again with:
+// below about 1e-2 the step stays what it was (captured takes: jumping), so each smaller retry
+// repeated the rejected step at the cost of a conjugate-gradient solve and an evaluation.
+constexpr double RetryDamping = 1e-2;
 
 // Preconditioned conjugate gradients on the lower-stored symmetric positive definite A, from
 // x = 0, until the residual falls below tolerance * |b| or after `limit` iterations. Every
@@ -238,7 +242,7 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
         continue;
       }
       if (!blameVertices(distance, step, dataAtTrial, predicted - actual, vertexDamping))
-        damping *= 10;
+        damping = std::max(damping * 10, RetryDamping);
     }
     // Settled: decide the terms' choices again at the new shape (at most `decisions` times); go
     // on only if that changed something.
