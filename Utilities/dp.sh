@@ -27,7 +27,7 @@ build_packages=(
   libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
-  liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev
+  liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev libmetis-dev
 )
 # What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the
 # X server for the ParaView GUI and rendering tests with xdotool and xwd to drive and photograph

@@ -29,6 +29,10 @@
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
 
+// Eigen's MetisSupport uses std::cerr without including <iostream>.
+#include <iostream>
+
+#include <Eigen/MetisSupport>
 #include <Eigen/SparseCholesky>
 
 #include <cstdint>
@@ -71,8 +75,11 @@ private:
   detail::BlockSparseMatrix Hessian;
   // P (x) I_3, P the matrix of the blocks' traces / 3: a rotation-invariant, Laplacian-like
   // approximation of the Gauss-Newton matrix with a third of its unknowns, so 27x cheaper to
-  // factorise, by sparse LDL^T (symbolic analysis once).
-  Eigen::SimplicialLDLT<detail::BlockSparseMatrix::Matrix, Eigen::Lower> Preconditioner;
+  // factorise, by sparse LDL^T (symbolic analysis once) in nested-dissection order (METIS: on
+  // the scaling tube at 50 000 vertices the fine level 1.46x faster than in AMD's order, at
+  // 1 000 vertices the same).
+  Eigen::SimplicialLDLT<detail::BlockSparseMatrix::Matrix, Eigen::Lower, Eigen::MetisOrdering<int>>
+      Preconditioner;
   bool Analysed = false;
 };
 
