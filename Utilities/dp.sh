@@ -15,7 +15,8 @@ build="${DP_BUILD_DIR:-$root/build}"
 
 # What the build and the main job need. The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev
 # libraries are the ones its CMake package looks for. Debian's libvtk9-dev cannot be installed
-# beside it (see README).
+# beside it (see README). OpenBLAS, serial (TBB has the cores), is the BLAS behind CHOLMOD's
+# supernodal factorisation: Debian's reference BLAS made it slower than the simplicial one.
 build_packages=(
   cmake ninja-build g++ pkg-config
   paraview paraview-dev python3-paraview python3-dev python3-numpy python3-mpi4py
@@ -28,6 +29,7 @@ build_packages=(
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
   liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev libmetis-dev
+  libsuitesparse-dev libopenblas0-serial
 )
 # What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the
 # X server for the ParaView GUI and rendering tests with xdotool and xwd to drive and photograph

@@ -18,6 +18,7 @@
 #include "dp/track/Solvers.h"
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
+#include "dp/track/TracePreconditioner.h"
 #include "dp/track/Tracker.h"
 
 #include "NumericChecks.h"
@@ -778,14 +779,14 @@ public:
   }
 };
 
-TEST(GaussNewtonSolver, SolvesAQuadraticItsPreconditionerFactorsExactlyInFewSteps)
+// When the preconditioner is the model's own matrix, conjugate gradients solve each step exactly:
+// Levenberg-Marquardt reaches the minimum in a few steps whatever the fill-reducing order of the
+// factor, so any slip in applying it (order, transposes, D) shows. Run on n vertices: below and
+// at the size from which the preconditioner's factorisation is supernodal.
+void solvesAQuadraticInFewSteps(std::int64_t n)
 {
-  // When the preconditioner is the model's own matrix, conjugate gradients solve each step
-  // exactly: Levenberg-Marquardt reaches the minimum in a few steps whatever the fill-reducing
-  // order of the factor, so any slip in applying it (order, transposes, D) shows.
   std::mt19937 random(5);
   std::uniform_real_distribution<double> unit(0, 1);
-  const std::int64_t n = 400;
   SpringsAndAnchors term;
   for (std::int64_t v = 0; v + 1 < n; ++v)
     term.springs.push_back({v, v + 1});
@@ -837,6 +838,86 @@ TEST(GaussNewtonSolver, SolvesAQuadraticItsPreconditionerFactorsExactlyInFewStep
     for (int k = 0; k < 3; ++k)
       error = std::max(error, std::abs(x[3 * v + k] - minimum(v, k)));
   EXPECT_LT(error, 1e-6 * minimum.cwiseAbs().maxCoeff());
+}
+
+TEST(GaussNewtonSolver, SolvesAQuadraticItsPreconditionerFactorsExactlyInFewSteps)
+{
+  solvesAQuadraticInFewSteps(400);
+  solvesAQuadraticInFewSteps(dp::TracePreconditioner::SupernodalFrom);
+}
+
+// P of a triangulated w x h grid (weighted Laplacian plus a positive diagonal), a surface mesh's
+// pattern at the size where the factorisation changes kind.
+Eigen::SparseMatrix<double> gridTraceMatrix(int w, int h, std::mt19937& random)
+{
+  std::uniform_real_distribution<double> unit(0, 1);
+  std::vector<Eigen::Triplet<double>> entries;
+  const auto couple = [&](int a, int b)
+  {
+    const double k = 0.5 + unit(random);
+    entries.emplace_back(std::max(a, b), std::min(a, b), -k);
+    entries.emplace_back(a, a, k);
+    entries.emplace_back(b, b, k);
+  };
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i)
+    {
+      const int v = j * w + i;
+      entries.emplace_back(v, v, 1e-2 * (1 + unit(random)));
+      if (i + 1 < w)
+        couple(v, v + 1);
+      if (j + 1 < h)
+        couple(v, v + w);
+      if (i + 1 < w && j + 1 < h)
+        couple(v, v + w + 1);
+    }
+  Eigen::SparseMatrix<double> P(w * h, w * h);
+  P.setFromTriplets(entries.begin(), entries.end());
+  return P;
+}
+
+TEST(TracePreconditioner, BothFactorisationsSolveEachCoordinateAndAgree)
+{
+  std::mt19937 random(3);
+  const int w = 160, h = 160; // 25 600 vertices: the supernodal kind by default
+  const Eigen::SparseMatrix<double> P = gridTraceMatrix(w, h, random);
+  const Eigen::VectorXd r = Eigen::VectorXd::Random(3 * P.rows());
+  const auto S = P.selfadjointView<Eigen::Lower>();
+  std::vector<Eigen::VectorXd> solutions;
+  for (auto kind :
+       {dp::TracePreconditioner::Kind::Automatic, dp::TracePreconditioner::Kind::Simplicial})
+  {
+    dp::TracePreconditioner preconditioner(P.rows(), kind);
+    EXPECT_EQ(preconditioner.supernodal(), kind == dp::TracePreconditioner::Kind::Automatic);
+    ASSERT_TRUE(preconditioner.factorise(P));
+    ASSERT_TRUE(preconditioner.factorise(P)); // the same pattern again: analysis reused
+    const Eigen::VectorXd z = preconditioner.apply(r);
+    for (int k = 0; k < 3; ++k) // P z_k = r_k, coordinate by coordinate
+    {
+      Eigen::VectorXd zk(P.rows()), rk(P.rows());
+      for (Eigen::Index v = 0; v < P.rows(); ++v)
+      {
+        zk[v] = z[3 * v + k];
+        rk[v] = r[3 * v + k];
+      }
+      EXPECT_LT((S * zk - rk).norm(), 1e-9 * rk.norm()) << "coordinate " << k;
+    }
+    solutions.push_back(z);
+  }
+  EXPECT_LT((solutions[0] - solutions[1]).norm(), 1e-8 * solutions[1].norm());
+  EXPECT_FALSE(dp::TracePreconditioner(1000).supernodal());
+}
+
+TEST(TracePreconditioner, TheSupernodalFactorisationReportsAMatrixThatIsNotPositiveDefinite)
+{
+  // Its LL^T needs P positive definite; the solver then falls back to a diagonal step.
+  std::mt19937 random(4);
+  Eigen::SparseMatrix<double> P = gridTraceMatrix(30, 30, random);
+  dp::TracePreconditioner preconditioner(P.rows(), dp::TracePreconditioner::Kind::Supernodal);
+  EXPECT_TRUE(preconditioner.factorise(P));
+  P.coeffRef(450, 450) = -5; // a negative pivot
+  EXPECT_FALSE(preconditioner.factorise(P));
+  EXPECT_FALSE(preconditioner.factorised());
 }
 
 } // namespace

@@ -28,12 +28,7 @@
 #include "dp/detail/BlockSparseMatrix.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
-
-// Eigen's MetisSupport uses std::cerr without including <iostream>.
-#include <iostream>
-
-#include <Eigen/MetisSupport>
-#include <Eigen/SparseCholesky>
+#include "dp/track/TracePreconditioner.h"
 
 #include <cstdint>
 #include <vector>
@@ -63,7 +58,6 @@ public:
             const DistanceTerm* distance, const SolveSettings& settings);
 
 private:
-  Eigen::VectorXd precondition(const Eigen::VectorXd& r) const;
   /** Linearises the terms at x and fills Hessian and gradient with their model; returns E(x). */
   double buildModel(const std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
                     Eigen::VectorXd& gradient);
@@ -73,14 +67,7 @@ private:
                              bool factorise);
 
   detail::BlockSparseMatrix Hessian;
-  // P (x) I_3, P the matrix of the blocks' traces / 3: a rotation-invariant, Laplacian-like
-  // approximation of the Gauss-Newton matrix with a third of its unknowns, so 27x cheaper to
-  // factorise, by sparse LDL^T (symbolic analysis once) in nested-dissection order (METIS: on
-  // the scaling tube at 50 000 vertices the fine level 1.46x faster than in AMD's order, at
-  // 1 000 vertices the same).
-  Eigen::SimplicialLDLT<detail::BlockSparseMatrix::Matrix, Eigen::Lower, Eigen::MetisOrdering<int>>
-      Preconditioner;
-  bool Analysed = false;
+  TracePreconditioner Preconditioner; // (P (x) I_3)^-1, P the matrix of the blocks' traces / 3
 };
 
 /** L-BFGS on the sum of `terms`; returns the energy evaluations. */
