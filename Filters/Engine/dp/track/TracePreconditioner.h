@@ -9,11 +9,12 @@
  * pattern, in METIS's nested-dissection order (on the scaling tube at 50 000 vertices the fine
  * level 1.46x faster than in AMD's order, at 1 000 the same). Two factorisations, chosen by P's
  * size:
- *   - below SupernodalFrom unknowns: Eigen's simplicial LDL^T, swept column by column;
+ *   - below SupernodalFrom unknowns (small meshes): Eigen's simplicial LDL^T, swept column by
+ *     column;
  *   - from SupernodalFrom on: CHOLMOD's supernodal LL^T (dense blocks through BLAS). Its work
  *     grows as n^1.5 on a surface mesh (nested dissection of a planar-like graph); dense kernels
  *     do it several times faster per flop than the simplicial sweep once the supernodes are big.
- *     On the scaling tube at 100 000 vertices the fine level went from 40 to 22 s a frame.
+ *     On the scaling tube at 100 000 vertices the fine level went from 36-42 to 15-16 s a frame.
  *
  * Limits: P must be symmetric positive definite for the supernodal LL^T (a sum of principal
  * submatrices of a positive semi-definite matrix, plus the damping shift, is); `factorise`
@@ -33,10 +34,11 @@ namespace dp
 class TracePreconditioner
 {
 public:
-  /** The size (unknowns of P, i.e. vertices) from which the supernodal factorisation is used:
-   *  on the scaling tube the two were even at 20 000 vertices; the simplicial one was 1.2-1.3x
-   *  faster at 1 000-10 000, the supernodal one 1.36x at 50 000. */
-  static constexpr long SupernodalFrom = 20000;
+  /** The size (unknowns of P, i.e. vertices) from which the supernodal factorisation is used.
+   *  On the scaling tube, the fine level with it against the simplicial one: 46-51 against
+   *  44-45 ms a frame at 1 000 vertices, even at 2 000, 405 against 480-513 at 5 000, 954-1095
+   *  against 1285-1376 at 10 000. */
+  static constexpr long SupernodalFrom = 2000;
 
   enum class Kind
   {
