@@ -69,22 +69,27 @@ public:
 
 namespace
 {
+// Factorises P with an Eigen sparse solver (its interface: analyzePattern, factorize, info),
+// analysing the pattern on the first call only.
+template <typename Solver>
+bool factoriseOnPattern(Solver& solver, bool& analysed, const Matrix& P)
+{
+  if (!analysed)
+  {
+    solver.analyzePattern(P);
+    analysed = true;
+  }
+  solver.factorize(P);
+  return solver.info() == Eigen::Success;
+}
+
 // Eigen's simplicial LDL^T, P = Q^T L D L^T Q, swept by hand so that the three coordinates of a
 // vertex go through L's columns together: Eigen's own solve visits L once per coordinate, and its
 // transposed sweep over a column-major L ran three times slower than the forward one.
 class SimplicialFactorisation final : public TracePreconditioner::Factorisation
 {
 public:
-  bool factorise(const Matrix& P) override
-  {
-    if (!Analysed)
-    {
-      Ldlt.analyzePattern(P);
-      Analysed = true;
-    }
-    Ldlt.factorize(P);
-    return Ldlt.info() == Eigen::Success;
-  }
+  bool factorise(const Matrix& P) override { return factoriseOnPattern(Ldlt, Analysed, P); }
 
   Eigen::VectorXd apply(const Eigen::VectorXd& r) const override
   {
@@ -144,13 +149,7 @@ public:
   bool factorise(const Matrix& P) override
   {
     const IdleCoresOnly threads;
-    if (!Analysed)
-    {
-      Llt.analyzePattern(P);
-      Analysed = true;
-    }
-    Llt.factorize(P);
-    return Llt.info() == Eigen::Success;
+    return factoriseOnPattern(Llt, Analysed, P);
   }
 
   Eigen::VectorXd apply(const Eigen::VectorXd& r) const override
