@@ -30,6 +30,7 @@
 #include <Eigen/SparseCholesky>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <memory>
@@ -164,6 +165,41 @@ TEST(FrameData, SpreadsTheSubsampleEvenlyAndFlipsNormals)
 
 // Every term, at a shape off the data: gradient against finite differences, and the Gauss-Newton
 // model's value and gradient equal to the term's own.
+
+TEST(FrameData, KeepsEveryPointWithItsNormalInCurveOrder)
+{
+  const Shape shape = tube();
+  dp::SamplerOptions o;
+  o.pointsPerFrame = 3000;
+  const dp::PointCloud c = dp::sampleSurface(shape.positions, shape.triangles, o, 0);
+  dp::FrameDataOptions fo;
+  fo.voxelSize = dp::boundingBoxDiagonal(shape.positions) / 60;
+  const dp::FrameData data(c.points.data(), c.numberOfPoints(), c.normals.data(), fo);
+  ASSERT_EQ(data.size(), c.numberOfPoints());
+  // The same points, each with its own normal: matched by sorting both sides.
+  auto rows = [](const double* p, const float* n, std::size_t count)
+  {
+    std::vector<std::array<double, 6>> r(count);
+    for (std::size_t i = 0; i < count; ++i)
+      r[i] = {p[3 * i], p[3 * i + 1], p[3 * i + 2], n[3 * i], n[3 * i + 1], n[3 * i + 2]};
+    std::sort(r.begin(), r.end());
+    return r;
+  };
+  EXPECT_EQ(rows(data.points(), data.normals(), data.size()),
+            rows(c.points.data(), c.normals.data(), c.numberOfPoints()));
+  // Near in memory, near in space: consecutive points are far closer than the sampler's
+  // random order puts them.
+  auto path = [](const double* p, std::size_t count)
+  {
+    double length = 0;
+    for (std::size_t i = 1; i < count; ++i)
+      length += std::sqrt((p[3 * i] - p[3 * i - 3]) * (p[3 * i] - p[3 * i - 3]) +
+                          (p[3 * i + 1] - p[3 * i - 2]) * (p[3 * i + 1] - p[3 * i - 2]) +
+                          (p[3 * i + 2] - p[3 * i - 1]) * (p[3 * i + 2] - p[3 * i - 1]));
+    return length;
+  };
+  EXPECT_LT(path(data.points(), data.size()), 0.1 * path(c.points.data(), c.numberOfPoints()));
+}
 class Terms : public ::testing::TestWithParam<int>
 {
 };

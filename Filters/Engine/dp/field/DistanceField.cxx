@@ -106,17 +106,21 @@ namespace
 // coordinate.
 double largestCoordinate(const double* points, std::size_t count)
 {
+  requireFinitePoints(points, count);
   double largest = 0;
   for (std::size_t i = 0; i < 3 * count; ++i)
-  {
-    if (!std::isfinite(points[i]))
-      throw std::invalid_argument("point " + std::to_string(i / 3) +
-                                  " has a NaN or infinite coordinate");
     largest = std::max(largest, std::abs(points[i]));
-  }
   return largest;
 }
 } // namespace
+
+void requireFinitePoints(const double* points, std::size_t count)
+{
+  for (std::size_t i = 0; i < 3 * count; ++i)
+    if (!std::isfinite(points[i]))
+      throw std::invalid_argument("point " + std::to_string(i / 3) +
+                                  " has a NaN or infinite coordinate");
+}
 
 void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxels)
 {

@@ -93,6 +93,10 @@ public:
   using std::runtime_error::runtime_error;
 };
 
+/** Throws std::invalid_argument naming the first point with a NaN or infinite coordinate (the
+ *  field's own check, for callers that must not read such points before building it). */
+void requireFinitePoints(const double* points, std::size_t count);
+
 class DistanceField
 {
 public:

@@ -34,13 +34,15 @@ NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k
                           std::vector<float>& normals)
 {
   const detail::KdTree tree(points, count);
+  const std::vector<std::uint32_t>& order = tree.leafOrder();
   NeighbourGraph graph{k, std::vector<std::uint32_t>(count * k), std::vector<std::size_t>(count)};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
                     [&](const tbb::blocked_range<std::size_t>& range)
                     {
                       std::vector<double> d2(k);
-                      for (std::size_t i = range.begin(); i != range.end(); ++i)
+                      for (std::size_t r = range.begin(); r != range.end(); ++r)
                       {
+                        const std::size_t i = order[r];
                         std::uint32_t* ids = &graph.ids[i * k];
                         const std::size_t degree = tree.nearest(points + 3 * i, k, ids, d2.data());
                         graph.degree[i] = degree;
@@ -54,7 +56,8 @@ NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k
                           const Eigen::Vector3d d = Eigen::Vector3d(points + 3 * ids[j]) - mean;
                           covariance += d * d.transpose();
                         }
-                        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
+                        Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+                        solver.computeDirect(covariance);
                         const Eigen::Vector3d n = solver.eigenvectors().col(0);
                         for (int c = 0; c < 3; ++c)
                           normals[3 * i + c] = static_cast<float>(n[c]);

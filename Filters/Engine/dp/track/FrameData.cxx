@@ -4,8 +4,11 @@
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/NormalEstimation.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <unordered_map>
 
 namespace dp
@@ -51,6 +54,41 @@ std::vector<std::uint32_t> spreadSubsample(const double* points, std::size_t cou
   return out;
 }
 
+// Sorts point indices along a Morton (Z-order) curve over their bounding box, 2^20 cells an
+// axis; ties by index, so the order is the same on every platform.
+void sortAlongCurve(const double* points, std::vector<std::size_t>& indices)
+{
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (const std::size_t i : indices)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], points[3 * i + k]);
+      hi[k] = std::max(hi[k], points[3 * i + k]);
+    }
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1e-300});
+  const double scale = ((1 << 20) - 1) / extent;
+  // Bit b of axis k lands at bit 3b + k of the code.
+  auto spreadBits = [](std::uint64_t v)
+  {
+    std::uint64_t out = 0;
+    for (int b = 0; b < 20; ++b)
+      out |= ((v >> b) & 1u) << (3 * b);
+    return out;
+  };
+  std::vector<std::pair<std::uint64_t, std::size_t>> keyed(indices.size());
+  for (std::size_t j = 0; j < indices.size(); ++j)
+  {
+    const std::size_t i = indices[j];
+    std::uint64_t code = 0;
+    for (int k = 0; k < 3; ++k)
+      code |= spreadBits(static_cast<std::uint64_t>((points[3 * i + k] - lo[k]) * scale)) << k;
+    keyed[j] = {code, i};
+  }
+  std::sort(keyed.begin(), keyed.end());
+  for (std::size_t j = 0; j < indices.size(); ++j)
+    indices[j] = keyed[j].second;
+}
+
 // Indices of at most `limit` points spread evenly over the frame (see the file comment).
 std::vector<std::size_t> thinnedFrame(const double* points, std::size_t count, double area,
                                       std::size_t limit)
@@ -86,51 +124,74 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
 {
   if (count == 0)
     return;
-  std::vector<double> thinPoints;
-  std::vector<float> thinNormals;
-  // (A frame with a NaN is not thinned: the field refuses it with its own message.)
-  if (options.maxPoints > 0 && count > options.maxPoints &&
-      std::all_of(points, points + 3 * count, [](double c) { return std::isfinite(c); }))
+  requireFinitePoints(points, count); // the field's message, before anything reads them
+  // The points kept (all, or an evenly thinned share), in space-filling-curve order: points
+  // near one another in space are then near in memory too, so the searches below and the energy
+  // terms' per-point loops stay in cache (a scanner's or a sampler's order can be anything).
+  std::vector<std::size_t> kept;
+  if (options.maxPoints > 0 && count > options.maxPoints)
   {
     const double area = options.surfaceArea > 0 ? options.surfaceArea
                                                 : std::pow(boundingBoxDiagonal(points, count), 2);
-    for (const std::size_t i : thinnedFrame(points, count, area, options.maxPoints))
-    {
-      thinPoints.insert(thinPoints.end(), points + 3 * i, points + 3 * i + 3);
-      if (normals)
-        thinNormals.insert(thinNormals.end(), normals + 3 * i, normals + 3 * i + 3);
-    }
-    points = thinPoints.data();
-    normals = normals ? thinNormals.data() : nullptr;
-    count = Count = thinPoints.size() / 3;
+    kept = thinnedFrame(points, count, area, options.maxPoints);
   }
+  else
+  {
+    kept.resize(count);
+    std::iota(kept.begin(), kept.end(), std::size_t{0});
+  }
+  sortAlongCurve(points, kept);
+  std::vector<double> keptPoints(3 * kept.size());
+  std::vector<float> keptNormals(normals ? 3 * kept.size() : 0);
+  for (std::size_t j = 0; j < kept.size(); ++j)
+    for (int k = 0; k < 3; ++k)
+    {
+      keptPoints[3 * j + k] = points[3 * kept[j] + k];
+      if (normals)
+        keptNormals[3 * j + k] = normals[3 * kept[j] + k];
+    }
+  points = keptPoints.data();
+  normals = normals ? keptNormals.data() : nullptr;
+  count = Count = kept.size();
   DistanceFieldOptions field;
   field.voxelSize = options.voxelSize;
   field.bandWidth = options.bandWidth > 0 ? options.bandWidth : 4 * options.voxelSize;
   field.lazy = true; // only the voxels around the mesh are ever needed
-  Field.build(points, count, field);
+  // The field, the normals and the subsample read the points and nothing of each other: built
+  // side by side (the normals' serial orientation leaves a core free).
+  tbb::parallel_invoke([&] { Field.build(points, count, field); },
+                       [&] { takeOrEstimateNormals(points, count, normals); },
+                       [&] { chooseSpread(points, count, options); });
+}
+
+void FrameData::takeOrEstimateNormals(const double* points, std::size_t count, const float* normals)
+{
   if (normals)
+  {
     Normals.assign(normals, normals + 3 * count);
-  else
-  {
-    std::vector<std::uint32_t> parts;
-    Normals = estimateNormals(points, count, 16, &parts);
-    Parts = std::move(parts);
-    PartCount = Parts.empty() ? 0 : *std::max_element(Parts.begin(), Parts.end()) + 1;
+    return;
   }
-  if (options.spreadCount > 0 && options.surfaceArea > 0)
+  std::vector<std::uint32_t> parts;
+  Normals = estimateNormals(points, count, 16, &parts);
+  Parts = std::move(parts);
+  PartCount = Parts.empty() ? 0 : *std::max_element(Parts.begin(), Parts.end()) + 1;
+}
+
+void FrameData::chooseSpread(const double* points, std::size_t count,
+                             const FrameDataOptions& options)
+{
+  if (options.spreadCount == 0 || !(options.surfaceArea > 0))
+    return;
+  // A surface of area A meets about A / cell^2 cells of a grid (fewer where it is flat along an
+  // axis, more where it is not): start there and shrink the cell until enough are kept.
+  double cell = std::sqrt(options.surfaceArea / static_cast<double>(options.spreadCount));
+  for (int attempt = 0; attempt < 4; ++attempt)
   {
-    // A surface of area A meets about A / cell^2 cells of a grid (fewer where it is flat along an
-    // axis, more where it is not): start there and shrink the cell until enough are kept.
-    double cell = std::sqrt(options.surfaceArea / static_cast<double>(options.spreadCount));
-    for (int attempt = 0; attempt < 4; ++attempt)
-    {
-      Spread = spreadSubsample(points, count, cell);
-      if (Spread.size() >= options.spreadCount * 3 / 4 || Spread.size() == count)
-        break;
-      cell *=
-          std::sqrt(static_cast<double>(Spread.size()) / static_cast<double>(options.spreadCount));
-    }
+    Spread = spreadSubsample(points, count, cell);
+    if (Spread.size() >= options.spreadCount * 3 / 4 || Spread.size() == count)
+      break;
+    cell *=
+        std::sqrt(static_cast<double>(Spread.size()) / static_cast<double>(options.spreadCount));
   }
 }
 

@@ -11,6 +11,11 @@
  * meet the surface, the point nearest the cell's centre: evenly spread over the data whatever
  * the scanner's density, deterministic (no random choice).
  *
+ * The points are kept in the order of a space-filling (Morton) curve, not the frame's: points
+ * near in space are near in memory, which the searches and the per-point loops of the energy
+ * terms read faster (1.1x a frame of jumping, 20 000 points in random order). point(i) and the
+ * subsample's indices refer to that order.
+ *
  * A frame of more than `maxPoints` points is thinned first, the same way (one point per cell,
  * cells grown until few enough are left; above 8 x maxPoints every k-th point is taken before
  * the grid, which bounds the memory): the field resolves nothing finer than its voxel, and a
@@ -90,6 +95,11 @@ public:
   const std::vector<std::uint32_t>& spread() const { return Spread; }
 
 private:
+  // The normals: given, or estimated and oriented part by part.
+  void takeOrEstimateNormals(const double* points, std::size_t count, const float* normals);
+  // The well-spread subsample (see the file comment).
+  void chooseSpread(const double* points, std::size_t count, const FrameDataOptions& options);
+
   std::size_t Count = 0;
   std::size_t OriginalCount = 0;
   double Voxel = 0;

@@ -11,6 +11,7 @@
 #include "dp/track/InternalEnergyTerm.h"
 #include "dp/track/LocalThickness.h"
 #include "dp/track/MotionPredictor.h"
+#include "dp/track/Parallel.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
 #include "dp/track/SurfaceLocator.h"
@@ -292,19 +293,30 @@ void Tracker::orientData(FrameData& frame) const
   Mesh.vertexNormals(x.data(), normals.data());
   const auto& tri = Mesh.triangles();
   const std::size_t parts = std::max<std::size_t>(1, frame.numberOfParts());
+  // Each subsample point's vote (searched in parallel, counted in order): +1 agrees, -1
+  // disagrees, 0 no surface within 3 voxels.
+  const std::vector<std::uint32_t>& spread = frame.spread();
+  std::vector<std::int8_t> vote(spread.size(), 0);
+  forEachIndex(spread.size(),
+               [&](std::size_t i)
+               {
+                 const std::uint32_t p = spread[i];
+                 const SurfaceLocator::Hit hit = locator.closest(frame.point(p), 3 * Voxel);
+                 if (hit.triangle < 0)
+                   return;
+                 double along = 0;
+                 for (int c = 0; c < 3; ++c)
+                   for (int k = 0; k < 3; ++k)
+                     along += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k] *
+                              frame.normal(p)[k];
+                 vote[i] = along >= 0 ? 1 : -1;
+               });
   std::vector<double> agree(parts, 0), disagree(parts, 0);
-  for (std::uint32_t p : frame.spread())
+  for (std::size_t i = 0; i < spread.size(); ++i)
   {
-    const SurfaceLocator::Hit hit = locator.closest(frame.point(p), 3 * Voxel);
-    if (hit.triangle < 0)
-      continue;
-    double along = 0;
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k)
-        along +=
-            hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k] * frame.normal(p)[k];
-    const std::uint32_t part = frame.numberOfParts() > 0 ? frame.part(p) : 0;
-    (along >= 0 ? agree : disagree)[part] += 1;
+    const std::uint32_t part = frame.numberOfParts() > 0 ? frame.part(spread[i]) : 0;
+    if (vote[i] != 0)
+      (vote[i] > 0 ? agree : disagree)[part] += 1;
   }
   for (std::uint32_t part = 0; part < parts; ++part)
     if (disagree[part] > agree[part])
