@@ -14,8 +14,10 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <mutex>
 #include <string>
 
@@ -35,9 +37,24 @@ struct DistanceField::Impl
   std::unique_ptr<detail::KdTree> Tree;
   std::size_t Active = 0;
   bool Lazy = false;
-  // Lazy mode: voxel key -> nearest point index, filled on first use (thread-safe; lookups
-  // take no lock, which matters: the tracker samples 8 voxels per vertex and evaluation).
-  mutable tbb::concurrent_unordered_map<std::uint64_t, std::int32_t> Visited;
+  // Lazy mode: each voxel's nearest point, filled on first use, in blocks of 8^3 voxels made
+  // when a voxel of theirs is first needed (-1: not yet). Thread-safe without locks on the
+  // lookups (the tracker samples 8 voxels per vertex and evaluation): two threads filling one
+  // voxel store the same value. A voxel costs 4 bytes and a block lookup, not a hash map
+  // entry and its insertion.
+  static constexpr int BlockBits = 3;
+  static constexpr int BlockVoxels = 1 << (3 * BlockBits);
+  struct LazyBlock
+  {
+    std::array<std::atomic<std::int32_t>, BlockVoxels> nearest;
+    LazyBlock()
+    {
+      for (auto& n : nearest)
+        n.store(-1, std::memory_order_relaxed);
+    }
+  };
+  mutable tbb::concurrent_unordered_map<std::uint64_t, std::unique_ptr<LazyBlock>> Blocks;
+  mutable std::atomic<std::size_t> Filled{0}; // voxels filled so far
 
   static std::uint64_t key(const Coord& c)
   {
@@ -47,9 +64,30 @@ struct DistanceField::Impl
            (static_cast<std::uint64_t>(c.z() + (1 << 20)) & mask);
   }
 
-  // The nearest point of voxel centre c, and whether it lies within the band.
+  // Lazy mode: voxel c's slot, in its block (made if needed). `last` remembers the block of the
+  // previous call (a cell's 8 corners mostly share one).
+  std::atomic<std::int32_t>& slotOf(const Coord& c, LazyBlock** last, Coord* lastBlock) const
+  {
+    const Coord b(c.x() >> BlockBits, c.y() >> BlockBits, c.z() >> BlockBits);
+    constexpr int mask = (1 << BlockBits) - 1;
+    const int local =
+        (c.x() & mask) | ((c.y() & mask) << BlockBits) | ((c.z() & mask) << (2 * BlockBits));
+    if (*last && *lastBlock == b)
+      return (*last)->nearest[static_cast<std::size_t>(local)];
+    const std::uint64_t k = key(b);
+    auto found = Blocks.find(k);
+    if (found == Blocks.end())
+      found = Blocks.emplace(k, std::make_unique<LazyBlock>()).first;
+    *last = found->second.get();
+    *lastBlock = b;
+    return (*last)->nearest[static_cast<std::size_t>(local)];
+  }
+
+  // The nearest point of voxel centre c, and whether it lies within the band. `last` and
+  // `lastBlock` (lazy mode; may be null) carry the block of the previous call.
   template <typename Accessor>
-  std::int32_t nearestOf(const Coord& c, Accessor* acc, bool& inBand) const
+  std::int32_t nearestOf(const Coord& c, Accessor* acc, bool& inBand, LazyBlock** last = nullptr,
+                         Coord* lastBlock = nullptr) const
   {
     std::int32_t index = -1;
     if (acc && acc->probeValue(c, index))
@@ -60,16 +98,21 @@ struct DistanceField::Impl
     const double centre[3] = {Voxel * c.x(), Voxel * c.y(), Voxel * c.z()};
     if (Lazy)
     {
-      const auto found = Visited.find(key(c));
-      if (found != Visited.end())
-        index = found->second;
+      LazyBlock* none = nullptr;
+      Coord noneBlock;
+      std::atomic<std::int32_t>& slot =
+          last ? slotOf(c, last, lastBlock) : slotOf(c, &none, &noneBlock);
+      index = slot.load(std::memory_order_relaxed);
+      if (index < 0)
+      {
+        index = static_cast<std::int32_t>(Tree->nearest(centre));
+        std::int32_t empty = -1;
+        if (slot.compare_exchange_strong(empty, index, std::memory_order_relaxed))
+          Filled.fetch_add(1, std::memory_order_relaxed);
+      }
     }
-    if (index < 0)
-    {
+    else
       index = static_cast<std::int32_t>(Tree->nearest(centre));
-      if (Lazy)
-        Visited.insert({key(c), index});
-    }
     const double* p = &Points[3 * static_cast<std::size_t>(index)];
     const double d2 = (centre[0] - p[0]) * (centre[0] - p[0]) +
                       (centre[1] - p[1]) * (centre[1] - p[1]) +
@@ -242,17 +285,17 @@ const double* DistanceField::points() const
 }
 std::size_t DistanceField::activeVoxelCount() const
 {
-  return P->Lazy ? P->Visited.size() : P->Active;
+  return P->Lazy ? P->Filled.load() : P->Active;
 }
 
 std::size_t DistanceField::memoryBytes() const
 {
   if (empty())
     return 0;
-  // Lazy mode has no grid: the voxels filled so far are map entries (key, index and the
-  // map's node and bucket pointers, about 40 bytes each).
+  // Lazy mode has no grid: its blocks, each with a map entry (key, pointer and the map's node
+  // and bucket pointers, about 40 bytes).
   const std::size_t voxels = P->Grid ? static_cast<std::size_t>(P->Grid->memUsage())
-                                     : P->Visited.size() * (sizeof(std::uint64_t) + 32);
+                                     : P->Blocks.size() * (sizeof(Impl::LazyBlock) + 40);
   return voxels + P->Tree->memoryBytes() + P->Points.capacity() * sizeof(double);
 }
 
@@ -305,12 +348,14 @@ const VoxelCell& DistanceField::locate(const double x[3], VoxelCell* cell, doubl
     using Accessor = openvdb::tree::ValueAccessor<const IndexTree, false>;
     std::unique_ptr<Accessor> acc = P->Grid ? std::make_unique<Accessor>(P->Grid->tree()) : nullptr;
     cell->inBand = true;
+    Impl::LazyBlock* lastBlock = nullptr;
+    Coord lastBlockCoord;
     for (int corner = 0; corner < 8; ++corner)
     {
       const Coord c(base[0] + (corner & 1), base[1] + ((corner >> 1) & 1),
                     base[2] + ((corner >> 2) & 1));
       bool cornerInBand = false;
-      cell->nearest[corner] = P->nearestOf(c, acc.get(), cornerInBand);
+      cell->nearest[corner] = P->nearestOf(c, acc.get(), cornerInBand, &lastBlock, &lastBlockCoord);
       cell->inBand = cell->inBand && cornerInBand;
     }
     std::copy(base, base + 3, cell->base);

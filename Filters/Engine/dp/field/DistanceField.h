@@ -42,9 +42,9 @@ struct DistanceFieldOptions
   double voxelSize = 0.0; // world units; must be positive
   double bandWidth = 0.0; // world units around the points kept in the grid; 0: 3 voxels
   std::size_t maxActiveVoxels = 200'000'000; // refuse grids larger than this (memory guard)
-  // Lazy: build only the kd-tree and fill voxels on first use (a thread-safe hash map): the
-  // same values as the eager grid, at a cost proportional to the voxels actually sampled
-  // (the tracker touches a few thousand, not the whole band).
+  // Lazy: build only the kd-tree and fill voxels on first use (thread-safe, in blocks of 8^3
+  // voxels made where first needed): the same values as the eager grid, at a cost proportional
+  // to the voxels actually sampled (the tracker touches a few thousand, not the whole band).
   bool lazy = false;
 };
 
