@@ -53,6 +53,13 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
   resetReference();
   NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
+  // The blocks each directed edge (j, k) of E_reg adds to, found once: (j, j), (k, k), (j, k).
+  for (const auto& edge : graph.edges())
+    for (int direction = 0; direction < 2; ++direction)
+    {
+      const std::int64_t j = edge[direction], k = edge[1 - direction];
+      EdgeSlots.push_back({NodeModel.slotOf(j, j), NodeModel.slotOf(k, k), NodeModel.slotOf(j, k)});
+    }
   // The node block each (vertex block, node of a, node of b) adds to, found once.
   VertexModel.forEachBlock(
       [&](std::int64_t a, std::int64_t b, const double*, int)
@@ -91,9 +98,10 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       Jk << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity();
       const Matrix66 jj = c * Jj.transpose() * Jj, kk = c * Jk.transpose() * Jk,
                      jk = c * Jj.transpose() * Jk;
-      hessian->addBlock(hessian->slotOf(j, j), jj.data());
-      hessian->addBlock(hessian->slotOf(k, k), kk.data());
-      hessian->addBlock(hessian->slotOf(j, k), jk.data());
+      const auto& slots = EdgeSlots[2 * index + direction];
+      hessian->addBlock(slots[0], jj.data());
+      hessian->addBlock(slots[1], kk.data());
+      hessian->addBlock(slots[2], jk.data());
       gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
       gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
     }
@@ -129,9 +137,10 @@ double GraphRegistration::stretching(const DeformationGraph::State& state, doubl
     Matrix66 kk = Matrix66::Zero();
     kk.bottomRightCorner<3, 3>() = weight * u * u.transpose();
     const Matrix66 jk = -kk;
-    hessian->addBlock(hessian->slotOf(j, j), kk.data());
-    hessian->addBlock(hessian->slotOf(k, k), kk.data());
-    hessian->addBlock(hessian->slotOf(j, k), jk.data());
+    const auto& slots = EdgeSlots[2 * index]; // (j, j), (k, k), (j, k)
+    hessian->addBlock(slots[0], kk.data());
+    hessian->addBlock(slots[1], kk.data());
+    hessian->addBlock(slots[2], jk.data());
     gradient->segment<3>(6 * j + 3) -= weight * excess * u;
     gradient->segment<3>(6 * k + 3) += weight * excess * u;
   }

@@ -46,6 +46,7 @@
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/EnergyTerm.h"
 
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -88,7 +89,8 @@ public:
    *  `limit` (world units): by `rate` of the excess. */
   void yield(const DeformationGraph::State& state, double rate, double limit);
 
-  /** E_reg of a state with weight `rigidity`; adds its Gauss-Newton model when asked. */
+  /** E_reg of a state with weight `rigidity`; adds its Gauss-Newton model when asked (to a
+   *  `hessian` of the graph's pattern: nodes, graph.edges()). */
   double regularisation(const DeformationGraph::State& state, double rigidity,
                         detail::BlockSparseMatrixOf<6>* hessian = nullptr,
                         Eigen::VectorXd* gradient = nullptr) const;
@@ -120,6 +122,8 @@ private:
   detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
+  // Per directed edge (j, k) of E_reg: its blocks (j, j), (k, k), (j, k) in NodeModel.
+  std::vector<std::array<detail::BlockSparseMatrixOf<6>::Slot, 3>> EdgeSlots;
   Eigen::VectorXd NodeGradient;
   detail::BlockCholeskyOf<6> Solver;
   bool Analysed = false;
