@@ -107,6 +107,19 @@ void SurfaceLocator::build(const double* positions)
     return;
   Nodes.emplace_back();
   split(0, 0, static_cast<std::int32_t>(nt), centres);
+  Parent.assign(Nodes.size(), -1);
+  LeafOf.assign(nt, -1);
+  for (std::size_t n = 0; n < Nodes.size(); ++n)
+  {
+    const Node& node = Nodes[n];
+    if (node.count > 0)
+      for (std::int32_t i = node.first; i < node.first + node.count; ++i)
+        LeafOf[static_cast<std::size_t>(Order[static_cast<std::size_t>(i)])] =
+            static_cast<std::int32_t>(n);
+    else
+      Parent[static_cast<std::size_t>(node.first)] =
+          Parent[static_cast<std::size_t>(node.first) + 1] = static_cast<std::int32_t>(n);
+  }
   refit(Positions);
 }
 
@@ -239,27 +252,24 @@ bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
   return gap > 0 && gap * gap > bound2 * (1 + 1e-9);
 }
 
-SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistance,
-                                            std::int64_t hint) const
+void SurfaceLocator::visitLeaf(const Node& leaf, const double p[3], Search& search) const
 {
-  Hit best;
-  if (Nodes.empty())
-    return best;
-  double bound = maxDistance * maxDistance;
   const auto& tri = Mesh->triangles();
-  if (hint >= 0 && static_cast<std::size_t>(hint) < Mesh->numberOfTriangles())
+  for (std::int32_t i = leaf.first; i < leaf.first + leaf.count; ++i)
   {
+    if (outside(Spheres[static_cast<std::size_t>(i)], p, search.bound))
+      continue; // its bounding sphere is farther than the best so far
+    const std::int64_t t = Order[i];
     double w[3], c[3];
     const double d2 =
-        closestPointOnTriangle(p, &Positions[3 * tri[3 * hint]], &Positions[3 * tri[3 * hint + 1]],
-                               &Positions[3 * tri[3 * hint + 2]], w, c);
-    if (d2 < bound)
-    {
-      // Strictly inside the bound, so the search may still find an equally close triangle of
-      // lower tree order: the answer does not depend on the hint.
-      bound = std::nextafter(d2, HUGE_VAL);
-    }
+        closestPointOnTriangle(p, &Positions[3 * tri[3 * t]], &Positions[3 * tri[3 * t + 1]],
+                               &Positions[3 * tri[3 * t + 2]], w, c);
+    search.offer(t, d2, w, c);
   }
+}
+
+void SurfaceLocator::descend(std::int32_t root, const double p[3], Search& search) const
+{
   // Each entry keeps its box's squared distance, measured when it was pushed: the bound may have
   // shrunk since, and the test needs no second measurement.
   struct Entry
@@ -269,49 +279,60 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
   };
   Entry stack[128];
   int top = 0;
-  stack[top++] = {0, boxDistance2(Nodes[0], p)};
+  stack[top++] = {root, boxDistance2(Nodes[static_cast<std::size_t>(root)], p)};
   while (top > 0)
   {
     const Entry entry = stack[--top];
-    if (entry.distance2 >= bound)
+    if (!search.mayHold(entry.distance2))
       continue;
-    const Node& node = Nodes[entry.node];
+    const Node& node = Nodes[static_cast<std::size_t>(entry.node)];
     if (node.count > 0)
     {
-      for (std::int32_t i = node.first; i < node.first + node.count; ++i)
-      {
-        if (outside(Spheres[static_cast<std::size_t>(i)], p, bound))
-          continue; // its bounding sphere is no nearer than the best so far
-        const std::int64_t t = Order[i];
-        double w[3], c[3];
-        const double d2 =
-            closestPointOnTriangle(p, &Positions[3 * tri[3 * t]], &Positions[3 * tri[3 * t + 1]],
-                                   &Positions[3 * tri[3 * t + 2]], w, c);
-        if (d2 < bound)
-        {
-          bound = d2;
-          best.triangle = t;
-          best.squaredDistance = d2;
-          std::copy(w, w + 3, best.barycentric);
-          std::copy(c, c + 3, best.point);
-        }
-      }
+      visitLeaf(node, p, search);
       continue;
     }
     // Nearer child last, so it is searched first.
     const std::int32_t left = node.first, right = node.first + 1;
-    const double dl = boxDistance2(Nodes[left], p), dr = boxDistance2(Nodes[right], p);
+    const double dl = boxDistance2(Nodes[static_cast<std::size_t>(left)], p),
+                 dr = boxDistance2(Nodes[static_cast<std::size_t>(right)], p);
     if (top + 2 > 128)
       continue; // cannot happen for trees of fewer than 2^60 triangles
     // (A child already beyond the bound never will be nearer: the bound only shrinks.)
     const Entry nearer = dl < dr ? Entry{left, dl} : Entry{right, dr};
     const Entry farther = dl < dr ? Entry{right, dr} : Entry{left, dl};
-    if (farther.distance2 < bound)
+    if (search.mayHold(farther.distance2))
       stack[top++] = farther;
-    if (nearer.distance2 < bound)
+    if (search.mayHold(nearer.distance2))
       stack[top++] = nearer;
   }
-  return best;
+}
+
+SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistance,
+                                            std::int64_t hint) const
+{
+  Search search;
+  search.bound = maxDistance * maxDistance;
+  if (Nodes.empty())
+    return search.best;
+  if (hint < 0 || static_cast<std::size_t>(hint) >= Mesh->numberOfTriangles())
+  {
+    descend(0, p, search);
+    return search.best;
+  }
+  // From the hint's leaf up to the root, searching each sibling subtree the bound reaches:
+  // near the hint (where the answer usually is) first, so the bound is small early and the
+  // far subtrees are dismissed by one box each. The same answer as from the root (ties go to
+  // the lower triangle index, whatever the order of the search).
+  std::int32_t node = LeafOf[static_cast<std::size_t>(hint)];
+  visitLeaf(Nodes[static_cast<std::size_t>(node)], p, search);
+  while (node > 0)
+  {
+    // Children are allocated in pairs after the root: left odd, right = left + 1.
+    const std::int32_t sibling = node % 2 == 1 ? node + 1 : node - 1;
+    descend(sibling, p, search);
+    node = Parent[static_cast<std::size_t>(node)];
+  }
+  return search.best;
 }
 
 } // namespace dp

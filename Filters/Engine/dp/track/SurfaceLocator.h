@@ -78,12 +78,44 @@ private:
   // Whether every point of the sphere is farther from p than sqrt(bound2).
   static bool outside(const Sphere& s, const double p[3], double bound2);
 
+  // The best hit so far and the squared distance a triangle must not exceed to replace it.
+  // Before a hit, only what is strictly nearer than the bound (the caller's maxDistance) counts;
+  // after one, an equally near triangle of lower index replaces it, so the answer does not
+  // depend on the order the tree is searched in.
+  struct Search
+  {
+    Hit best;
+    double bound = 0;
+    bool mayHold(double distance2) const
+    {
+      return best.triangle < 0 ? distance2 < bound : distance2 <= bound;
+    }
+    void offer(std::int64_t t, double d2, const double w[3], const double c[3])
+    {
+      if (!(best.triangle < 0 ? d2 < bound : d2 < bound || (d2 == bound && t < best.triangle)))
+        return;
+      bound = d2;
+      best.triangle = t;
+      best.squaredDistance = d2;
+      for (int k = 0; k < 3; ++k)
+      {
+        best.barycentric[k] = w[k];
+        best.point[k] = c[k];
+      }
+    }
+  };
+  void visitLeaf(const Node& leaf, const double p[3], Search& search) const;
+  // Searches the subtree of `root` (with the bound search holds).
+  void descend(std::int32_t root, const double p[3], Search& search) const;
+
   const TriangleMesh* Mesh = nullptr;
   const double* Positions = nullptr; // the positions of the last build/refit (caller's memory)
   std::vector<double> Copy;          // ... copied, so the caller's array may change
   std::vector<Node> Nodes;
-  std::vector<std::int32_t> Order; // triangle indices, leaves' ranges
-  std::vector<Sphere> Spheres;     // per entry of Order: its triangle's bounding sphere
+  std::vector<std::int32_t> Order;  // triangle indices, leaves' ranges
+  std::vector<Sphere> Spheres;      // per entry of Order: its triangle's bounding sphere
+  std::vector<std::int32_t> Parent; // per node (-1 for the root)
+  std::vector<std::int32_t> LeafOf; // per triangle, the leaf that holds it
 };
 
 } // namespace dp
