@@ -10,7 +10,10 @@
  * linear time (the boxes grow, the tree stays valid). Queries descend the nearer child first
  * and prune boxes farther than the best hit, and in a leaf the triangles whose bounding sphere is
  * farther (about half the triangle tests of a tracked take: jumping, 10 frames), so they are
- * exact; they are const and thread-safe.
+ * exact; they are const and thread-safe. A query with a hint (the triangle found last time)
+ * starts at the hint's leaf and climbs to the root, searching each sibling subtree: the bound is
+ * small from the start, so most subtrees cost one box test. Ties go to the lower triangle index,
+ * so a hint never changes the answer.
  *
  * Limits: after large deformations a refitted tree prunes less well (rebuild it then: build()
  * costs O(n log n)); degenerate (zero-area) triangles are handled (their closest point is on an
