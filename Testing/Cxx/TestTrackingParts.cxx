@@ -135,6 +135,39 @@ TEST(SurfaceLocator, FindsTheClosestPointsBruteForceFinds)
   }
 }
 
+TEST(SurfaceLocator, ATieGoesToTheLowestTriangleWhateverTheHint)
+{
+  // A flat grid of 12 x 12 squares, two triangles each: a point above an inner vertex is
+  // equally near its six triangles (their closest point is the vertex itself).
+  const int n = 12;
+  std::vector<double> positions;
+  std::vector<std::int64_t> triangles;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i)
+      positions.insert(positions.end(), {double(i), double(j), 0.0});
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+    {
+      const std::int64_t a = j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+      triangles.insert(triangles.end(), {a, b, d, a, d, c});
+    }
+  const dp::TriangleMesh mesh(triangles, positions.size() / 3);
+  const dp::SurfaceLocator locator(mesh, positions.data());
+  for (const auto& [i, j] : {std::pair{3, 4}, std::pair{7, 7}, std::pair{10, 2}})
+  {
+    const std::int64_t vertex = j * (n + 1) + i;
+    std::int64_t lowest = -1;
+    for (std::size_t t = 0; t < mesh.numberOfTriangles() && lowest < 0; ++t)
+      for (int c = 0; c < 3; ++c)
+        if (triangles[3 * t + c] == vertex)
+          lowest = static_cast<std::int64_t>(t);
+    const double p[3] = {double(i), double(j), 0.5};
+    EXPECT_EQ(locator.closest(p).triangle, lowest);
+    for (std::int64_t hint = 0; hint < static_cast<std::int64_t>(mesh.numberOfTriangles()); ++hint)
+      ASSERT_EQ(locator.closest(p, HUGE_VAL, hint).triangle, lowest) << "hint " << hint;
+  }
+}
+
 TEST(FrameData, SpreadsTheSubsampleEvenlyAndFlipsNormals)
 {
   Frame f(tube().positions);
