@@ -636,7 +636,10 @@ void Tracker::remember(const FrameResult& result)
       P->Predictor.restartFrom(result.positions, &state);
     else
       P->Predictor.push(result.positions, &state);
-    if (Options.graph.yieldRate > 0)
+    // A failed frame's shape may be garbage (a frame a thousand times too large): the graph's
+    // reference gives way to it only once failures persist, when the take itself has changed
+    // (as the quality's baseline does).
+    if (Options.graph.yieldRate > 0 && (!result.failed || P->FailedInARow >= 3))
       P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
     if (!result.failed)
       P->LastGoodState = state;
