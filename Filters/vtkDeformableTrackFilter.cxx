@@ -75,6 +75,7 @@ struct vtkDeformableTrackFilter::Internals
     f.CoarseLevel = o.graph.enabled;
     f.GraphNodes = static_cast<int>(o.graph.nodes);
     f.GraphRigidity = o.graph.rigidity;
+    f.FineIterations = o.graph.fineIterations;
     f.Plasticity = o.graph.yieldRate;
     f.TemporalWeight = o.temporalWeight;
     f.Recovery = o.recovery.enabled;
@@ -108,6 +109,7 @@ struct vtkDeformableTrackFilter::Internals
     o.graph.enabled = f.CoarseLevel;
     o.graph.nodes = static_cast<std::size_t>(f.GraphNodes);
     o.graph.rigidity = f.GraphRigidity;
+    o.graph.fineIterations = f.FineIterations;
     o.graph.yieldRate = f.Plasticity;
     o.temporalWeight = f.TemporalWeight;
     o.recovery.enabled = f.Recovery;
@@ -455,6 +457,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "CoarseLevel: " << this->CoarseLevel << "\n";
   os << indent << "GraphNodes: " << this->GraphNodes << "\n";
   os << indent << "GraphRigidity: " << this->GraphRigidity << "\n";
+  os << indent << "FineIterations: " << this->FineIterations << "\n";
   os << indent << "Plasticity: " << this->Plasticity << "\n";
   os << indent << "TemporalWeight: " << this->TemporalWeight << "\n";
   os << indent << "Recovery: " << this->Recovery << "\n";

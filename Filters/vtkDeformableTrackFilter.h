@@ -171,7 +171,8 @@ public:
   ///@}
 
   ///@{
-  /** Iteration limit per frame and relative tolerance of the stopping rule. */
+  /** Iteration limit of a frame's cloth solve (with the coarse level on, Gauss-Newton takes at
+   *  most FineIterations) and relative tolerance of the stopping rule. */
   vtkSetClampMacro(MaximumIterations, int, 1, VTK_INT_MAX);
   vtkGetMacro(MaximumIterations, int);
   vtkSetClampMacro(Tolerance, double, 1e-15, 1.0);
@@ -192,7 +193,9 @@ public:
    *  are caught as whole limbs; then the cloth solve refines. GraphNodes: its node count (0 =
    *  automatic, one per 5 vertices within 30..600). GraphRigidity multiplies its rigidity
    *  (default 1). Plasticity (0..1, default 0.3): where the shape stays bent far from the
-   *  template (a collapse, clothes), the graph's reference gives way by this share per frame. */
+   *  template (a collapse, clothes), the graph's reference gives way by this share per frame.
+   *  FineIterations (default 3): the Gauss-Newton steps the cloth solve takes after the graph
+   *  (at most); more let vertices slide along the data and end farther from the true ones. */
   vtkSetMacro(CoarseLevel, vtkTypeBool);
   vtkGetMacro(CoarseLevel, vtkTypeBool);
   vtkBooleanMacro(CoarseLevel, vtkTypeBool);
@@ -202,6 +205,8 @@ public:
   vtkGetMacro(GraphRigidity, double);
   vtkSetClampMacro(Plasticity, double, 0.0, 1.0);
   vtkGetMacro(Plasticity, double);
+  vtkSetClampMacro(FineIterations, int, 1, VTK_INT_MAX);
+  vtkGetMacro(FineIterations, int);
   ///@}
 
   ///@{
@@ -277,6 +282,7 @@ protected:
   vtkTypeBool CoarseLevel;
   int GraphNodes;
   double GraphRigidity;
+  int FineIterations;
   double Plasticity;
   double TemporalWeight;
   vtkTypeBool Recovery;

@@ -333,6 +333,7 @@ const char* Usage =
     "             [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
+    "             [--fine-iterations N]\n"
     "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
     "RATE] [--coverage-weight "
     "W] "
@@ -437,6 +438,9 @@ int main(int argc, char** argv)
       else if (arg == "--graph-iterations")
         options.graph.iterations =
             static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
+      else if (arg == "--fine-iterations")
+        options.graph.fineIterations =
+            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100000));
       else if (arg == "--rigidity")
         options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--stretch-weight")

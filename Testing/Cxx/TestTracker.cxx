@@ -302,6 +302,9 @@ TEST(Tracker, RefusesOptionsOutOfRange)
     EXPECT_NE(std::string(e.what()).find("yield rate"), std::string::npos) << e.what();
   }
   o = dp::TrackerOptions{};
+  o.graph.fineIterations = 0;
+  EXPECT_THROW(make(o), std::invalid_argument);
+  o = dp::TrackerOptions{};
   o.coverage.weight = -1;
   EXPECT_THROW(make(o), std::invalid_argument);
   o = dp::TrackerOptions{};
@@ -379,6 +382,47 @@ TEST(Tracker, FollowsANoisySequenceWithEverySolver)
     }
     EXPECT_LT(std::sqrt(sum / s.frames.size()), 0.03 * s.diagonal) << static_cast<int>(solver);
   }
+}
+
+TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
+{
+  // The graph places the surface; on a frame that passes, the fine level then takes at most
+  // graph.fineIterations Gauss-Newton steps and still follows the data. Solved to convergence,
+  // the same frames take more steps (so the limit is what holds them) and end farther from the
+  // true vertices.
+  const Sequence s = makeSequence(6, 0.0, 0, 3000);
+  auto run = [&s](int fineIterations)
+  {
+    dp::TrackerOptions o = tubeOptions();
+    o.graph.fineIterations = fineIterations;
+    dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                        s.animation.positions(0), o);
+    std::vector<dp::FrameResult> results;
+    for (const dp::PointCloud& c : s.frames)
+      results.push_back(tracker.track(c.points.data(), c.numberOfPoints(), nullptr));
+    return results;
+  };
+  const std::vector<dp::FrameResult> few = run(3), converged = run(300);
+  int passed = 0, longer = 0;
+  double fewError = 0, convergedError = 0;
+  for (std::size_t f = 0; f < s.frames.size(); ++f)
+  {
+    fewError += vertexRms(few[f].positions, s.animation.positions(f));
+    convergedError += vertexRms(converged[f].positions, s.animation.positions(f));
+    EXPECT_LT(vertexRms(few[f].positions, s.animation.positions(f)), 0.01 * s.diagonal)
+        << "frame " << f;
+    if (few[f].failed)
+      continue;
+    ++passed;
+    EXPECT_GE(few[f].iterations, 1) << "frame " << f;
+    EXPECT_LE(few[f].iterations, 3) << "frame " << f;
+    longer += converged[f].iterations > 3;
+  }
+  EXPECT_GE(passed, 4);
+  EXPECT_GT(longer, 0);
+  // The longer solves let vertices slide along the tube (frame 3: 1 % of the diagonal off
+  // against 0.4 %).
+  EXPECT_LT(fewError, convergedError);
 }
 
 TEST(Tracker, FollowsARigidMotionWithTheDefaults)

@@ -98,7 +98,7 @@ def check_panel(ns):
                 if solvers.GetEntryText(i).startswith("Steepest")]
     assert shown_when("ProvisionalDetermination") == ("Solver", str(steepest[0]))
     assert shown_when("RigidAlignment") == ("CoarseLevel", "0")
-    for name in ("GraphNodes", "GraphRigidity", "Plasticity"):
+    for name in ("GraphNodes", "GraphRigidity", "Plasticity", "FineIterations"):
         assert shown_when(name) == ("CoarseLevel", "1"), name
     assert shown_when("FailureMargin") == ("Recovery", "1")
 

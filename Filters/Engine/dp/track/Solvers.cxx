@@ -205,7 +205,7 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
     if (!accepted || converged)
       break; // no step decreases E any more, or the last one barely moved: a (local) minimum
   }
-  return iteration + 1;
+  return std::min(iteration + 1, settings.maxIterations); // models built
 }
 
 namespace

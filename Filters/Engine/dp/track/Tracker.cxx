@@ -70,6 +70,7 @@ void validate(const TrackerOptions& o)
   check(nonNegative(o.graph.rigidity) && nonNegative(o.graph.robustScale),
         "graph rigidity and robust scale (>= 0)");
   check(o.graph.iterations >= 0, "graph iterations (>= 0)");
+  check(o.graph.fineIterations >= 1, "fine iterations after the graph (>= 1)");
   check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
   check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
   check(nonNegative(o.graph.stretchWeight), "graph stretch weight (>= 0)");
@@ -406,7 +407,7 @@ void Tracker::preferStraightIfCloser(DistanceTerm& distance, Attempt& a,
   }
 }
 
-Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
+Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, bool converge)
 {
   Attempt a;
   auto clock = std::chrono::steady_clock::now();
@@ -433,7 +434,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start)
   a.coarsePositions = x;
 
   clock = std::chrono::steady_clock::now();
-  solveFine(a, distance, coverage.get(), internal, x);
+  solveFine(a, distance, coverage.get(), internal, x, converge);
   a.timings.fine = elapsed(clock);
 
   clock = std::chrono::steady_clock::now();
@@ -489,7 +490,7 @@ void Tracker::solveCoarse(Start start, Attempt& a, DistanceTerm& distance, Cover
 }
 
 void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* coverage,
-                        InternalEnergyTerm& internal, std::vector<double>& x)
+                        InternalEnergyTerm& internal, std::vector<double>& x, bool converge)
 {
   const MotionPredictor& predictor = P->Predictor;
   // The fine level starts within reach of the data: the paper's term, not robust (the coarse
@@ -518,6 +519,8 @@ void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* covera
     terms.push_back(temporal.get());
   SolveSettings settings;
   settings.maxIterations = Options.maxIterations;
+  if (P->Graph && Options.solver == TrackerSolver::GaussNewton && !converge)
+    settings.maxIterations = std::min(settings.maxIterations, Options.graph.fineIterations);
   settings.tolerance = Options.tolerance;
   settings.settledStep = SettledStep * Voxel;
   a.frozen.assign(Mesh.numberOfVertices(), 0);
@@ -564,7 +567,17 @@ void Tracker::trackEmptyFrame(FrameResult& result)
 
 Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& result)
 {
-  Attempt best = attempt(frame, Start::Predicted);
+  // After the graph, a few fine steps (GraphOptions::fineIterations) unless the frame then
+  // fails: there the graph may have missed, and the fine level solved to convergence mends
+  // what it can before other starts are tried.
+  Attempt best = attempt(frame, Start::Predicted, false);
+  if (Options.recovery.enabled && failed(best) && P->Graph &&
+      Options.solver == TrackerSolver::GaussNewton)
+  {
+    Attempt converged = attempt(frame, Start::Predicted, true);
+    if (converged.score() < best.score())
+      best = std::move(converged);
+  }
   int kept = 0;
   if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
   {
@@ -577,7 +590,7 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
           (retry == Start::Stiff && !torn) ||
           (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
         continue;
-      Attempt other = attempt(frame, retry);
+      Attempt other = attempt(frame, retry, true);
       ++result.retries;
       // Another start must do clearly better to be kept: the scores of two plausible fits
       // differ by noise, and a start from elsewhere breaks the motion's continuity.

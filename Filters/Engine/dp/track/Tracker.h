@@ -136,9 +136,10 @@ private:
     LastGood,  // the last frame that did not fail (while the frames since fail)
     Template   // the template, moved rigidly onto the last frame
   };
-  /** One try at a frame from `start`: the start, the coarse level, the fine solve, the
+  /** One try at a frame from `start`: the start, the coarse level, the fine solve (to
+   *  convergence when `converge`, else the few steps of GraphOptions::fineIterations), the
    *  frame's quality. */
-  Attempt attempt(const class FrameData& frame, Start start);
+  Attempt attempt(const class FrameData& frame, Start start, bool converge);
   /** The start's positions (the graph deformed by a.state, or the last frame's extrapolated
    *  and aligned when the coarse level is off). */
   std::vector<double> startPositions(Start start, Attempt& a, class DistanceTerm& distance,
@@ -147,9 +148,9 @@ private:
   void solveCoarse(Start start, Attempt& a, class DistanceTerm& distance,
                    class CoverageTerm* coverage, std::vector<double>& x);
   /** The fine solve from x with the frame's terms; records iterations, energies and the
-   *  per-vertex residuals in `a`. */
+   *  per-vertex residuals in `a`; see attempt() for `converge`. */
   void solveFine(Attempt& a, class DistanceTerm& distance, class CoverageTerm* coverage,
-                 class InternalEnergyTerm& internal, std::vector<double>& x);
+                 class InternalEnergyTerm& internal, std::vector<double>& x, bool converge);
   /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
    *  frame 0). */
   void startState(Start start, Attempt& a) const;

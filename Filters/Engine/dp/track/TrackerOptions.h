@@ -72,6 +72,12 @@ struct GraphOptions
   // bending term's: limbs bend but do not stretch. 0 switches it off.
   double stretchWeight = 1.0;
   int iterations = 10; // Levenberg-Marquardt steps per stage of the schedule (at most)
+  // Gauss-Newton steps of the fine level after this level (at most; TrackerOptions::
+  // maxIterations bounds the other solvers, and Gauss-Newton without the graph). The graph has
+  // placed the surface and a few steps fit its detail; solved to convergence, the fine level
+  // lets vertices slide along the data, where no term holds them, and the tracked vertices end
+  // farther from the true ones (README, Speed, session 22).
+  int fineIterations = 3;
 };
 
 /** Failure detection and recovery (FrameQuality): a frame fails when the share of its data
