@@ -407,7 +407,7 @@ void Tracker::preferStraightIfCloser(DistanceTerm& distance, Attempt& a,
   }
 }
 
-Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, bool converge)
+Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Attempt* capped)
 {
   Attempt a;
   auto clock = std::chrono::steady_clock::now();
@@ -424,18 +424,29 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, bool conv
     coverage = std::make_unique<CoverageTerm>(frame, Mesh, L, Options.coverage);
   InternalEnergyTerm internal(Cloth);
 
-  std::vector<double> x = startPositions(start, a, distance, internal);
-  a.timings.prediction = elapsed(clock);
-  a.startPositions = x;
+  std::vector<double> x;
+  if (capped)
+  {
+    a = *capped; // its start and coarse level; the fine level goes on from where it stopped
+    x = capped->positions;
+  }
+  else
+  {
+    x = startPositions(start, a, distance, internal);
+    a.timings.prediction = elapsed(clock);
+    a.startPositions = x;
+
+    clock = std::chrono::steady_clock::now();
+    solveCoarse(start, a, distance, coverage.get(), x);
+    a.timings.coarse = elapsed(clock);
+    a.coarsePositions = x;
+  }
 
   clock = std::chrono::steady_clock::now();
-  solveCoarse(start, a, distance, coverage.get(), x);
-  a.timings.coarse = elapsed(clock);
-  a.coarsePositions = x;
-
-  clock = std::chrono::steady_clock::now();
-  solveFine(a, distance, coverage.get(), internal, x, converge);
-  a.timings.fine = elapsed(clock);
+  const int stepsBefore = capped ? capped->iterations : 0;
+  solveFine(a, distance, coverage.get(), internal, x, capped || start != Start::Predicted);
+  a.iterations += stepsBefore;
+  a.timings.fine = elapsed(clock) + (capped ? capped->timings.fine : 0.0);
 
   clock = std::chrono::steady_clock::now();
   a.quality =
@@ -568,13 +579,13 @@ void Tracker::trackEmptyFrame(FrameResult& result)
 Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& result)
 {
   // After the graph, a few fine steps (GraphOptions::fineIterations) unless the frame then
-  // fails: there the graph may have missed, and the fine level solved to convergence mends
+  // fails: there the graph may have missed, and the fine level solved on to convergence mends
   // what it can before other starts are tried.
-  Attempt best = attempt(frame, Start::Predicted, false);
+  Attempt best = attempt(frame, Start::Predicted);
   if (Options.recovery.enabled && failed(best) && P->Graph &&
       Options.solver == TrackerSolver::GaussNewton)
   {
-    Attempt converged = attempt(frame, Start::Predicted, true);
+    Attempt converged = attempt(frame, Start::Predicted, &best);
     if (converged.score() < best.score())
       best = std::move(converged);
   }
@@ -590,7 +601,7 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
           (retry == Start::Stiff && !torn) ||
           (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
         continue;
-      Attempt other = attempt(frame, retry, true);
+      Attempt other = attempt(frame, retry);
       ++result.retries;
       // Another start must do clearly better to be kept: the scores of two plausible fits
       // differ by noise, and a start from elsewhere breaks the motion's continuity.

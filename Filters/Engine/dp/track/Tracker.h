@@ -136,10 +136,12 @@ private:
     LastGood,  // the last frame that did not fail (while the frames since fail)
     Template   // the template, moved rigidly onto the last frame
   };
-  /** One try at a frame from `start`: the start, the coarse level, the fine solve (to
-   *  convergence when `converge`, else the few steps of GraphOptions::fineIterations), the
-   *  frame's quality. */
-  Attempt attempt(const class FrameData& frame, Start start, bool converge);
+  /** One try at a frame from `start`: the start, the coarse level, the fine solve, the
+   *  frame's quality. The first try (Start::Predicted) takes the few fine steps of
+   *  GraphOptions::fineIterations; other starts, and a try that goes on from `capped` (a first
+   *  try that failed: its start and coarse level are kept), solve the fine level to
+   *  convergence. */
+  Attempt attempt(const class FrameData& frame, Start start, const Attempt* capped = nullptr);
   /** The start's positions (the graph deformed by a.state, or the last frame's extrapolated
    *  and aligned when the coarse level is off). */
   std::vector<double> startPositions(Start start, Attempt& a, class DistanceTerm& distance,
@@ -148,7 +150,7 @@ private:
   void solveCoarse(Start start, Attempt& a, class DistanceTerm& distance,
                    class CoverageTerm* coverage, std::vector<double>& x);
   /** The fine solve from x with the frame's terms; records iterations, energies and the
-   *  per-vertex residuals in `a`; see attempt() for `converge`. */
+   *  per-vertex residuals in `a`; without `converge`, the few steps of attempt(). */
   void solveFine(Attempt& a, class DistanceTerm& distance, class CoverageTerm* coverage,
                  class InternalEnergyTerm& internal, std::vector<double>& x, bool converge);
   /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
