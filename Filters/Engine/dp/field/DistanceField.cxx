@@ -98,10 +98,14 @@ struct DistanceField::Impl
     const double centre[3] = {Voxel * c.x(), Voxel * c.y(), Voxel * c.z()};
     if (Lazy)
     {
-      LazyBlock* none = nullptr;
+      LazyBlock* none = nullptr; // no block carried over: this call's own
       Coord noneBlock;
-      std::atomic<std::int32_t>& slot =
-          last ? slotOf(c, last, lastBlock) : slotOf(c, &none, &noneBlock);
+      if (!last)
+      {
+        last = &none;
+        lastBlock = &noneBlock;
+      }
+      std::atomic<std::int32_t>& slot = slotOf(c, last, lastBlock);
       index = slot.load(std::memory_order_relaxed);
       if (index < 0)
       {

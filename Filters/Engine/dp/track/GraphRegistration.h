@@ -122,7 +122,8 @@ private:
   detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
-  // Per directed edge (j, k) of E_reg: its blocks (j, j), (k, k), (j, k) in NodeModel.
+  // Per directed edge (j, k) of E_reg: its blocks (j, j), (k, k), (j, k) in NodeModel, and in
+  // any matrix of the same pattern (regularisation()'s `hessian`: slots follow the pattern).
   std::vector<std::array<detail::BlockSparseMatrixOf<6>::Slot, 3>> EdgeSlots;
   Eigen::VectorXd NodeGradient;
   detail::BlockCholeskyOf<6> Solver;

@@ -530,8 +530,8 @@ void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* covera
     terms.push_back(temporal.get());
   SolveSettings settings;
   settings.maxIterations = Options.maxIterations;
-  if (P->Graph && Options.solver == TrackerSolver::GaussNewton && !converge)
-    settings.maxIterations = std::min(settings.maxIterations, Options.graph.fineIterations);
+  if (!converge && capsFineLevel())
+    settings.maxIterations = Options.graph.fineIterations;
   settings.tolerance = Options.tolerance;
   settings.settledStep = SettledStep * Voxel;
   a.frozen.assign(Mesh.numberOfVertices(), 0);
@@ -576,14 +576,19 @@ void Tracker::trackEmptyFrame(FrameResult& result)
   result.positions = std::move(x);
 }
 
+bool Tracker::capsFineLevel() const
+{
+  return P->Graph && Options.solver == TrackerSolver::GaussNewton &&
+         Options.graph.fineIterations < Options.maxIterations;
+}
+
 Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& result)
 {
   // After the graph, a few fine steps (GraphOptions::fineIterations) unless the frame then
   // fails: there the graph may have missed, and the fine level solved on to convergence mends
   // what it can before other starts are tried.
   Attempt best = attempt(frame, Start::Predicted);
-  if (Options.recovery.enabled && failed(best) && P->Graph &&
-      Options.solver == TrackerSolver::GaussNewton)
+  if (Options.recovery.enabled && failed(best) && capsFineLevel())
   {
     Attempt converged = attempt(frame, Start::Predicted, &best);
     if (converged.score() < best.score())

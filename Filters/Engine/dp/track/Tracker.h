@@ -161,6 +161,9 @@ private:
   void preferStraightIfCloser(class DistanceTerm& distance, Attempt& a,
                               std::vector<double>& x) const;
   bool failed(const Attempt& a) const;
+  /** Whether a first try's fine level stops after GraphOptions::fineIterations steps (the graph
+   *  is on, the solver Gauss-Newton, and the limit below maxIterations). */
+  bool capsFineLevel() const;
   /** The predicted attempt, then the retries while it fails; counts them in `result`. */
   Attempt solveWithRetries(const class FrameData& frame, FrameResult& result);
   /** Moves the kept attempt's outcome into `result`. */
