@@ -611,6 +611,63 @@ TEST(GraphRegistration, LimbsBendButDoNotStretch)
   EXPECT_LT(worst, 1e-4 * scale);
 }
 
+TEST(GraphRegistration, RegulariserModelIsItsHessianWhereNoEdgeBends)
+{
+  // Under a rigid motion of the whole graph no edge bends or stretches (E_reg = 0, residuals 0),
+  // so the Gauss-Newton model J^T J is E_reg's exact Hessian there: the model times a direction
+  // against central differences of the gradient along it (rotation increments and translations).
+  const Shape shape = tube(16, 12);
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  const dp::DeformationGraph graph(mesh, shape.positions.data(), 20, 4);
+  dp::GraphRegistration registration(graph, 1.0, 0.01);
+  const std::size_t nodes = graph.numberOfNodes();
+  const Eigen::Matrix3d turn =
+      Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).toRotationMatrix();
+  dp::DeformationGraph::State rigid = graph.identity();
+  for (std::size_t j = 0; j < nodes; ++j)
+  {
+    const Eigen::Vector3d g(graph.nodePosition(j));
+    rigid.rotation[j] = turn;
+    rigid.translation[j] = turn * g + Eigen::Vector3d(0.1, -0.2, 0.3) - g;
+  }
+  const double rigidity = 2.0;
+  ASSERT_LT(registration.regularisation(rigid, rigidity), 1e-20);
+  auto modelAt = [&](const dp::DeformationGraph::State& s, Eigen::VectorXd& gradient)
+  {
+    dp::detail::BlockSparseMatrixOf<6> hessian(nodes, graph.edges());
+    gradient = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * nodes));
+    registration.regularisation(s, rigidity, &hessian, &gradient);
+    return Eigen::SparseMatrix<double>(hessian.matrix());
+  };
+  Eigen::VectorXd gradient;
+  const Eigen::SparseMatrix<double> lower = modelAt(rigid, gradient);
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Eigen::VectorXd direction(static_cast<Eigen::Index>(6 * nodes));
+  for (Eigen::Index i = 0; i < direction.size(); ++i)
+    direction[i] = u(rng);
+  const Eigen::VectorXd modelled = lower.selfadjointView<Eigen::Lower>() * direction;
+  auto moved = [&](double h)
+  {
+    dp::DeformationGraph::State s = rigid;
+    for (std::size_t j = 0; j < nodes; ++j)
+    {
+      const Eigen::Vector3d w = h * direction.segment<3>(static_cast<Eigen::Index>(6 * j));
+      s.rotation[j] =
+          Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * rigid.rotation[j];
+      s.translation[j] += h * direction.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
+    }
+    return s;
+  };
+  const double h = 1e-6;
+  Eigen::VectorXd plus, minus;
+  modelAt(moved(h), plus);
+  modelAt(moved(-h), minus);
+  const Eigen::VectorXd numeric = (plus - minus) / (2 * h);
+  ASSERT_GT(numeric.norm(), 0);
+  EXPECT_LT((numeric - modelled).norm(), 1e-5 * numeric.norm());
+}
+
 // A closed lat-long sphere of `radius` around `centre` (rings x segments quads, fans at the poles),
 // appended to `shape`; `inward` turns its faces inward.
 void addSphere(Shape& shape, const double centre[3], double radius, bool inward = false)

@@ -92,18 +92,27 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       e += 0.5 * c * r.squaredNorm();
       if (!hessian)
         continue;
-      // de/d(w_j, t_j) = [-[arm]x, I]; de/d(w_k, t_k) = [0, -I].
-      Matrix36 Jj, Jk;
-      Jj << -crossMatrix(arm), Eigen::Matrix3d::Identity();
-      Jk << Eigen::Matrix3d::Zero(), -Eigen::Matrix3d::Identity();
-      const Matrix66 jj = c * Jj.transpose() * Jj, kk = c * Jk.transpose() * Jk,
-                     jk = c * Jj.transpose() * Jk;
+      // de/d(w_j, t_j) = Jj = [-[arm]x, I], de/d(w_k, t_k) = Jk = [0, -I]; their products
+      // written out ([a]x^T = -[a]x, [a]x^T [a]x = |a|^2 I - a a^T): c Jj^T Jj, c Jk^T Jk,
+      // c Jj^T Jk, and the gradients c Jj^T r = c (arm x r, r), c Jk^T r = c (0, -r).
+      const Eigen::Matrix3d cross = c * crossMatrix(arm);
+      const Eigen::Matrix3d identity = c * Eigen::Matrix3d::Identity();
+      Matrix66 jj, kk = Matrix66::Zero(), jk = Matrix66::Zero();
+      jj.topLeftCorner<3, 3>() =
+          c * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
+      jj.topRightCorner<3, 3>() = cross;
+      jj.bottomLeftCorner<3, 3>() = -cross;
+      jj.bottomRightCorner<3, 3>() = identity;
+      kk.bottomRightCorner<3, 3>() = identity;
+      jk.topRightCorner<3, 3>() = -cross;
+      jk.bottomRightCorner<3, 3>() = -identity;
       const auto& slots = EdgeSlots[2 * index + direction];
       hessian->addBlock(slots[0], jj.data());
       hessian->addBlock(slots[1], kk.data());
       hessian->addBlock(slots[2], jk.data());
-      gradient->segment<6>(6 * j) += c * Jj.transpose() * r;
-      gradient->segment<6>(6 * k) += c * Jk.transpose() * r;
+      gradient->segment<3>(6 * j) += c * arm.cross(r);
+      gradient->segment<3>(6 * j + 3) += c * r;
+      gradient->segment<3>(6 * k + 3) -= c * r;
     }
   return StretchWeight > 0 ? e + stretching(state, StretchWeight * scale, hessian, gradient) : e;
 }
