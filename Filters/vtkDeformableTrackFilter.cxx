@@ -25,6 +25,7 @@
 
 #include <algorithm>
 #include <memory>
+#include <string>
 #include <vector>
 
 vtkStandardNewMacro(vtkDeformableTrackFilter);
@@ -378,6 +379,14 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
     this->ShowProgressOf(frame, false);
     this->UpdateProgress(0.0); // the new text while the frame is under way
     vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+    if (input && input->GetFieldData()->GetAbstractArray("UnreadableFrame"))
+    {
+      vtkErrorMacro(<< "frame " << frame << " could not be read (the reader says why): tracking "
+                    << "stops before it"
+                    << (frame > 0 ? ", frames 0-" + std::to_string(frame - 1) + " are kept" : ""));
+      ContinueExecuting(request, false);
+      return 0;
+    }
     if ((!in.Tracker && !this->MakeTracker(inputVector, input)) || !this->TrackFrame(frame, input))
     {
       ContinueExecuting(request, false);

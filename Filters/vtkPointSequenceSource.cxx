@@ -7,6 +7,7 @@
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkCommand.h"
+#include "vtkDPPointSetAccess.h"
 #include "vtkDPXMLReaders.h"
 #include "vtkDoubleArray.h"
 #include "vtkErrorCode.h"
@@ -436,7 +437,11 @@ int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
     output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frame.time);
     this->SetErrorCode(vtkErrorCode::FileFormatError);
     vtkErrorMacro(<< "frame " << index << ": " << e.what());
-    return 0;
+    // An empty output that says so, not a failed request: a failure upstream of a filter that
+    // computes frame after frame (CONTINUE_EXECUTING) keeps VTK's executive asking again forever,
+    // while this lets it stop with the frames before kept (vtkDeformableTrackFilter).
+    vtkDP::addFieldValue(output, "UnreadableFrame", static_cast<double>(index));
+    return 1;
   }
 
   if (this->NumberOfDroppedPoints > 0)

@@ -137,7 +137,13 @@ TEST(PointSequenceSource, ABadFrameIsAnErrorNamingItAndTheOtherFramesStillRead)
   EXPECT_NE(f.log->Errors.find(f.dir.file("f2.ply")), std::string::npos) << f.log->Errors;
   EXPECT_NE(f.log->Errors.find("truncated"), std::string::npos) << f.log->Errors;
   EXPECT_EQ(bad->GetNumberOfPoints(), 0);
+  // Said in the output too (not a failed request): a consumer computing frame after frame stops.
+  vtkDataArray* unreadable =
+      vtkArrayDownCast<vtkDataArray>(bad->GetFieldData()->GetAbstractArray("UnreadableFrame"));
+  ASSERT_NE(unreadable, nullptr);
+  EXPECT_EQ(unreadable->GetComponent(0, 0), 2);
   EXPECT_EQ(f.at(3)->GetNumberOfPoints(), 5);
+  EXPECT_EQ(f.at(3)->GetFieldData()->GetAbstractArray("UnreadableFrame"), nullptr);
   EXPECT_EQ(f.log->Errors, "");
 
   writeText(f.dir.file("odd.series"), R"({"files":[{"name":"f0.las"}]})");

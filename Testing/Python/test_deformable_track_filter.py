@@ -130,6 +130,22 @@ class TestDeformableTrackFilter(TempDirTestCase):
         self.assertEqual(f.GetOutput().GetFieldData().GetArray("FrameIndex").GetValue(0),
                          FRAMES - 2)
 
+    def test_an_unreadable_frame_stops_the_run_before_it_keeping_the_frames_before(self):
+        # Asked for the last frame with frame 3 truncated: frames 0-2 are tracked, then an error
+        # names frame 3 and the run stops (it used to loop forever: a failed request upstream
+        # of a continuation keeps VTK's executive asking again).
+        with open(self.path("seq", self.frames[3]), "r+b") as f:
+            f.truncate(200)
+        f = self.tracker()
+        reader, tracker = MessageRecorder(self.source), MessageRecorder(f)
+        f.UpdateTimeStep(FRAMES - 1)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 3)
+        self.assertIn("frame_0003.ply", reader.error_text)
+        self.assertIn("frame 3 could not be read", tracker.error_text)
+        self.assertIn("frames 0-2 are kept", tracker.error_text)
+        f.UpdateTimeStep(1)
+        self.assertEqual(f.GetOutput().GetFieldData().GetArray("FrameIndex").GetValue(0), 1)
+
     def test_the_cache_answers_earlier_times_and_parameter_changes_clear_it(self):
         f = self.tracker()
         f.UpdateTimeStep(FRAMES - 1)
