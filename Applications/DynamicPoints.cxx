@@ -200,7 +200,9 @@ double fieldValue(vtkDataObject* data, const char* name)
 struct FrameRecord
 {
   int frame;
-  double time, rmsResidual, maxResidual, milliseconds;
+  double time, rmsResidual, maxResidual;
+  double milliseconds;           // the frame's wall time
+  double overlappedMilliseconds; // of its data's preparation, what ran beside the frame before
   long long points, iterations;
   double unexplained, unsupported; // shares of the points / of the mesh beyond 3 voxels
   double largestStretch;           // of a stiff edge, in mean edge lengths (above 2: torn)
@@ -387,6 +389,19 @@ private:
     return true;
   }
 
+  // Says where tracking stopped and which frames are kept.
+  void stopAt(int f)
+  {
+    Bar.clear();
+    std::cerr << "error: tracking stopped at frame " << f << " (" << Source->GetFramePath(f)
+              << "); ";
+    if (f == 0)
+      std::cerr << "no frame was tracked\n";
+    else
+      std::cerr << "frames 0-" << f - 1 << " are in " << Pvd.string() << "\n";
+    Failed = true;
+  }
+
   // Tracks frame after frame; each finished frame is written and listed in the .pvd at once.
   void track()
   {
@@ -413,17 +428,15 @@ private:
       if (Interrupted)
         break;
       vtkPolyData* mesh = Tracker->GetOutput();
-      if (Printer->Errors > errorsBefore || mesh->GetNumberOfPoints() == 0 ||
-          Tracker->GetNumberOfCachedFrames() != f + 1)
+      // The track filter reads frame f + 1 before it tracks frame f (so that its data is prepared
+      // beside the solve): an error with frame f tracked is frame f + 1's, and frame f is kept.
+      const bool tracked = mesh->GetNumberOfPoints() > 0 &&
+                           Tracker->GetNumberOfCachedFrames() == f + 1 &&
+                           fieldValue(mesh, "FrameIndex") == f;
+      const bool nextFailed = tracked && Printer->Errors > errorsBefore;
+      if (!tracked || (Printer->Errors > errorsBefore && !nextFailed))
       {
-        Bar.clear();
-        std::cerr << "error: tracking stopped at frame " << f << " (" << Source->GetFramePath(f)
-                  << "); ";
-        if (f == 0)
-          std::cerr << "no frame was tracked\n";
-        else
-          std::cerr << "frames 0-" << f - 1 << " are in " << Pvd.string() << "\n";
-        Failed = true;
+        stopAt(f);
         break;
       }
       if (f == 0)
@@ -452,6 +465,11 @@ private:
       Written.emplace_back(time, (fs::path("tracked") / name).string());
       writeAtomically(Pvd, pvdText(Written));
       record(f, time, mesh);
+      if (nextFailed)
+      {
+        stopAt(f + 1);
+        break;
+      }
     }
     Bar.clear();
     if (Interrupted)
@@ -487,7 +505,8 @@ private:
                   std::sqrt(sum / n),
                   largest,
                   1000 * fieldValue(mesh, "Seconds"),
-                  static_cast<long long>(Source->GetOutput()->GetNumberOfPoints()),
+                  1000 * fieldValue(mesh, "OverlappedSeconds"),
+                  static_cast<long long>(fieldValue(mesh, "Points")),
                   static_cast<long long>(fieldValue(mesh, "Iterations")),
                   fieldValue(mesh, "Unexplained"),
                   fieldValue(mesh, "Unsupported"),
@@ -606,6 +625,7 @@ private:
                           {"rmsResidual", r.rmsResidual},
                           {"maxResidual", r.maxResidual},
                           {"milliseconds", r.milliseconds},
+                          {"overlappedMilliseconds", r.overlappedMilliseconds},
                           {"unexplained", r.unexplained},
                           {"unsupported", r.unsupported},
                           {"largestStretch", r.largestStretch},

@@ -23,12 +23,24 @@
 #include "vtkStreamingDemandDrivenPipeline.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <tbb/global_control.h>
+
 #include <algorithm>
+#include <chrono>
+#include <future>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 vtkStandardNewMacro(vtkDeformableTrackFilter);
+
+// A frame's data under preparation (dp::Tracker::prepare, on another thread beside the frame
+// before).
+struct vtkDeformableTrackFilter::PendingFrame
+{
+  std::future<dp::PreparedFrame> data;
+};
 
 struct vtkDeformableTrackFilter::Internals
 {
@@ -36,9 +48,15 @@ struct vtkDeformableTrackFilter::Internals
   vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
   std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
   std::size_t ProgressFrames = 0;       // what the request under way counts its frames out of
+  // The pipeline: frame Cache.size()'s data, when its input has been read (with more than one
+  // thread, prepared while the frame before was tracked); and the input frame the request under
+  // way reads (-1: none).
+  PendingFrame Next;
+  long long Reading = -1;
 
   void clear()
   {
+    Next = PendingFrame{}; // waits for a preparation under way: it reads the tracker
     Tracker.reset();
     Polys = nullptr;
     Cache.clear();
@@ -158,9 +176,17 @@ void vtkDeformableTrackFilter::ClearTemporalState()
 
 long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 {
-  // Computing: the next frame. Answering from the cache: none, so nothing upstream re-executes.
-  const std::size_t done = this->Internal->Cache.size();
-  return done <= requestedFrame ? static_cast<long long>(done) : -1;
+  // Computing: the next frame to track, or, when its data is already under preparation, the
+  // frame after it (read before the frame is tracked, so that its data is prepared beside the
+  // solve). Answering from the cache, or only the last frame left to track: none, so nothing
+  // upstream re-executes.
+  Internals& in = *this->Internal;
+  const std::size_t done = in.Cache.size();
+  const std::size_t wanted = done + (in.Next.data.valid() ? 1 : 0);
+  in.Reading = done <= requestedFrame && wanted < this->GetNumberOfInputFrames()
+                   ? static_cast<long long>(wanted)
+                   : -1;
+  return in.Reading;
 }
 
 namespace
@@ -208,13 +234,16 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   auto addValue = [output](const char* name, double value)
   { vtkDP::addFieldValue(output, name, value); };
   addValue("FrameIndex", static_cast<double>(frame));
+  addValue("Points", static_cast<double>(r.pointsGiven));
   addValue("Iterations", r.iterations);
   addValue("CoarseIterations", r.coarseIterations);
   addValue("InternalEnergy", r.internalEnergy);
   addValue("DistanceEnergy", r.distanceEnergy);
-  addValue("Seconds", r.seconds);
-  // Where the frame's time went: its data, then the kept attempt's stages; the other attempts
-  // (retries) take the rest of the frame's time.
+  // The frame's wall time: its data's preparation ran partly beside the frame before.
+  addValue("Seconds", r.seconds - r.overlapped);
+  addValue("OverlappedSeconds", r.overlapped);
+  // Where the frame's work went: its data, then the kept attempt's stages; the other attempts
+  // (retries) take the rest of the frame's work.
   const dp::FrameTimings& t = r.timings;
   const double stages = t.data + t.prediction + t.coarse + t.fine + t.quality;
   addValue("DataSeconds", t.data);
@@ -311,19 +340,44 @@ bool vtkDeformableTrackFilter::MakeTracker(vtkInformationVector** inputVector, v
   return true;
 }
 
-bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, vtkPointSet* input)
+vtkDeformableTrackFilter::PendingFrame vtkDeformableTrackFilter::PrepareFrame(std::size_t frame,
+                                                                              vtkPointSet* input)
 {
-  Internals& in = *this->Internal;
-  const vtkDP::TargetPoints points = vtkDP::finitePoints(input);
+  vtkDP::TargetPoints points = vtkDP::finitePoints(input);
   if (points.dropped > 0)
   {
     vtkWarningMacro(<< "frame " << frame << ": dropped " << points.dropped
                     << " point(s) with NaN or infinite coordinates");
   }
+  PendingFrame pending;
+  const dp::Tracker& tracker = *this->Internal->Tracker;
+  auto prepare = [&tracker, points = std::move(points)]
+  {
+    return tracker.prepare(points.xyz.data(), points.ids.size(),
+                           points.normals.empty() ? nullptr : points.normals.data());
+  };
+  // Beside the solve only when there is a second thread for it (a batch process given one
+  // thread keeps to one); its errors come out when the frame is tracked.
+  const bool beside =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+  pending.data =
+      std::async(beside ? std::launch::async : std::launch::deferred, std::move(prepare));
+  return pending;
+}
+
+bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, PendingFrame pending)
+{
+  Internals& in = *this->Internal;
   try
   {
-    in.Cache.push_back(in.Tracker->track(points.xyz.data(), points.ids.size(),
-                                         points.normals.empty() ? nullptr : points.normals.data()));
+    // The frame's data, once its preparation is done: what of it ran beside the frame before
+    // cost no waiting.
+    const auto waitStart = std::chrono::steady_clock::now();
+    dp::PreparedFrame data = pending.data.get();
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - waitStart).count();
+    in.Cache.push_back(in.Tracker->track(std::move(data)));
+    in.Cache.back().overlapped = std::max(0.0, in.Cache.back().timings.data - waited);
   }
   catch (const std::exception& e)
   {
@@ -334,7 +388,7 @@ bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, vtkPointSet* input)
   // Said once per run of thinned frames.
   if (done.thinned && (frame == 0 || !in.Cache[frame - 1].thinned))
   {
-    vtkWarningMacro(<< "frame " << frame << " has " << points.ids.size()
+    vtkWarningMacro(<< "frame " << frame << " has " << done.pointsGiven
                     << " points: the tracker used " << done.pointsUsed
                     << " of them, spread evenly (its frame point limit; the distance field "
                        "resolves nothing finer)");
@@ -379,7 +433,15 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
     this->ShowProgressOf(frame, false);
     this->UpdateProgress(0.0); // the new text while the frame is under way
     vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
-    if (input && input->GetFieldData()->GetAbstractArray("UnreadableFrame"))
+    long long reading = std::exchange(in.Reading, -1);
+    // The pipeline: the input read now is the frame after the one to track, whose data has been
+    // prepared since; it is prepared in turn while that frame is tracked. The first frame of a
+    // run is only prepared, and the next pass reads the one after it.
+    PendingFrame current = std::move(in.Next);
+    if (!current.data.valid() && reading < 0)
+      reading = static_cast<long long>(frame); // the input holds the frame to track
+    const bool unreadable = input && input->GetFieldData()->GetAbstractArray("UnreadableFrame");
+    if (!current.data.valid() && unreadable)
     {
       vtkErrorMacro(<< "frame " << frame << " could not be read (the reader says why): tracking "
                     << "stops before it"
@@ -387,8 +449,33 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
       ContinueExecuting(request, false);
       return 0;
     }
-    if ((!in.Tracker && !this->MakeTracker(inputVector, input)) || !this->TrackFrame(frame, input))
+    if (!in.Tracker && !this->MakeTracker(inputVector, input))
     {
+      ContinueExecuting(request, false);
+      return 0;
+    }
+    // A frame after it that could not be read is not prepared: asked for, it stops the run.
+    PendingFrame arriving = reading >= 0 && !unreadable
+                                ? this->PrepareFrame(static_cast<std::size_t>(reading), input)
+                                : PendingFrame{};
+    if (!current.data.valid() &&
+        reading + 1 < static_cast<long long>(this->GetNumberOfInputFrames()))
+    {
+      in.Next = std::move(arriving);
+      ContinueExecuting(request, !this->GetAbortExecute());
+      output->Initialize();
+      if (!in.Cache.empty())
+        fillOutput(output, in.Polys, in.Cache.back(), in.Tracker->templatePositions(),
+                   in.Cache.size() - 1);
+      return 1;
+    }
+    if (!current.data.valid())
+      current = std::move(arriving); // the take's last frame: nothing to read beside it
+    else
+      in.Next = std::move(arriving);
+    if (!this->TrackFrame(frame, std::move(current)))
+    {
+      in.Next = PendingFrame{};
       ContinueExecuting(request, false);
       return 0;
     }

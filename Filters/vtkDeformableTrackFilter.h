@@ -294,8 +294,11 @@ private:
   bool TemplateOf(vtkInformationVector** inputVector, vtkPointSet* frame0,
                   std::vector<std::int64_t>& triangles, std::vector<double>& positions);
   bool MakeTracker(vtkInformationVector** inputVector, vtkPointSet* frame0);
-  /** Tracks the next frame into the cache, with its warnings. */
-  bool TrackFrame(std::size_t frame, vtkPointSet* input);
+  struct PendingFrame;
+  /** Starts preparing input `frame`'s data (beside the caller when there is a second thread). */
+  PendingFrame PrepareFrame(std::size_t frame, vtkPointSet* input);
+  /** Tracks the next frame from its prepared data into the cache, with its warnings. */
+  bool TrackFrame(std::size_t frame, PendingFrame pending);
   /** Progress text, shift and scale while computing `frame`, or once it is done. */
   void ShowProgressOf(std::size_t frame, bool done);
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;

@@ -26,12 +26,16 @@
 
 #include <Eigen/Dense>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <future>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
@@ -49,6 +53,7 @@ struct Settings
   std::size_t holes = 2;     // "noisy" condition: holes per frame, new places every frame
   double holeRadius = 0.05;  // m
   bool givenNormals = false; // pass the true normals to the tracker (else it estimates them)
+  bool pipeline = true;      // prepare frame f + 1's data while frame f is tracked (main job)
   double uncoveredLimit = 0.03;
   std::size_t truthSamples = 20000; // samples of the true surface for the uncovered share
   bool verbose = false;
@@ -146,17 +151,38 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   Jitter jitter;
   double vertexSum = 0, surfaceSum = 0, uncoveredSum = 0, seconds = 0;
   const std::size_t first = std::min(S.startFrame, frames - 1);
+  // As the main job runs (vtkDeformableTrackFilter): frame f + 1's data is prepared on another
+  // thread while frame f is tracked; a frame's time is the wall time of that cycle (tracking it
+  // and preparing the next, whichever ends last). --no-pipeline: prepared, then tracked.
+  auto prepare = [&tracker](const dp::PointCloud& c)
+  {
+    return tracker.prepare(c.points.data(), c.numberOfPoints(),
+                           c.hasNormals() ? c.normals.data() : nullptr);
+  };
+  dp::PointCloud cloud =
+      dp::sampleSurface(mesh.positions(first), mesh.triangles(), sampling, first);
+  std::optional<dp::PreparedFrame> ready;
   for (std::size_t f = first; f < frames; ++f)
   {
     const std::vector<double> truthMesh = mesh.positions(f);
-    const dp::PointCloud cloud = dp::sampleSurface(truthMesh, mesh.triangles(), sampling, f);
+    const dp::PointCloud next =
+        f + 1 < frames ? dp::sampleSurface(mesh.positions(f + 1), mesh.triangles(), sampling, f + 1)
+                       : dp::PointCloud{};
     if (S.oracle == "previous" && f > 0)
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
     else if (S.oracle == "same")
       tracker.restartFrom(groundTruth(t, truthMesh, mesh.triangles()));
-    const dp::FrameResult r = tracker.track(cloud.points.data(), cloud.numberOfPoints(),
-                                            cloud.hasNormals() ? cloud.normals.data() : nullptr);
-    seconds += r.seconds;
+    const auto cycle = std::chrono::steady_clock::now();
+    if (!ready)
+      ready = prepare(cloud);
+    std::future<dp::PreparedFrame> preparing;
+    if (S.pipeline && f + 1 < frames)
+      preparing = std::async(std::launch::async, prepare, std::cref(next));
+    const dp::FrameResult r = tracker.track(std::move(*ready));
+    ready.reset();
+    if (preparing.valid())
+      ready = preparing.get();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cycle).count();
     run.time.data += r.timings.data;
     run.time.prediction += r.timings.prediction;
     run.time.coarse += r.timings.coarse;
@@ -230,6 +256,7 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
            << 100 * figures.uncovered << ',' << r.iterations << ',' << 1e3 * r.seconds << '\n';
     if (!S.dumpFolder.empty())
       dumpFrame(S.dumpFolder + "/" + label, f, r.positions, truth, t.triangles, cloud);
+    cloud = next;
   }
   const std::size_t tracked = frames - first;
   const double samples = static_cast<double>(tracked * t.vertices());
@@ -332,7 +359,8 @@ const char* Usage =
     "             [--soften-creases ST,WIDTH] [--tolerance T]\n"
     "             [--max-iterations N]\n"
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
-    "             [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] [--graph-iterations N]\n"
+    "             [--no-pipeline] [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] "
+    "[--graph-iterations N]\n"
     "             [--fine-iterations N]\n"
     "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
     "RATE] [--coverage-weight "
@@ -429,6 +457,8 @@ int main(int argc, char** argv)
                                       : dp::DistanceMeasure::Planes;
       else if (arg == "--no-mp")
         options.motionPrediction = false;
+      else if (arg == "--no-pipeline")
+        S.pipeline = false;
       else if (arg == "--no-rigid")
         options.rigidAlignment = false;
       else if (arg == "--no-graph")
@@ -523,10 +553,13 @@ int main(int argc, char** argv)
     return 2;
   }
   std::printf("machine: %s, %u hardware threads; %zu samples per frame, %s normals; figures at "
-              "%s\n",
+              "%s; ms/frame %s\n",
               cpuModel().c_str(), std::thread::hardware_concurrency(), S.points,
               S.givenNormals ? "true" : "estimated",
-              height > 0 ? (std::to_string(height) + " m height").c_str() : "stored units");
+              height > 0 ? (std::to_string(height) + " m height").c_str() : "stored units",
+              S.pipeline ? "with each frame's data prepared beside the frame before (the main "
+                           "job's pipeline; the data stage's time overlaps)"
+                         : "with each frame prepared, then tracked (--no-pipeline)");
   if (scaling)
   {
     scalingTable(options, frames ? frames : 4);

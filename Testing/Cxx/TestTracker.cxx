@@ -17,6 +17,7 @@
 #include <tbb/global_control.h>
 
 #include <cmath>
+#include <future>
 #include <map>
 #include <random>
 #include <string>
@@ -541,6 +542,44 @@ TEST(Tracker, OneThreadGivesTheSameBitsAsAll)
   }
   for (std::size_t f = 0; f < s.frames.size(); ++f)
     EXPECT_EQ(results[0][f], results[1][f]) << "frame " << f;
+}
+
+TEST(Tracker, FramesPreparedBesideTheTrackingGiveTheSameBits)
+{
+  // The pipeline of vtkDeformableTrackFilter: frame f + 1's data prepared on another thread
+  // while frame f is tracked. prepare() reads only the tracker's settings, so the results are
+  // those of track() frame after frame, bit for bit; a frame's work still counts its data.
+  const Sequence s = makeSequence(4, 0.001, 0, 4000);
+  auto tracker = [&]
+  {
+    return std::make_unique<dp::Tracker>(
+        dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+        s.animation.positions(0), dp::TrackerOptions{});
+  };
+  auto plain = tracker(), pipelined = tracker();
+  auto prepare = [&](std::size_t f)
+  {
+    const dp::PointCloud& c = s.frames[f];
+    return pipelined->prepare(c.points.data(), c.numberOfPoints(), nullptr);
+  };
+  dp::PreparedFrame ready = prepare(0);
+  for (std::size_t f = 0; f < s.frames.size(); ++f)
+  {
+    const dp::PointCloud& c = s.frames[f];
+    const dp::FrameResult expected = plain->track(c.points.data(), c.numberOfPoints(), nullptr);
+    std::future<dp::PreparedFrame> next;
+    if (f + 1 < s.frames.size())
+      next = std::async(std::launch::async, prepare, f + 1);
+    const double preparation = ready.seconds();
+    ASSERT_GT(preparation, 0);
+    const dp::FrameResult r = pipelined->track(std::move(ready));
+    EXPECT_EQ(r.positions, expected.positions) << "frame " << f;
+    EXPECT_EQ(r.pointsGiven, c.numberOfPoints());
+    EXPECT_GE(r.timings.data, preparation);
+    EXPECT_GE(r.seconds, r.timings.data + r.timings.coarse + r.timings.fine);
+    if (next.valid())
+      ready = next.get();
+  }
 }
 
 TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)

@@ -682,7 +682,44 @@ void Tracker::remember(const FrameResult& result)
   P->LastFailed = result.failed;
 }
 
+PreparedFrame::PreparedFrame() = default;
+PreparedFrame::PreparedFrame(PreparedFrame&&) noexcept = default;
+PreparedFrame& PreparedFrame::operator=(PreparedFrame&&) noexcept = default;
+PreparedFrame::~PreparedFrame() = default;
+
+PreparedFrame Tracker::prepare(const double* points, std::size_t count, const float* normals) const
+{
+  const auto start = std::chrono::steady_clock::now();
+  FrameDataOptions dataOptions;
+  dataOptions.voxelSize = Voxel;
+  dataOptions.bandWidth = Options.bandWidth;
+  dataOptions.surfaceArea = Cloth.lengthScale() * Cloth.lengthScale();
+  const std::size_t nv = Mesh.numberOfVertices();
+  dataOptions.spreadCount = Options.coverage.weight > 0 || Options.recovery.enabled
+                                ? (Options.coverage.points > 0 ? Options.coverage.points : 4 * nv)
+                                : 0;
+  dataOptions.maxPoints = Options.maxFramePoints;
+  // Point indices are 32-bit: beyond that a frame must be thinned.
+  if (Options.maxFramePoints == 0 && count > std::numeric_limits<std::uint32_t>::max())
+    throw std::invalid_argument("a frame of " + std::to_string(count) +
+                                " points is more than the tracker can index (2^32 - 1): set a "
+                                "frame point limit (maxFramePoints) to thin it");
+  PreparedFrame frame;
+  frame.Count = count;
+  // A frame with too little data is kept like an empty one (the motion continued) and flagged:
+  // fitting the mesh to a point or two would crush it.
+  if (count == 0 || !tooLittleData(points, count, Voxel))
+    frame.Data = std::make_unique<FrameData>(points, count, normals, dataOptions);
+  frame.Seconds = elapsed(start);
+  return frame;
+}
+
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)
+{
+  return track(prepare(points, count, normals));
+}
+
+FrameResult Tracker::track(PreparedFrame prepared)
 {
   const auto start = std::chrono::steady_clock::now();
   const std::size_t nv = Mesh.numberOfVertices();
@@ -698,22 +735,8 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
                                                    Cloth.restStateOf(P->Predictor.last().data()),
                                                    Options.restUpdate));
 
-  FrameDataOptions dataOptions;
-  dataOptions.voxelSize = Voxel;
-  dataOptions.bandWidth = Options.bandWidth;
-  dataOptions.surfaceArea = Cloth.lengthScale() * Cloth.lengthScale();
-  dataOptions.spreadCount = Options.coverage.weight > 0 || Options.recovery.enabled
-                                ? (Options.coverage.points > 0 ? Options.coverage.points : 4 * nv)
-                                : 0;
-  dataOptions.maxPoints = Options.maxFramePoints;
-  // Point indices are 32-bit: beyond that a frame must be thinned.
-  if (Options.maxFramePoints == 0 && count > std::numeric_limits<std::uint32_t>::max())
-    throw std::invalid_argument("a frame of " + std::to_string(count) +
-                                " points is more than the tracker can index (2^32 - 1): set a "
-                                "frame point limit (maxFramePoints) to thin it");
-  // A frame with too little data is kept like an empty one (the motion continued) and flagged:
-  // fitting the mesh to a point or two would crush it.
-  if (count > 0 && tooLittleData(points, count, Voxel))
+  result.pointsGiven = prepared.Count;
+  if (!prepared.Data)
   {
     trackEmptyFrame(result);
     result.failed = true;
@@ -721,18 +744,18 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
   else
   {
     auto clock = std::chrono::steady_clock::now();
-    FrameData frame(points, count, normals, dataOptions);
+    FrameData& frame = *prepared.Data;
     result.pointsUsed = frame.size();
     result.thinned = frame.size() < frame.originalSize();
     orientData(frame);
-    result.timings.data = elapsed(clock);
+    result.timings.data = prepared.Seconds + elapsed(clock);
     if (frame.empty())
       trackEmptyFrame(result);
     else
       keep(solveWithRetries(frame, result), result);
   }
   remember(result);
-  result.seconds = elapsed(start);
+  result.seconds = prepared.Seconds + elapsed(start);
   return result;
 }
 

@@ -85,14 +85,43 @@ struct FrameResult
   // Which attempt was kept: 0 the first, 1 a retry from another start, 2 the stiff retry.
   int kept = 0;
   bool failed = false; // the quality still failed after the retries: do not trust this frame
-  double seconds = 0;
+  double seconds = 0;  // the frame's work: its data's preparation and its tracking
+  // Of that, the preparation's share that ran beside the frame before (set by a caller that
+  // prepares frames on another thread, e.g. vtkDeformableTrackFilter): the frame's own wall
+  // time is seconds - overlapped.
+  double overlapped = 0;
   FrameTimings timings;
   bool emptyFrame = false;
-  std::size_t pointsUsed = 0; // the frame's points, or fewer when it was thinned (maxFramePoints)
+  std::size_t pointsGiven = 0; // the frame's points
+  std::size_t pointsUsed = 0;  // the same, or fewer when the frame was thinned (maxFramePoints)
   bool thinned = false;
   // For diagnosis (BenchmarkTracker prints their errors): the kept attempt's start and the
   // coarse level's result.
   std::vector<double> startPositions, coarsePositions;
+};
+
+class FrameData;
+
+/** A frame's data made ready for Tracker::track(): its distance field, normals and subsample
+ *  (FrameData), or the finding that it has too little data to say where a surface is. Made from
+ *  the points and the tracker's settings alone, never its state, so Tracker::prepare() may run
+ *  on another thread while the frame before is tracked: in a pipeline the frame's data, about a
+ *  fifth of its work, costs no waiting (the second core is idle for much of a solve). */
+class PreparedFrame
+{
+public:
+  PreparedFrame();
+  PreparedFrame(PreparedFrame&&) noexcept;
+  PreparedFrame& operator=(PreparedFrame&&) noexcept;
+  ~PreparedFrame();
+  /** How long prepare() took, in seconds. */
+  double seconds() const { return Seconds; }
+
+private:
+  friend class Tracker;
+  std::unique_ptr<FrameData> Data; // null when the frame has too little data
+  std::size_t Count = 0;           // the frame's points
+  double Seconds = 0;
 };
 
 class Tracker
@@ -111,6 +140,14 @@ public:
    * estimate them) and returns the result; the tracker remembers it for the next frame.
    */
   FrameResult track(const double* points, std::size_t count, const float* normals);
+
+  /** The first half of track(): the frame's data (throws std::invalid_argument for a frame
+   *  the tracker cannot take). Const and thread-safe: it reads only the tracker's settings, so
+   *  it may run while another thread is in track(). */
+  PreparedFrame prepare(const double* points, std::size_t count, const float* normals) const;
+  /** The second half: fits the mesh to a prepared frame, as track() does. Its `seconds` and
+   *  `timings.data` include the preparation's time, wherever it ran. */
+  FrameResult track(PreparedFrame frame);
 
   /** Forgets the trajectory: the next track() starts from the template again. */
   void reset();
