@@ -19,11 +19,13 @@
  * coarse level (an embedded deformation graph, CoarseLevel) and failure detection with retries
  * (Recovery). Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's
  * points, -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or
- * outlier cut-off). Field data: "FrameIndex", "Iterations", "CoarseIterations", "InternalEnergy",
- * "DistanceEnergy", "Seconds" and where they went ("DataSeconds": field, normals, subsample;
- * "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds", "QualitySeconds" of the kept
- * attempt; "RetrySeconds": the other attempts; the stages add up to Seconds but for a little
- * bookkeeping, an empty frame's time is in Seconds only), "EmptyFrame", and the frame's quality:
+ * outlier cut-off). Field data: "FrameIndex", "Points" (the frame's), "Iterations",
+ * "CoarseIterations", "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall time) and
+ * where its work went ("DataSeconds": field, normals, subsample, of which "OverlappedSeconds" ran
+ * beside the frame before; "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds",
+ * "QualitySeconds" of the kept attempt; "RetrySeconds": the other attempts; the stages add up to
+ * Seconds + OverlappedSeconds but for a little bookkeeping, an empty frame's time is in Seconds
+ * only), "EmptyFrame", and the frame's quality:
  * "Unexplained" (share of the points farther than 3 voxels from the mesh), "Unsupported" (share
  * of the mesh farther than that from the points), "LargestStretch" (the most a stiff edge grew
  * beyond its template length, in mean edge lengths: above 2 a limb was caught by other data and
@@ -34,7 +36,10 @@
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),
  * with progress and abort, and caches every result: later requests for any computed time are
  * answered from the cache. Any change of a parameter, of the template or upstream clears the
- * cache.
+ * cache. The input is read one frame ahead: while frame f is tracked, frame f + 1's data is
+ * prepared on another thread (dp::Tracker::prepare; not with one thread). A frame whose input
+ * says it could not be read ("UnreadableFrame", vtkPointSequenceSource) stops the run before it
+ * with an error; the frames before are kept.
  *
  * @warning Memory: the cache keeps one position array per computed frame (24 bytes per vertex
  * and frame). An empty frame is tracked by continuing the motion and flagged in "EmptyFrame".
