@@ -580,6 +580,11 @@ TEST(Tracker, FramesPreparedBesideTheTrackingGiveTheSameBits)
     if (next.valid())
       ready = next.get();
   }
+  // A frame is tracked by the tracker that prepared it (its voxel and subsample are its own).
+  const dp::PointCloud& c = s.frames[0];
+  EXPECT_THROW(plain->track(pipelined->prepare(c.points.data(), c.numberOfPoints(), nullptr)),
+               std::invalid_argument);
+  EXPECT_THROW(plain->track(dp::PreparedFrame{}), std::invalid_argument);
 }
 
 TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)

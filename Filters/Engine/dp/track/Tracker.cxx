@@ -706,6 +706,7 @@ PreparedFrame Tracker::prepare(const double* points, std::size_t count, const fl
                                 "frame point limit (maxFramePoints) to thin it");
   PreparedFrame frame;
   frame.Count = count;
+  frame.Owner = this;
   // A frame with too little data is kept like an empty one (the motion continued) and flagged:
   // fitting the mesh to a point or two would crush it.
   if (count == 0 || !tooLittleData(points, count, Voxel))
@@ -721,6 +722,10 @@ FrameResult Tracker::track(const double* points, std::size_t count, const float*
 
 FrameResult Tracker::track(PreparedFrame prepared)
 {
+  // Its field's voxel and subsample are this tracker's settings.
+  if (prepared.Owner != this)
+    throw std::invalid_argument("a frame prepared by another tracker, or by none (use this "
+                                "tracker's prepare())");
   const auto start = std::chrono::steady_clock::now();
   const std::size_t nv = Mesh.numberOfVertices();
   FrameResult result;

@@ -122,6 +122,7 @@ private:
   std::unique_ptr<FrameData> Data; // null when the frame has too little data
   std::size_t Count = 0;           // the frame's points
   double Seconds = 0;
+  const class Tracker* Owner = nullptr; // whose settings made it
 };
 
 class Tracker
@@ -146,7 +147,8 @@ public:
    *  it may run while another thread is in track(). */
   PreparedFrame prepare(const double* points, std::size_t count, const float* normals) const;
   /** The second half: fits the mesh to a prepared frame, as track() does. Its `seconds` and
-   *  `timings.data` include the preparation's time, wherever it ran. */
+   *  `timings.data` include the preparation's time, wherever it ran. Throws
+   *  std::invalid_argument for a frame another tracker (or nobody) prepared. */
   FrameResult track(PreparedFrame frame);
 
   /** Forgets the trajectory: the next track() starts from the template again. */
