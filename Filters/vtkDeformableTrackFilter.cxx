@@ -409,6 +409,49 @@ bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, PendingFrame pendin
   return true;
 }
 
+vtkDeformableTrackFilter::PipelineStep
+vtkDeformableTrackFilter::StepPipeline(std::size_t frame, vtkInformationVector** inputVector)
+{
+  // The input read now is the frame after the one to track, whose data has been prepared since;
+  // it is prepared in turn while that frame is tracked. The first frame of a run is only
+  // prepared, and the next pass reads the one after it.
+  Internals& in = *this->Internal;
+  vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
+  long long reading = std::exchange(in.Reading, -1);
+  PendingFrame current = std::move(in.Next);
+  if (!current.data.valid() && reading < 0)
+    reading = static_cast<long long>(frame); // the input holds the frame to track
+  const bool unreadable = input && input->GetFieldData()->GetAbstractArray("UnreadableFrame");
+  if (!current.data.valid() && unreadable)
+  {
+    vtkErrorMacro(<< "frame " << frame << " could not be read (the reader says why): tracking "
+                  << "stops before it"
+                  << (frame > 0 ? ", frames 0-" + std::to_string(frame - 1) + " are kept" : ""));
+    return PipelineStep::Failed;
+  }
+  if (!in.Tracker && !this->MakeTracker(inputVector, input))
+    return PipelineStep::Failed;
+  // A frame after it that could not be read is not prepared: asked for, it stops the run.
+  PendingFrame arriving = reading >= 0 && !unreadable
+                              ? this->PrepareFrame(static_cast<std::size_t>(reading), input)
+                              : PendingFrame{};
+  if (!current.data.valid() && reading + 1 < static_cast<long long>(this->GetNumberOfInputFrames()))
+  {
+    in.Next = std::move(arriving);
+    return PipelineStep::Prepared;
+  }
+  if (!current.data.valid())
+    current = std::move(arriving); // the take's last frame: nothing to read beside it
+  else
+    in.Next = std::move(arriving);
+  if (!this->TrackFrame(frame, std::move(current)))
+  {
+    in.Next = PendingFrame{};
+    return PipelineStep::Failed;
+  }
+  return PipelineStep::Tracked;
+}
+
 int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
                                                vtkInformationVector** inputVector,
                                                vtkInformationVector* outputVector)
@@ -432,52 +475,20 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
       in.ProgressFrames = frame == target ? this->GetNumberOfInputFrames() : target + 1;
     this->ShowProgressOf(frame, false);
     this->UpdateProgress(0.0); // the new text while the frame is under way
-    vtkPointSet* input = vtkPointSet::GetData(inputVector[0], 0);
-    long long reading = std::exchange(in.Reading, -1);
-    // The pipeline: the input read now is the frame after the one to track, whose data has been
-    // prepared since; it is prepared in turn while that frame is tracked. The first frame of a
-    // run is only prepared, and the next pass reads the one after it.
-    PendingFrame current = std::move(in.Next);
-    if (!current.data.valid() && reading < 0)
-      reading = static_cast<long long>(frame); // the input holds the frame to track
-    const bool unreadable = input && input->GetFieldData()->GetAbstractArray("UnreadableFrame");
-    if (!current.data.valid() && unreadable)
-    {
-      vtkErrorMacro(<< "frame " << frame << " could not be read (the reader says why): tracking "
-                    << "stops before it"
-                    << (frame > 0 ? ", frames 0-" + std::to_string(frame - 1) + " are kept" : ""));
-      ContinueExecuting(request, false);
-      return 0;
-    }
-    if (!in.Tracker && !this->MakeTracker(inputVector, input))
+    const PipelineStep step = this->StepPipeline(frame, inputVector);
+    if (step == PipelineStep::Failed)
     {
       ContinueExecuting(request, false);
       return 0;
     }
-    // A frame after it that could not be read is not prepared: asked for, it stops the run.
-    PendingFrame arriving = reading >= 0 && !unreadable
-                                ? this->PrepareFrame(static_cast<std::size_t>(reading), input)
-                                : PendingFrame{};
-    if (!current.data.valid() &&
-        reading + 1 < static_cast<long long>(this->GetNumberOfInputFrames()))
+    if (step == PipelineStep::Prepared)
     {
-      in.Next = std::move(arriving);
       ContinueExecuting(request, !this->GetAbortExecute());
       output->Initialize();
       if (!in.Cache.empty())
         fillOutput(output, in.Polys, in.Cache.back(), in.Tracker->templatePositions(),
                    in.Cache.size() - 1);
       return 1;
-    }
-    if (!current.data.valid())
-      current = std::move(arriving); // the take's last frame: nothing to read beside it
-    else
-      in.Next = std::move(arriving);
-    if (!this->TrackFrame(frame, std::move(current)))
-    {
-      in.Next = PendingFrame{};
-      ContinueExecuting(request, false);
-      return 0;
     }
     this->ShowProgressOf(frame, true);
     this->UpdateProgress(1.0); // the whole work's (frame + 1) / needed

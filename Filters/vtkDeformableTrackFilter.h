@@ -304,6 +304,15 @@ private:
   PendingFrame PrepareFrame(std::size_t frame, vtkPointSet* input);
   /** Tracks the next frame from its prepared data into the cache, with its warnings. */
   bool TrackFrame(std::size_t frame, PendingFrame pending);
+  enum class PipelineStep
+  {
+    Tracked,  // frame `frame` is in the cache
+    Prepared, // only its data was started: the next pass reads the frame after it
+    Failed    // an error was reported
+  };
+  /** One pass of the frame-after-frame run: the input read now goes into the pipeline (its data
+   *  prepared beside the solve), and frame `frame` is tracked once its data is there. */
+  PipelineStep StepPipeline(std::size_t frame, vtkInformationVector** inputVector);
   /** Progress text, shift and scale while computing `frame`, or once it is done. */
   void ShowProgressOf(std::size_t frame, bool done);
   vtkDeformableTrackFilter(const vtkDeformableTrackFilter&) = delete;
