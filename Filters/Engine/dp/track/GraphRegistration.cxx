@@ -13,7 +13,6 @@ namespace dp
 {
 namespace
 {
-using Matrix36 = Eigen::Matrix<double, 3, 6>;
 using Matrix66 = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
 
 // [v]x, the cross-product matrix: [v]x u = v x u.
@@ -160,58 +159,56 @@ void GraphRegistration::project(const DeformationGraph::State& state,
                                 const Eigen::VectorXd& vertexGradient,
                                 Eigen::VectorXd& nodeGradient)
 {
-  // B_aj = w_aj [-[R_j (v_a - g_j)]x, I]: how vertex a moves with node j's rotation and
-  // translation. H_nodes += B_a^T H_ab B_b over the vertex model's blocks, g_nodes += B_a^T g_a.
-  const std::size_t nv = Graph.mesh().numberOfVertices();
-  std::vector<std::size_t> first(nv + 1, 0);
-  for (std::size_t v = 0; v < nv; ++v)
-    first[v + 1] =
-        first[v] + static_cast<std::size_t>(Graph.influencesEnd(v) - Graph.influencesBegin(v));
-  std::vector<Matrix36> B(first[nv]);
-  for (std::size_t v = 0; v < nv; ++v)
-  {
-    const Eigen::Vector3d rest(Graph.rest() + 3 * v);
-    std::size_t slot = first[v];
-    for (auto i = Graph.influencesBegin(v); i != Graph.influencesEnd(v); ++i, ++slot)
-    {
-      const Eigen::Vector3d g(Graph.nodePosition(static_cast<std::size_t>(i->node)));
-      B[slot] << -i->weight * crossMatrix(state.rotation[i->node] * (rest - g)),
-          i->weight * Eigen::Matrix3d::Identity();
-      nodeGradient.segment<6>(6 * i->node) +=
-          B[slot].transpose() * vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
-    }
-  }
+  // B_aj = w_aj [-[r_aj]x, I] with r_aj = R_j (v_a - g_j): how vertex a moves with node j's
+  // rotation and translation. The vertex model is block diagonal (M_a, symmetric), so
+  // H_nodes += B_aj^T M_a B_ak over the pairs of nodes vertex a blends, written out:
+  //   w_aj w_ak [-P_j [r_ak]x, P_j; P_k^T, M_a]  with P_j = [r_aj]x M_a,
+  // and g_nodes += B_aj^T g_a = w_aj (r_aj x g_a, g_a).
+  std::vector<Eigen::Vector3d> arms;
+  std::vector<Eigen::Matrix3d> products;
   std::size_t next = 0; // into ProjectionSlots, in the order forEachBlock visits the blocks
   VertexModel.forEachBlock(
-      [&](std::int64_t a, std::int64_t b, const double* block, int stride)
+      [&](std::int64_t a, std::int64_t, const double* block, int stride)
       {
-        const std::size_t na = first[a + 1] - first[a], nb = first[b + 1] - first[b];
+        const auto v = static_cast<std::size_t>(a);
+        const auto influences = Graph.influencesBegin(v);
+        const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influences);
         const std::size_t slots = next;
-        next += na * nb;
+        next += n * n;
+        const Eigen::Vector3d rest(Graph.rest() + 3 * v);
+        const Eigen::Vector3d g = vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
         Eigen::Matrix3d M;
         for (int c = 0; c < 3; ++c)
           for (int r = 0; r < 3; ++r)
             M(r, c) = block[c * stride + r];
+        arms.resize(n);
+        products.resize(n);
+        for (std::size_t p = 0; p < n; ++p)
+        {
+          const std::int64_t j = influences[p].node;
+          const double w = influences[p].weight;
+          arms[p] = state.rotation[j] *
+                    (rest - Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(j))));
+          nodeGradient.segment<3>(6 * j) += w * arms[p].cross(g);
+          nodeGradient.segment<3>(6 * j + 3) += w * g;
+          products[p] = crossMatrix(arms[p]) * M;
+        }
         if (M.isZero(0.0))
           return;
-        const auto ia = Graph.influencesBegin(static_cast<std::size_t>(a));
-        const auto ib = Graph.influencesBegin(static_cast<std::size_t>(b));
-        for (std::size_t p = 0; p < na; ++p)
-        {
-          const Eigen::Matrix<double, 6, 3> left = B[first[a] + p].transpose() * M;
-          for (std::size_t q = 0; q < nb; ++q)
+        for (std::size_t p = 0; p < n; ++p)
+          for (std::size_t q = 0; q < n; ++q)
           {
-            const std::int64_t j = ia[p].node, k = ib[q].node;
-            if (a == b && j > k)
-              continue; // a diagonal vertex block visits (j, k) and (k, j) alike: add each once
-            Matrix66 m = left * B[first[b] + q];
-            // Off the diagonal the vertex block stands for (a, b) and (b, a): m goes to (j, k)
-            // and m^T to (k, j); for j == k both land on one diagonal block.
-            if (a != b && j == k)
-              m += m.transpose().eval();
-            NodeModel.addBlock(ProjectionSlots[slots + p * nb + q], m.data());
+            // (j, k) and (k, j) are transposes: each pair is added once, to j <= k.
+            if (influences[p].node > influences[q].node)
+              continue;
+            const double w = influences[p].weight * influences[q].weight;
+            Matrix66 m;
+            m.topLeftCorner<3, 3>() = -w * products[p] * crossMatrix(arms[q]);
+            m.topRightCorner<3, 3>() = w * products[p];
+            m.bottomLeftCorner<3, 3>() = w * products[q].transpose();
+            m.bottomRightCorner<3, 3>() = w * M;
+            NodeModel.addBlock(ProjectionSlots[slots + p * n + q], m.data());
           }
-        }
       });
 }
 
