@@ -39,12 +39,13 @@ void CoverageTerm::linearise(const double* x)
     for (std::size_t i = 0; i < 3 * nv; ++i)
       largest = std::max(largest, std::abs(x[i] - LinearisedAt[i]));
     if (largest < still && LinearisedScale == Options.robustScale &&
-        LinearisedReach == Options.maxDistance)
+        LinearisedReach == Options.maxDistance && LinearisedStride == Stride)
       return;
   }
   LinearisedAt.assign(x, x + 3 * nv);
   LinearisedScale = Options.robustScale;
   LinearisedReach = Options.maxDistance;
+  LinearisedStride = Stride;
   if (!Built)
     Locator = SurfaceLocator(Mesh, x);
   else
@@ -61,6 +62,8 @@ void CoverageTerm::linearise(const double* x)
         Match& m = Matches[i];
         m.triangle = -1;
         m.weight = 0;
+        if (i % Stride != 0)
+          return;
         const double* p = Frame.point(m.point);
         const SurfaceLocator::Hit hit =
             Locator.closest(p, Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL, Hints[i]);
@@ -79,11 +82,11 @@ void CoverageTerm::linearise(const double* x)
           return;
         m.triangle = hit.triangle;
         std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
-        m.weight = 1;
+        m.weight = static_cast<double>(Stride);
         if (Options.robustScale > 0)
         {
           const double u2 = hit.squaredDistance / (Options.robustScale * Options.robustScale);
-          m.weight = 1.0 / ((1 + u2) * (1 + u2));
+          m.weight /= (1 + u2) * (1 + u2);
         }
       });
 }
