@@ -354,46 +354,6 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
   EXPECT_EQ(matched, 0u);
 }
 
-TEST(CoverageTerm, AStrideReadsEveryKthPointAtKTimesItsWeight)
-{
-  // The coarse level's stride: the points it reads keep their matches and weigh k times as much,
-  // the others do not pull, and the term's total weight stays about the same. Changing the
-  // stride decides the matches again even where the mesh has not moved.
-  Frame f(tube().positions);
-  std::vector<double> x = f.shape.positions;
-  for (std::size_t i = 0; i < x.size(); i += 3)
-    x[i] += 0.02;
-  dp::CoverageOptions c;
-  c.robustScale = 0.03; // weights differ from point to point
-  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
-  coverage.linearise(x.data());
-  const std::vector<dp::CoverageTerm::Match> all = coverage.matches();
-  const double full = coverage.evaluate(x.data(), nullptr);
-  coverage.setStride(3);
-  coverage.linearise(x.data());
-  const auto& strided = coverage.matches();
-  ASSERT_EQ(strided.size(), all.size());
-  std::size_t read = 0;
-  for (std::size_t i = 0; i < all.size(); ++i)
-  {
-    if (i % 3 != 0)
-    {
-      EXPECT_EQ(strided[i].triangle, -1) << i;
-      EXPECT_EQ(strided[i].weight, 0.0) << i;
-      continue;
-    }
-    EXPECT_EQ(strided[i].triangle, all[i].triangle) << i;
-    EXPECT_DOUBLE_EQ(strided[i].weight, 3 * all[i].weight) << i;
-    read += strided[i].triangle >= 0;
-  }
-  EXPECT_GT(read, all.size() / 6);
-  EXPECT_NEAR(coverage.evaluate(x.data(), nullptr), full, 0.2 * full);
-  coverage.setStride(1);
-  coverage.linearise(x.data());
-  for (std::size_t i = 0; i < all.size(); ++i)
-    EXPECT_EQ(coverage.matches()[i].weight, all[i].weight) << i;
-}
-
 TEST(FrameQuality, ATearIsTheLargestStiffEdgeGrowthInMeanEdgeLengths)
 {
   // A unit square of two triangles: four sides of 1 and a diagonal of sqrt(2).

@@ -39,13 +39,12 @@ void CoverageTerm::linearise(const double* x)
     for (std::size_t i = 0; i < 3 * nv; ++i)
       largest = std::max(largest, std::abs(x[i] - LinearisedAt[i]));
     if (largest < still && LinearisedScale == Options.robustScale &&
-        LinearisedReach == Options.maxDistance && LinearisedStride == Stride)
+        LinearisedReach == Options.maxDistance)
       return;
   }
   LinearisedAt.assign(x, x + 3 * nv);
   LinearisedScale = Options.robustScale;
   LinearisedReach = Options.maxDistance;
-  LinearisedStride = Stride;
   if (!Built)
     Locator = SurfaceLocator(Mesh, x);
   else
@@ -62,8 +61,6 @@ void CoverageTerm::linearise(const double* x)
         Match& m = Matches[i];
         m.triangle = -1;
         m.weight = 0;
-        if (i % Stride != 0)
-          return;
         const double* p = Frame.point(m.point);
         const SurfaceLocator::Hit hit =
             Locator.closest(p, Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL, Hints[i]);
@@ -82,11 +79,11 @@ void CoverageTerm::linearise(const double* x)
           return;
         m.triangle = hit.triangle;
         std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
-        m.weight = static_cast<double>(Stride);
+        m.weight = 1;
         if (Options.robustScale > 0)
         {
           const double u2 = hit.squaredDistance / (Options.robustScale * Options.robustScale);
-          m.weight /= (1 + u2) * (1 + u2);
+          m.weight = 1.0 / ((1 + u2) * (1 + u2));
         }
       });
 }

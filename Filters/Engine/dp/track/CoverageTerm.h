@@ -21,9 +21,7 @@
  *
  * For fixed correspondences the term is quadratic in x; its Gauss-Newton model is exact and
  * couples the three vertices of each triangle (the mesh's edges), or, on request, is replaced
- * by a diagonal upper bound that couples nothing (the coarse level's cheaper systems). The coarse
- * level may also read only every k-th subsample point, each weighing k (setStride): a graph of
- * a fifth as many nodes as vertices is held as well by fewer points.
+ * by a diagonal upper bound that couples nothing (the coarse level's cheaper systems).
  *
  * Limits: the normal test needs oriented normals, consistent with the mesh's (outward/outward);
  * the closest point is searched exactly (SurfaceLocator), which costs a tree query per point and
@@ -37,7 +35,6 @@
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TrackerOptions.h"
 
-#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -63,10 +60,6 @@ public:
   /** With a diagonal model, addModel() gives each vertex only its own block, an upper bound of
    *  the term (see addModel), so vertices are not coupled: cheaper systems, slower steps. */
   void setDiagonalModel(bool diagonal) { DiagonalModel = diagonal; }
-  /** Reads only every `stride`-th subsample point (in the subsample's space-filling order, so
-   *  they stay spread), each weighing `stride` times as much: the term's total weight is kept.
-   *  1 (the default) reads them all. */
-  void setStride(std::size_t stride) { Stride = std::max<std::size_t>(stride, 1); }
   void setRobustScale(double scale) { Options.robustScale = scale; }
   void setMaxDistance(double distance) { Options.maxDistance = distance; }
   const CoverageOptions& options() const { return Options; }
@@ -100,11 +93,9 @@ private:
   std::vector<Match> Matches;
   std::vector<std::int64_t> Hints; // per match, the closest triangle last found (search hint)
   bool DiagonalModel = false;
-  std::size_t Stride = 1;
-  // Where the correspondences were last decided, and with which scale, reach and stride.
+  // Where the correspondences were last decided, and with which scale and reach.
   std::vector<double> LinearisedAt;
   double LinearisedScale = 0, LinearisedReach = 0;
-  std::size_t LinearisedStride = 0;
 };
 
 } // namespace dp

@@ -38,9 +38,6 @@ constexpr double Tolerance = 1e-6;
 // 1e-1 and not visibly below 1e-2 (jumping), so smaller retries only repeat the rejected step.
 constexpr double StartDamping = 1e-4;
 constexpr double RetryDamping = 1e-2;
-// The points -> mesh term reads every CoverageStride-th subsample point in the coarse level (see
-// registerFrame).
-constexpr std::size_t CoverageStride = 2;
 // The stretch term: the share of an edge's length that may change freely (skin over a joint).
 constexpr double StretchFreedom = 0.1;
 } // namespace
@@ -398,10 +395,7 @@ int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTer
   std::vector<EnergyTerm*> terms{&distance};
   if (coverage)
   {
-    // The graph has a fifth as many nodes as the mesh has vertices: half the subsample holds it
-    // as well (errors within their spread over seeds) and halves the searches of a step.
     coverage->setDiagonalModel(true);
-    coverage->setStride(CoverageStride);
     terms.push_back(coverage);
   }
   std::vector<double> x(3 * Graph.mesh().numberOfVertices());
@@ -421,10 +415,7 @@ int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTer
     steps += solve(state, terms, rigidity * stage.rigidity, iterationsPerStage);
   }
   if (coverage)
-  {
     coverage->setDiagonalModel(false);
-    coverage->setStride(1);
-  }
   return steps;
 }
 
