@@ -611,6 +611,83 @@ TEST(GraphRegistration, LimbsBendButDoNotStretch)
   EXPECT_LT(worst, 1e-4 * scale);
 }
 
+TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
+{
+  // The data terms' part of the node model is J^T H J, H their vertex model and J = dx/dtheta
+  // the blending's Jacobian: for any direction d in node space, d^T (model - E_reg's part) d
+  // equals (J d)^T H (J d), with J d from central differences of the deformed positions.
+  Frame f(tube(16, 12).positions);
+  f.shape = tube(16, 12);
+  f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
+  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
+  f.mass = cloth.vertexMass();
+  const dp::DeformationGraph graph(f.mesh, f.shape.positions.data(), 20, 4);
+  dp::GraphRegistration registration(graph, f.L, f.voxel);
+  dp::DistanceTermOptions d;
+  dp::DistanceTerm distance(*f.data, f.mesh, f.mass, f.L, d);
+  dp::CoverageOptions c;
+  c.robustScale = 3 * f.voxel;
+  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
+  coverage.setDiagonalModel(true);
+  std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
+  const std::size_t nodes = graph.numberOfNodes();
+  dp::DeformationGraph::State state = graph.identity();
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (std::size_t j = 0; j < nodes; ++j)
+  {
+    state.rotation[j] =
+        Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .matrix();
+    state.translation[j] = 0.01 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+  }
+  std::vector<double> x(f.shape.positions.size());
+  graph.deform(state, x.data());
+  distance.decide(x.data());
+  coverage.linearise(x.data());
+  const double rigidity = 3.0;
+  Eigen::VectorXd gradient;
+  registration.model(state, terms, rigidity, gradient);
+  const Eigen::SparseMatrix<double> nodeModel = registration.nodeModel().matrix();
+  dp::detail::BlockSparseMatrixOf<6> regulariser(nodes, graph.edges());
+  Eigen::VectorXd unused = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * nodes));
+  registration.regularisation(state, rigidity, &regulariser, &unused);
+  const Eigen::SparseMatrix<double> dataPart =
+      nodeModel - Eigen::SparseMatrix<double>(regulariser.matrix());
+  dp::detail::BlockSparseMatrix vertexModel(x.size() / 3, {});
+  std::vector<double> vertexGradient(x.size(), 0.0);
+  for (const dp::EnergyTerm* t : terms)
+    t->addModel(x.data(), vertexModel, vertexGradient.data());
+  const Eigen::SparseMatrix<double> H = vertexModel.matrix();
+  for (int trial = 0; trial < 3; ++trial)
+  {
+    Eigen::VectorXd direction(static_cast<Eigen::Index>(6 * nodes));
+    for (Eigen::Index i = 0; i < direction.size(); ++i)
+      direction[i] = u(rng);
+    auto deformedAlong = [&](double h)
+    {
+      dp::DeformationGraph::State s = state;
+      for (std::size_t j = 0; j < nodes; ++j)
+      {
+        const Eigen::Vector3d w = h * direction.segment<3>(static_cast<Eigen::Index>(6 * j));
+        s.rotation[j] =
+            Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * state.rotation[j];
+        s.translation[j] += h * direction.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
+      }
+      std::vector<double> y(x.size());
+      graph.deform(s, y.data());
+      return Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()))
+          .eval();
+    };
+    const double h = 1e-6;
+    const Eigen::VectorXd moved = (deformedAlong(h) - deformedAlong(-h)) / (2 * h);
+    const double expected = moved.dot(H.selfadjointView<Eigen::Lower>() * moved);
+    const double modelled = direction.dot(dataPart.selfadjointView<Eigen::Lower>() * direction);
+    ASSERT_GT(expected, 0);
+    EXPECT_NEAR(modelled, expected, 1e-6 * expected) << "direction " << trial;
+  }
+}
+
 TEST(GraphRegistration, RegulariserModelIsItsHessianWhereNoEdgeBends)
 {
   // Under a rigid motion of the whole graph no edge bends or stretches (E_reg = 0, residuals 0),

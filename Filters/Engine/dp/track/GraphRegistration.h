@@ -96,6 +96,8 @@ public:
                         Eigen::VectorXd* gradient = nullptr) const;
 
   const DeformationGraph& graph() const { return Graph; }
+  /** The node-space matrix model() last built (lower triangle of 6 x 6 blocks). */
+  const detail::BlockSparseMatrixOf<6>& nodeModel() const { return NodeModel; }
 
 private:
   void project(const DeformationGraph::State& state, const Eigen::VectorXd& vertexGradient,
