@@ -483,18 +483,64 @@ TEST(DeformationGraph, BlendsAlongTheSurfaceNotAcrossGaps)
   }
 }
 
+// The coarse level's test problem: a 16 x 12 tube, its frame's points and masses, and a 20-node
+// deformation graph with the registration over it.
+struct GraphProblem
+{
+  Frame f{tube(16, 12).positions};
+  std::unique_ptr<dp::DeformationGraph> graph;
+  std::unique_ptr<dp::GraphRegistration> registration;
+  GraphProblem()
+  {
+    f.shape = tube(16, 12);
+    f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
+    const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
+    f.mass = cloth.vertexMass();
+    graph = std::make_unique<dp::DeformationGraph>(f.mesh, f.shape.positions.data(), 20, 4);
+    registration = std::make_unique<dp::GraphRegistration>(*graph, f.L, f.voxel);
+  }
+};
+
+// A state off the data: every node turned by up to `angle` and moved up to 0.01, differently.
+dp::DeformationGraph::State turnedState(const dp::DeformationGraph& graph, double angle,
+                                        std::mt19937_64& rng)
+{
+  std::uniform_real_distribution<double> u(-1, 1);
+  dp::DeformationGraph::State state = graph.identity();
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+  {
+    state.rotation[j] =
+        Eigen::AngleAxisd(angle * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
+            .matrix();
+    state.translation[j] = 0.01 * Eigen::Vector3d(u(rng), u(rng), u(rng));
+  }
+  return state;
+}
+
+// `state` moved by h along a node-space direction (angle-axis increments, translations).
+dp::DeformationGraph::State movedAlong(const dp::DeformationGraph::State& state,
+                                       const Eigen::VectorXd& direction, double h)
+{
+  dp::DeformationGraph::State s = state;
+  for (std::size_t j = 0; j < state.rotation.size(); ++j)
+  {
+    const Eigen::Vector3d w = h * direction.segment<3>(static_cast<Eigen::Index>(6 * j));
+    s.rotation[j] =
+        Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * state.rotation[j];
+    s.translation[j] += h * direction.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
+  }
+  return s;
+}
+
 TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
 {
   // E(theta) = data terms at x(theta) + E_reg(theta): its node-space gradient (the vertex model
   // carried through the blending) against central differences in each node's rotation
   // (angle-axis increment) and translation.
-  Frame f(tube(16, 12).positions);
-  f.shape = tube(16, 12);
-  f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
-  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
-  f.mass = cloth.vertexMass();
-  const dp::DeformationGraph graph(f.mesh, f.shape.positions.data(), 20, 4);
-  dp::GraphRegistration registration(graph, f.L, f.voxel);
+  GraphProblem problem;
+  const Frame& f = problem.f;
+  const dp::DeformationGraph& graph = *problem.graph;
+  dp::GraphRegistration& registration = *problem.registration;
   // The distance to the points, squared: its model's gradient is exact (the distance to planes
   // holds the interpolation weights), so the test sees the projection alone.
   dp::DistanceTermOptions d;
@@ -506,17 +552,8 @@ TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
   dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
   coverage.setDiagonalModel(true);
   std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
-  // A state off the data: every node turned and moved a little, differently.
-  dp::DeformationGraph::State state = graph.identity();
   std::mt19937_64 rng(5);
-  std::uniform_real_distribution<double> u(-1, 1);
-  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
-  {
-    state.rotation[j] =
-        Eigen::AngleAxisd(0.05 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
-            .matrix();
-    state.translation[j] = 0.01 * Eigen::Vector3d(u(rng), u(rng), u(rng));
-  }
+  const dp::DeformationGraph::State state = turnedState(graph, 0.05, rng);
   std::vector<double> x(f.shape.positions.size());
   graph.deform(state, x.data());
   coverage.linearise(x.data());
@@ -616,13 +653,10 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
   // The data terms' part of the node model is J^T H J, H their vertex model and J = dx/dtheta
   // the blending's Jacobian: for any direction d in node space, d^T (model - E_reg's part) d
   // equals (J d)^T H (J d), with J d from central differences of the deformed positions.
-  Frame f(tube(16, 12).positions);
-  f.shape = tube(16, 12);
-  f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
-  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
-  f.mass = cloth.vertexMass();
-  const dp::DeformationGraph graph(f.mesh, f.shape.positions.data(), 20, 4);
-  dp::GraphRegistration registration(graph, f.L, f.voxel);
+  GraphProblem problem;
+  const Frame& f = problem.f;
+  const dp::DeformationGraph& graph = *problem.graph;
+  dp::GraphRegistration& registration = *problem.registration;
   dp::DistanceTermOptions d;
   dp::DistanceTerm distance(*f.data, f.mesh, f.mass, f.L, d);
   dp::CoverageOptions c;
@@ -631,16 +665,9 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
   coverage.setDiagonalModel(true);
   std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
   const std::size_t nodes = graph.numberOfNodes();
-  dp::DeformationGraph::State state = graph.identity();
   std::mt19937_64 rng(11);
+  const dp::DeformationGraph::State state = turnedState(graph, 0.3, rng);
   std::uniform_real_distribution<double> u(-1, 1);
-  for (std::size_t j = 0; j < nodes; ++j)
-  {
-    state.rotation[j] =
-        Eigen::AngleAxisd(0.3 * u(rng), Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized())
-            .matrix();
-    state.translation[j] = 0.01 * Eigen::Vector3d(u(rng), u(rng), u(rng));
-  }
   std::vector<double> x(f.shape.positions.size());
   graph.deform(state, x.data());
   distance.decide(x.data());
@@ -666,16 +693,8 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
       direction[i] = u(rng);
     auto deformedAlong = [&](double h)
     {
-      dp::DeformationGraph::State s = state;
-      for (std::size_t j = 0; j < nodes; ++j)
-      {
-        const Eigen::Vector3d w = h * direction.segment<3>(static_cast<Eigen::Index>(6 * j));
-        s.rotation[j] =
-            Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * state.rotation[j];
-        s.translation[j] += h * direction.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
-      }
       std::vector<double> y(x.size());
-      graph.deform(s, y.data());
+      graph.deform(movedAlong(state, direction, h), y.data());
       return Eigen::Map<const Eigen::VectorXd>(y.data(), static_cast<Eigen::Index>(y.size()))
           .eval();
     };
@@ -724,22 +743,10 @@ TEST(GraphRegistration, RegulariserModelIsItsHessianWhereNoEdgeBends)
   for (Eigen::Index i = 0; i < direction.size(); ++i)
     direction[i] = u(rng);
   const Eigen::VectorXd modelled = lower.selfadjointView<Eigen::Lower>() * direction;
-  auto moved = [&](double h)
-  {
-    dp::DeformationGraph::State s = rigid;
-    for (std::size_t j = 0; j < nodes; ++j)
-    {
-      const Eigen::Vector3d w = h * direction.segment<3>(static_cast<Eigen::Index>(6 * j));
-      s.rotation[j] =
-          Eigen::AngleAxisd(w.norm(), w.normalized()).toRotationMatrix() * rigid.rotation[j];
-      s.translation[j] += h * direction.segment<3>(static_cast<Eigen::Index>(6 * j + 3));
-    }
-    return s;
-  };
   const double h = 1e-6;
   Eigen::VectorXd plus, minus;
-  modelAt(moved(h), plus);
-  modelAt(moved(-h), minus);
+  modelAt(movedAlong(rigid, direction, h), plus);
+  modelAt(movedAlong(rigid, direction, -h), minus);
   const Eigen::VectorXd numeric = (plus - minus) / (2 * h);
   ASSERT_GT(numeric.norm(), 0);
   EXPECT_LT((numeric - modelled).norm(), 1e-5 * numeric.norm());
