@@ -34,8 +34,8 @@ constexpr Stage Schedule[] = {{10.0, 24.0}, {3.0, 12.0}, {3.0, 6.0}};
 // A solve ends when a step gains less than this share of the energy.
 constexpr double Tolerance = 1e-6;
 // Levenberg-Marquardt's damping (relative to the diagonal) at a solve's start, and the least a
-// rejected step is tried again with: on captured takes the step changes by 4 % at 1e-1 and by
-// 40 % at 1 (jumping), so smaller retries only repeat the rejected step.
+// rejected step is tried again with: on captured takes the step's promised decrease changes by
+// 4 % at 1e-1 and by 40 % at 1 (jumping), so smaller retries only repeat the rejected step.
 constexpr double StartDamping = 1e-4;
 constexpr double RetryDamping = 1.0;
 // A rejected step that promised less than this share of the energy ends the stage: it lies in
