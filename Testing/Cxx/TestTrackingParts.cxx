@@ -135,6 +135,51 @@ TEST(SurfaceLocator, FindsTheClosestPointsBruteForceFinds)
   }
 }
 
+TEST(SurfaceLocator, TreesOfEverySizeFindWhatBruteForceFinds)
+{
+  // Strips of 1 to 40 triangles, crumpled at random: trees of one leaf, and four-child nodes
+  // with one to four children, leaves and inner nodes mixed. Every triangle as a hint.
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int count = 1; count <= 40; ++count)
+  {
+    std::vector<double> positions;
+    std::vector<std::int64_t> triangles;
+    for (int i = 0; i < count + 2; ++i)
+      positions.insert(positions.end(),
+                       {0.3 * i + 0.1 * u(rng), 0.3 * (i % 2) + 0.1 * u(rng), 0.2 * u(rng)});
+    for (int t = 0; t < count; ++t)
+      triangles.insert(triangles.end(), {t, t + 1, t + 2});
+    const dp::TriangleMesh mesh(triangles, positions.size() / 3);
+    const dp::SurfaceLocator locator(mesh, positions.data());
+    for (int i = 0; i < 20; ++i)
+    {
+      const double p[3] = {0.3 * count * 0.5 * (1 + u(rng)), u(rng), u(rng)};
+      double best = HUGE_VAL;
+      std::int64_t lowest = -1;
+      for (int t = 0; t < count; ++t)
+      {
+        double w[3], c[3];
+        const double d2 = dp::closestPointOnTriangle(p, &positions[3 * triangles[3 * t]],
+                                                     &positions[3 * triangles[3 * t + 1]],
+                                                     &positions[3 * triangles[3 * t + 2]], w, c);
+        if (d2 < best)
+        {
+          best = d2;
+          lowest = t;
+        }
+      }
+      const dp::SurfaceLocator::Hit hit = locator.closest(p);
+      ASSERT_EQ(hit.triangle, lowest) << count << " triangles";
+      EXPECT_EQ(hit.squaredDistance, best);
+      for (std::int64_t hint = 0; hint < count; ++hint)
+        ASSERT_EQ(locator.closest(p, HUGE_VAL, hint).triangle, lowest)
+            << count << " triangles, hint " << hint;
+      EXPECT_EQ(locator.closest(p, 0.99 * std::sqrt(best), count / 2).triangle, -1);
+    }
+  }
+}
+
 TEST(SurfaceLocator, ATieGoesToTheLowestTriangleWhateverTheHint)
 {
   // A flat grid of 12 x 12 squares, two triangles each: a point above an inner vertex is

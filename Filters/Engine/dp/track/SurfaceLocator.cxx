@@ -102,12 +102,12 @@ void SurfaceLocator::build(const double* positions)
   Order.resize(nt);
   std::iota(Order.begin(), Order.end(), 0);
   Nodes.clear();
+  Wide.clear();
   Nodes.reserve(2 * nt / LeafSize + 2);
   if (nt == 0)
     return;
   Nodes.emplace_back();
   split(0, 0, static_cast<std::int32_t>(nt), centres);
-  Parent.assign(Nodes.size(), -1);
   LeafOf.assign(nt, -1);
   for (std::size_t n = 0; n < Nodes.size(); ++n)
   {
@@ -116,11 +116,66 @@ void SurfaceLocator::build(const double* positions)
       for (std::int32_t i = node.first; i < node.first + node.count; ++i)
         LeafOf[static_cast<std::size_t>(Order[static_cast<std::size_t>(i)])] =
             static_cast<std::int32_t>(n);
-    else
-      Parent[static_cast<std::size_t>(node.first)] =
-          Parent[static_cast<std::size_t>(node.first) + 1] = static_cast<std::int32_t>(n);
   }
+  Wide.reserve(Nodes.size() / 3 + 1);
+  collapse(0);
+  WideParent.assign(Wide.size(), Place{});
+  LeafPlace.assign(Nodes.size(), Place{});
+  for (std::size_t w = 0; w < Wide.size(); ++w)
+    for (int e = 0; e < 4; ++e)
+    {
+      const Place here{static_cast<std::int32_t>(w), e};
+      if (Wide[w].count[e] == 0)
+        WideParent[static_cast<std::size_t>(Wide[w].first[e])] = here;
+      else if (Wide[w].count[e] > 0)
+        LeafPlace[static_cast<std::size_t>(Wide[w].source[e])] = here;
+    }
   refit(Positions);
+}
+
+// The wide node standing for binary node `binary`: its children, or for an inner child, that
+// child's two children. Returns its index in Wide (children are made after their parent).
+std::int32_t SurfaceLocator::collapse(std::int32_t binary)
+{
+  WideNode wide;
+  int slots = 0;
+  auto add = [&](std::int32_t node)
+  {
+    wide.source[slots] = node;
+    wide.count[slots] = Nodes[static_cast<std::size_t>(node)].count;
+    wide.first[slots] = Nodes[static_cast<std::size_t>(node)].first;
+    ++slots;
+  };
+  const Node& self = Nodes[static_cast<std::size_t>(binary)];
+  if (self.count > 0)
+    add(binary); // a tree of one leaf
+  else
+    for (std::int32_t child = self.first; child < self.first + 2; ++child)
+    {
+      const Node& node = Nodes[static_cast<std::size_t>(child)];
+      if (node.count > 0)
+        add(child);
+      else
+      {
+        add(node.first);
+        add(node.first + 1);
+      }
+    }
+  for (int e = slots; e < 4; ++e)
+  {
+    wide.source[e] = -1;
+    wide.count[e] = -1;
+    wide.first[e] = 0;
+  }
+  const auto index = static_cast<std::int32_t>(Wide.size());
+  Wide.push_back(wide);
+  for (int e = 0; e < slots; ++e)
+    if (Wide[static_cast<std::size_t>(index)].count[e] == 0)
+    {
+      const std::int32_t child = collapse(Wide[static_cast<std::size_t>(index)].source[e]);
+      Wide[static_cast<std::size_t>(index)].first[e] = child;
+    }
+  return index;
 }
 
 // Makes node `self` cover Order[begin, end): a leaf, or two children (allocated together, so
@@ -170,6 +225,15 @@ void SurfaceLocator::refit(const double* positions)
   // Children are stored after their parents: a reverse sweep sees children first.
   for (auto n = static_cast<std::int32_t>(Nodes.size()) - 1; n >= 0; --n)
     boxOf(n);
+  for (WideNode& wide : Wide)
+    for (int e = 0; e < 4; ++e)
+      for (int k = 0; k < 3; ++k)
+      {
+        const bool empty = wide.count[e] < 0; // a box no point is near
+        const Node& node = Nodes[static_cast<std::size_t>(empty ? 0 : wide.source[e])];
+        wide.lo[k][e] = empty ? HUGE_VAL : static_cast<double>(node.lo[k]);
+        wide.hi[k][e] = empty ? HUGE_VAL : static_cast<double>(node.hi[k]);
+      }
   // Each triangle's bounding sphere, in the leaves' order: centre rounded to float, radius
   // measured from that centre and rounded up, so the sphere still holds the triangle.
   const auto& tri = Mesh->triangles();
@@ -227,18 +291,6 @@ void SurfaceLocator::boxOf(std::int32_t n)
   }
 }
 
-double SurfaceLocator::boxDistance2(const Node& n, const double p[3]) const
-{
-  double d2 = 0;
-  for (int k = 0; k < 3; ++k)
-  {
-    const double d =
-        std::max({static_cast<double>(n.lo[k]) - p[k], 0.0, p[k] - static_cast<double>(n.hi[k])});
-    d2 += d * d;
-  }
-  return d2;
-}
-
 bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
 {
   double d2 = 0;
@@ -252,10 +304,11 @@ bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
   return gap > 0 && gap * gap > bound2 * (1 + 1e-9);
 }
 
-void SurfaceLocator::visitLeaf(const Node& leaf, const double p[3], Search& search) const
+void SurfaceLocator::visitLeaf(std::int32_t first, std::int32_t count, const double p[3],
+                               Search& search) const
 {
   const auto& tri = Mesh->triangles();
-  for (std::int32_t i = leaf.first; i < leaf.first + leaf.count; ++i)
+  for (std::int32_t i = first; i < first + count; ++i)
   {
     if (outside(Spheres[static_cast<std::size_t>(i)], p, search.bound))
       continue; // its bounding sphere is farther than the best so far
@@ -268,42 +321,54 @@ void SurfaceLocator::visitLeaf(const Node& leaf, const double p[3], Search& sear
   }
 }
 
-void SurfaceLocator::descend(std::int32_t root, const double p[3], Search& search) const
+void SurfaceLocator::descend(std::int32_t root, int skip, const double p[3], Search& search) const
 {
   // Each entry keeps its box's squared distance, measured when it was pushed: the bound may have
   // shrunk since, and the test needs no second measurement.
   struct Entry
   {
-    std::int32_t node;
+    std::int32_t first, count; // as a WideNode's child
     double distance2;
   };
-  Entry stack[128];
+  Entry stack[256];
   int top = 0;
-  stack[top++] = {root, boxDistance2(Nodes[static_cast<std::size_t>(root)], p)};
+  auto pushChildren = [&](const WideNode& wide, int skipped)
+  {
+    double d2[4];
+    for (int e = 0; e < 4; ++e)
+    {
+      d2[e] = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        const double d = std::max({wide.lo[k][e] - p[k], 0.0, p[k] - wide.hi[k][e]});
+        d2[e] += d * d;
+      }
+    }
+    // The nearest child last on the stack, so it is searched first. (A child already beyond the
+    // bound never will be nearer: the bound only shrinks.)
+    int nearest = -1;
+    for (int e = 0; e < 4; ++e)
+      if (e != skipped && wide.count[e] >= 0 && search.mayHold(d2[e]) &&
+          (nearest < 0 || d2[e] < d2[nearest]))
+        nearest = e;
+    // (A node's pop pushes at most four: the stack holds at most 3 x depth + 4 entries, under 256
+    // for any tree of fewer than 2^80 triangles.)
+    for (int e = 0; e < 4; ++e)
+      if (e != nearest && e != skipped && wide.count[e] >= 0 && search.mayHold(d2[e]) && top < 256)
+        stack[top++] = {wide.first[e], wide.count[e], d2[e]};
+    if (nearest >= 0 && top < 256)
+      stack[top++] = {wide.first[nearest], wide.count[nearest], d2[nearest]};
+  };
+  pushChildren(Wide[static_cast<std::size_t>(root)], skip);
   while (top > 0)
   {
     const Entry entry = stack[--top];
     if (!search.mayHold(entry.distance2))
       continue;
-    const Node& node = Nodes[static_cast<std::size_t>(entry.node)];
-    if (node.count > 0)
-    {
-      visitLeaf(node, p, search);
-      continue;
-    }
-    // Nearer child last, so it is searched first.
-    const std::int32_t left = node.first, right = node.first + 1;
-    const double dl = boxDistance2(Nodes[static_cast<std::size_t>(left)], p),
-                 dr = boxDistance2(Nodes[static_cast<std::size_t>(right)], p);
-    if (top + 2 > 128)
-      continue; // cannot happen for trees of fewer than 2^60 triangles
-    // (A child already beyond the bound never will be nearer: the bound only shrinks.)
-    const Entry nearer = dl < dr ? Entry{left, dl} : Entry{right, dr};
-    const Entry farther = dl < dr ? Entry{right, dr} : Entry{left, dl};
-    if (search.mayHold(farther.distance2))
-      stack[top++] = farther;
-    if (search.mayHold(nearer.distance2))
-      stack[top++] = nearer;
+    if (entry.count > 0)
+      visitLeaf(entry.first, entry.count, p, search);
+    else
+      pushChildren(Wide[static_cast<std::size_t>(entry.first)], -1);
   }
 }
 
@@ -312,26 +377,22 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
 {
   Search search;
   search.bound = maxDistance * maxDistance;
-  if (Nodes.empty())
+  if (Wide.empty())
     return search.best;
   if (hint < 0 || static_cast<std::size_t>(hint) >= Mesh->numberOfTriangles())
   {
-    descend(0, p, search);
+    descend(0, -1, p, search);
     return search.best;
   }
   // From the hint's leaf up to the root, searching each sibling subtree the bound reaches:
   // near the hint (where the answer usually is) first, so the bound is small early and the
   // far subtrees are dismissed by one box each. The same answer as from the root (ties go to
   // the lower triangle index, whatever the order of the search).
-  std::int32_t node = LeafOf[static_cast<std::size_t>(hint)];
-  visitLeaf(Nodes[static_cast<std::size_t>(node)], p, search);
-  while (node > 0)
-  {
-    // Children are allocated in pairs after the root: left odd, right = left + 1.
-    const std::int32_t sibling = node % 2 == 1 ? node + 1 : node - 1;
-    descend(sibling, p, search);
-    node = Parent[static_cast<std::size_t>(node)];
-  }
+  const auto leaf = static_cast<std::size_t>(LeafOf[static_cast<std::size_t>(hint)]);
+  visitLeaf(Nodes[leaf].first, Nodes[leaf].count, p, search);
+  for (Place place = LeafPlace[leaf]; place.node >= 0;
+       place = WideParent[static_cast<std::size_t>(place.node)])
+    descend(place.node, place.slot, p, search);
   return search.best;
 }
 
