@@ -546,6 +546,27 @@ struct GraphProblem
   }
 };
 
+// The coarse level's data terms on a problem's frame, as registerFrame() uses them: the
+// distance term with `options` and the points -> mesh term with its diagonal model.
+struct CoarseTerms
+{
+  dp::DistanceTerm distance;
+  dp::CoverageTerm coverage;
+  CoarseTerms(const Frame& f, const dp::DistanceTermOptions& options)
+      : distance(*f.data, f.mesh, f.mass, f.L, options),
+        coverage(*f.data, f.mesh, f.L, robustCoverage(f))
+  {
+    coverage.setDiagonalModel(true);
+  }
+  std::vector<dp::EnergyTerm*> all() { return {&distance, &coverage}; }
+  static dp::CoverageOptions robustCoverage(const Frame& f)
+  {
+    dp::CoverageOptions c;
+    c.robustScale = 3 * f.voxel;
+    return c;
+  }
+};
+
 // A state off the data: every node turned by up to `angle` and moved up to 0.01, differently.
 dp::DeformationGraph::State turnedState(const dp::DeformationGraph& graph, double angle,
                                         std::mt19937_64& rng)
@@ -591,17 +612,13 @@ TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
   dp::DistanceTermOptions d;
   d.normalTestDegrees = 180;
   d.measure = dp::DistanceMeasure::Points;
-  dp::DistanceTerm distance(*f.data, f.mesh, f.mass, f.L, d);
-  dp::CoverageOptions c;
-  c.robustScale = 3 * f.voxel;
-  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
-  coverage.setDiagonalModel(true);
-  std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
+  CoarseTerms data(f, d);
+  const std::vector<dp::EnergyTerm*> terms = data.all();
   std::mt19937_64 rng(5);
   const dp::DeformationGraph::State state = turnedState(graph, 0.05, rng);
   std::vector<double> x(f.shape.positions.size());
   graph.deform(state, x.data());
-  coverage.linearise(x.data());
+  data.coverage.linearise(x.data());
   const double rigidity = 3.0;
   Eigen::VectorXd gradient;
   registration.model(state, terms, rigidity, gradient);
@@ -702,21 +719,16 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
   const Frame& f = problem.f;
   const dp::DeformationGraph& graph = *problem.graph;
   dp::GraphRegistration& registration = *problem.registration;
-  dp::DistanceTermOptions d;
-  dp::DistanceTerm distance(*f.data, f.mesh, f.mass, f.L, d);
-  dp::CoverageOptions c;
-  c.robustScale = 3 * f.voxel;
-  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
-  coverage.setDiagonalModel(true);
-  std::vector<dp::EnergyTerm*> terms{&distance, &coverage};
+  CoarseTerms data(f, dp::DistanceTermOptions{});
+  const std::vector<dp::EnergyTerm*> terms = data.all();
   const std::size_t nodes = graph.numberOfNodes();
   std::mt19937_64 rng(11);
   const dp::DeformationGraph::State state = turnedState(graph, 0.3, rng);
   std::uniform_real_distribution<double> u(-1, 1);
   std::vector<double> x(f.shape.positions.size());
   graph.deform(state, x.data());
-  distance.decide(x.data());
-  coverage.linearise(x.data());
+  data.distance.decide(x.data());
+  data.coverage.linearise(x.data());
   const double rigidity = 3.0;
   Eigen::VectorXd gradient;
   registration.model(state, terms, rigidity, gradient);
