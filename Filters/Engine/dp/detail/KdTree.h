@@ -5,8 +5,10 @@
 
 #include <nanoflann.hpp>
 
+#include <cmath>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace dp::detail
@@ -43,6 +45,17 @@ public:
   std::size_t nearest(const double q[3], std::size_t k, std::uint32_t* indices, double* d2) const
   {
     return Index->knnSearch(q, k, indices, d2);
+  }
+
+  /** Every point within squared distance `radius2` of q (inclusive): (index, squared distance)
+   *  pairs, in no particular order. */
+  void within(const double q[3], double radius2,
+              std::vector<std::pair<std::uint32_t, double>>& found) const
+  {
+    found.clear();
+    // nanoflann keeps what is strictly nearer than the radius.
+    Index->radiusSearch(q, std::nextafter(radius2, HUGE_VAL), found,
+                        nanoflann::SearchParams(32, 0, false));
   }
 
   std::size_t memoryBytes() const { return Index->usedMemory(*Index); }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/NormalEstimation.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/geometry/NeighbourLists.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -20,32 +20,19 @@ namespace
 // new part (60 degrees).
 constexpr float WeakOrientation = 0.5f;
 
-// Each point's k nearest points (itself included): ids[i * k + j] for j < degree[i].
-struct NeighbourGraph
-{
-  std::size_t k = 0;
-  std::vector<std::uint32_t> ids;
-  std::vector<std::size_t> degree;
-};
-
 // Local PCA: each normal is the eigenvector of the smallest eigenvalue of the covariance of the
-// point's neighbours (unoriented). Returns the neighbour graph it used.
-NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k,
+// point's neighbours (unoriented). Returns the neighbour lists it used.
+NeighbourLists pcaNormals(const double* points, std::size_t count, std::size_t k,
                           std::vector<float>& normals)
 {
-  const detail::KdTree tree(points, count);
-  const std::vector<std::uint32_t>& order = tree.leafOrder();
-  NeighbourGraph graph{k, std::vector<std::uint32_t>(count * k), std::vector<std::size_t>(count)};
+  NeighbourLists graph = nearestNeighbourLists(points, count, k);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
                     [&](const tbb::blocked_range<std::size_t>& range)
                     {
-                      std::vector<double> d2(k);
-                      for (std::size_t r = range.begin(); r != range.end(); ++r)
+                      for (std::size_t i = range.begin(); i != range.end(); ++i)
                       {
-                        const std::size_t i = order[r];
-                        std::uint32_t* ids = &graph.ids[i * k];
-                        const std::size_t degree = tree.nearest(points + 3 * i, k, ids, d2.data());
-                        graph.degree[i] = degree;
+                        const std::uint32_t* ids = &graph.ids[i * graph.k];
+                        const std::size_t degree = graph.degree[i];
                         Eigen::Vector3d mean = Eigen::Vector3d::Zero();
                         for (std::size_t j = 0; j < degree; ++j)
                           mean += Eigen::Vector3d(points + 3 * ids[j]);
@@ -80,7 +67,7 @@ NeighbourGraph pcaNormals(const double* points, std::size_t count, std::size_t k
 class SpanningTreeOrientation
 {
 public:
-  SpanningTreeOrientation(const double* points, const NeighbourGraph& graph,
+  SpanningTreeOrientation(const double* points, const NeighbourLists& graph,
                           std::vector<float>& normals, std::vector<std::uint32_t>* parts)
       : Points(points), Graph(graph), Normals(normals), Parts(parts), Done(graph.degree.size(), 0),
         Best(graph.degree.size()), Slot(graph.degree.size(), NotQueued)
@@ -224,7 +211,7 @@ private:
   }
 
   const double* Points;
-  const NeighbourGraph& Graph;
+  const NeighbourLists& Graph;
   std::vector<float>& Normals;
   std::vector<std::uint32_t>* Parts;
   std::vector<char> Done;
@@ -244,7 +231,7 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
   if (count == 0)
     return normals;
   const std::size_t k = std::max<std::size_t>(3, std::min(neighbours, count));
-  const NeighbourGraph graph = pcaNormals(points, count, k, normals);
+  const NeighbourLists graph = pcaNormals(points, count, k, normals);
   // Seeds in order of decreasing x, so each connected part starts at its largest-x point.
   std::vector<std::uint32_t> order(count);
   for (std::size_t i = 0; i < count; ++i)
