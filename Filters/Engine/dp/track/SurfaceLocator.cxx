@@ -291,7 +291,7 @@ void SurfaceLocator::boxOf(std::int32_t n)
   }
 }
 
-bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
+bool SurfaceLocator::outside(const Sphere& s, const double p[3], double reach)
 {
   double d2 = 0;
   for (int k = 0; k < 3; ++k)
@@ -299,25 +299,28 @@ bool SurfaceLocator::outside(const Sphere& s, const double p[3], double bound2)
     const double d = p[k] - s.centre[k];
     d2 += d * d;
   }
-  const double gap = std::sqrt(d2) - s.radius;
-  // A relative margin for the rounding of the lines above: never skip a triangle that might win.
-  return gap > 0 && gap * gap > bound2 * (1 + 1e-9);
+  const double far = s.radius + reach;
+  return d2 > far * far;
 }
 
 void SurfaceLocator::visitLeaf(std::int32_t first, std::int32_t count, const double p[3],
                                Search& search) const
 {
   const auto& tri = Mesh->triangles();
+  // The bound's distance with a relative margin for the rounding of outside(): never skip a
+  // triangle that might win. (Kept as a distance, so a sphere's test needs no square root.)
+  double reach = std::sqrt(search.bound * (1 + 1e-9));
   for (std::int32_t i = first; i < first + count; ++i)
   {
-    if (outside(Spheres[static_cast<std::size_t>(i)], p, search.bound))
+    if (outside(Spheres[static_cast<std::size_t>(i)], p, reach))
       continue; // its bounding sphere is farther than the best so far
     const std::int64_t t = Order[i];
     double w[3], c[3];
     const double d2 =
         closestPointOnTriangle(p, &Positions[3 * tri[3 * t]], &Positions[3 * tri[3 * t + 1]],
                                &Positions[3 * tri[3 * t + 2]], w, c);
-    search.offer(t, d2, w, c);
+    if (search.offer(t, d2, w, c))
+      reach = std::sqrt(search.bound * (1 + 1e-9));
   }
 }
 

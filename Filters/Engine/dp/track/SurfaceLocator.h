@@ -79,8 +79,8 @@ private:
     float centre[3];
     float radius;
   };
-  // Whether every point of the sphere is farther from p than sqrt(bound2).
-  static bool outside(const Sphere& s, const double p[3], double bound2);
+  // Whether every point of the sphere is farther from p than `reach`.
+  static bool outside(const Sphere& s, const double p[3], double reach);
 
   // The best hit so far and the squared distance a triangle must not exceed to replace it.
   // Before a hit, only what is strictly nearer than the bound (the caller's maxDistance) counts;
@@ -94,10 +94,11 @@ private:
     {
       return best.triangle < 0 ? distance2 < bound : distance2 <= bound;
     }
-    void offer(std::int64_t t, double d2, const double w[3], const double c[3])
+    // True when the triangle became the best (the bound may have shrunk).
+    bool offer(std::int64_t t, double d2, const double w[3], const double c[3])
     {
       if (!(best.triangle < 0 ? d2 < bound : d2 < bound || (d2 == bound && t < best.triangle)))
-        return;
+        return false;
       bound = d2;
       best.triangle = t;
       best.squaredDistance = d2;
@@ -106,6 +107,7 @@ private:
         best.barycentric[k] = w[k];
         best.point[k] = c[k];
       }
+      return true;
     }
   };
   // The binary tree with its levels taken two at a time: each node holds the (up to) four
