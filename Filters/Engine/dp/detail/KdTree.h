@@ -60,10 +60,6 @@ public:
 
   std::size_t memoryBytes() const { return Index->usedMemory(*Index); }
 
-  /** Every point's index in the order of the tree's leaves: neighbours in space are near each
-   *  other in it, so queries made in this order reuse the same nodes and points (cache). */
-  const std::vector<std::uint32_t>& leafOrder() const { return Index->vAcc; }
-
 private:
   struct Cloud
   {

@@ -247,14 +247,18 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
   if (count == 0 || k == 0)
     return lists;
   double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  bool finite = true;
   for (std::size_t i = 0; i < count; ++i)
     for (int a = 0; a < 3; ++a)
     {
+      finite = finite && std::isfinite(points[3 * i + a]);
       lo[a] = std::min(lo[a], points[3 * i + a]);
       hi[a] = std::max(hi[a], points[3 * i + a]);
     }
   const std::size_t maxCells = 8 * count + 64;
-  const GridSize size = chooseSize(points, count, k, lo, hi, maxCells);
+  // (A cloud with NaN or infinite coordinates has no cells to file them in: the kd-tree, as
+  // before the grid.)
+  const GridSize size = finite ? chooseSize(points, count, k, lo, hi, maxCells) : GridSize{};
   PointGrid grid;
   const bool gridded =
       size.radius > 0 && buildGrid(grid, points, count, lo, hi, size.cell, maxCells);
@@ -292,7 +296,16 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
                           continue;
                         // The k-th distance, then every point at most that far: ties at it go
                         // to the lower indices, as on the grid.
-                        tree.nearest(points + 3 * i, k, ids.data(), d2.data());
+                        const std::size_t reached =
+                            tree.nearest(points + 3 * i, k, ids.data(), d2.data());
+                        if (reached < k)
+                        {
+                          // Only with NaN coordinates (nothing compares nearer): what it found.
+                          lists.degree[i] = reached;
+                          std::copy(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(reached),
+                                    lists.ids.begin() + static_cast<std::ptrdiff_t>(i * k));
+                          continue;
+                        }
                         tree.within(points + 3 * i, d2[k - 1], within);
                         found.clear();
                         for (const auto& [id, distance2] : within)
