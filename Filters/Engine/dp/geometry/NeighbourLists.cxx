@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <memory>
 #include <utility>
 
@@ -255,7 +256,8 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
       lo[a] = std::min(lo[a], points[3 * i + a]);
       hi[a] = std::max(hi[a], points[3 * i + a]);
     }
-  const std::size_t maxCells = 8 * count + 64;
+  // Cells are numbered in 32 bits.
+  const std::size_t maxCells = std::min<std::size_t>(8 * count + 64, UINT32_MAX - 1);
   // (A cloud with NaN or infinite coordinates has no cells to file them in: the kd-tree, as
   // before the grid.)
   const GridSize size = finite ? chooseSize(points, count, k, lo, hi, maxCells) : GridSize{};
