@@ -114,21 +114,24 @@ TEST(NeighbourLists, OutliersRepeatsAndFlatCloudsFindWhatBruteForceFinds)
   EXPECT_TRUE(dp::nearestNeighbourLists(nullptr, 0, 16).ids.empty());
 }
 
-TEST(NeighbourLists, ANaNPointNeitherCrashesNorJoinsTheOthersLists)
+TEST(NeighbourLists, ANaNOrInfinitePointNeitherCrashesNorJoinsTheOthersLists)
 {
   // Callers check coordinates first (FrameData); here the lists only must stay in bounds.
-  std::vector<double> points = sphere(500, false, 10);
-  points[3 * 7 + 1] = std::nan("");
-  const dp::NeighbourLists lists = dp::nearestNeighbourLists(points.data(), 500, 16);
-  for (std::size_t i = 0; i < 500; ++i)
+  for (const double bad : {std::nan(""), HUGE_VAL})
   {
-    ASSERT_LE(lists.degree[i], 16u);
-    for (std::size_t j = 0; j < lists.degree[i]; ++j)
+    std::vector<double> points = sphere(500, false, 10);
+    points[3 * 7 + 1] = bad;
+    const dp::NeighbourLists lists = dp::nearestNeighbourLists(points.data(), 500, 16);
+    for (std::size_t i = 0; i < 500; ++i)
     {
-      ASSERT_LT(lists.ids[16 * i + j], 500u);
-      if (i != 7)
+      ASSERT_LE(lists.degree[i], 16u);
+      for (std::size_t j = 0; j < lists.degree[i]; ++j)
       {
-        EXPECT_NE(lists.ids[16 * i + j], 7u) << "point " << i;
+        ASSERT_LT(lists.ids[16 * i + j], 500u);
+        if (i != 7)
+        {
+          EXPECT_NE(lists.ids[16 * i + j], 7u) << "point " << i << ", coordinate " << bad;
+        }
       }
     }
   }

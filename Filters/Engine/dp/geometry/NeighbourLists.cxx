@@ -101,14 +101,12 @@ double cellsFor(const double lo[3], const double hi[3], double cell)
 bool buildGrid(PointGrid& grid, const double* points, std::size_t count, const double lo[3],
                const double hi[3], double cell, std::size_t maxCells)
 {
-  double cells = 1;
+  const double cells = cellsFor(lo, hi, cell);
+  if (!(cells <= static_cast<double>(maxCells)))
+    return false;
   for (int a = 0; a < 3; ++a)
   {
-    const double along = std::floor((hi[a] - lo[a]) / cell) + 1;
-    cells *= along;
-    if (!(cells <= static_cast<double>(maxCells)))
-      return false;
-    grid.dims[a] = static_cast<std::int64_t>(along);
+    grid.dims[a] = static_cast<std::int64_t>(std::floor((hi[a] - lo[a]) / cell) + 1);
     grid.lo[a] = lo[a];
   }
   grid.cell = cell;
@@ -302,12 +300,14 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
                             tree.nearest(points + 3 * i, k, ids.data(), d2.data());
                         if (reached < k)
                         {
-                          // Only with NaN coordinates (nothing compares nearer): what it found.
+                          // Only with NaN or infinite coordinates (nothing compares nearer):
+                          // what the tree found.
                           lists.degree[i] = reached;
                           std::copy(ids.begin(), ids.begin() + static_cast<std::ptrdiff_t>(reached),
                                     lists.ids.begin() + static_cast<std::ptrdiff_t>(i * k));
                           continue;
                         }
+                        // (It holds the k found: their distances are at most the k-th.)
                         tree.within(points + 3 * i, d2[k - 1], within);
                         found.clear();
                         for (const auto& [id, distance2] : within)
