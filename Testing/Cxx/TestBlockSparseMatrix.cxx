@@ -75,6 +75,52 @@ TEST(BlockSparseMatrix, AssemblesLikeADenseMatrix)
   }
 }
 
+TEST(BlockSparseMatrix, CornersAddWhatTheirFullBlocksAdd)
+{
+  // 3 x 3 corners of 6 x 6 blocks, in both orders of an off-diagonal pair and on a diagonal
+  // block (with its mirrored corner), against addBlock() of the same blocks written out in full.
+  using Block = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
+  const std::vector<std::array<std::int64_t, 2>> pairs = {{0, 2}, {1, 2}};
+  dp::detail::BlockSparseMatrixOf<6> corners(3, pairs), full(3, pairs);
+  std::mt19937_64 rng(4);
+  std::normal_distribution<double> value;
+  auto random = [&]
+  {
+    Eigen::Matrix3d m;
+    for (int i = 0; i < 9; ++i)
+      m(i / 3, i % 3) = value(rng);
+    return m;
+  };
+  for (const auto& [a, b] : std::vector<std::array<std::int64_t, 2>>{{0, 2}, {2, 1}, {1, 1}})
+  {
+    const auto slot = corners.slotOf(a, b);
+    const Eigen::Matrix3d m = random(), n = random();
+    const double d = value(rng);
+    Block block = Block::Zero();
+    if (a == b)
+    {
+      corners.addCorner(slot, 0, 3, m);
+      corners.addCorner(slot, 3, 0, m.transpose());
+      block.topRightCorner<3, 3>() = m;
+      block.bottomLeftCorner<3, 3>() = m.transpose();
+    }
+    else
+    {
+      corners.addCorner(slot, 0, 3, m);
+      corners.addCorner(slot, 3, 0, n);
+      block.topRightCorner<3, 3>() = m;
+      block.bottomLeftCorner<3, 3>() = n;
+    }
+    corners.addCornerDiagonal(slot, 3, 3, d);
+    block.bottomRightCorner<3, 3>().diagonal().setConstant(d);
+    full.addBlock(full.slotOf(a, b), block.data());
+  }
+  const Eigen::MatrixXd difference =
+      Eigen::MatrixXd(corners.matrix()) - Eigen::MatrixXd(full.matrix());
+  EXPECT_EQ(difference.cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(Eigen::MatrixXd(full.matrix()).cwiseAbs().maxCoeff(), 0.0);
+}
+
 TEST(BlockSparseMatrix, RefusesBlocksOutsideThePattern)
 {
   dp::detail::BlockSparseMatrix m(4, {{{0, 1}}, {{2, 3}}});

@@ -129,6 +129,31 @@ public:
         block[c * s.stride + r] += s.transposed ? m[Size * c + r] : m[Size * r + c];
   }
 
+  /** Adds the 3 x 3 matrix m to rows r0.. r0 + 2, columns c0.. c0 + 2 of block (a, b) of the full
+   *  symmetric matrix (and m^T to (b, a)): for assembly loops whose blocks are mostly zero. On a
+   *  diagonal block only those entries change: the caller adds the mirrored corner too. */
+  void addCorner(const Slot& s, int r0, int c0, const Eigen::Matrix3d& m)
+  {
+    double* block = M.valuePtr() + s.offset;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r)
+      {
+        const int row = r0 + r, column = c0 + c;
+        block[s.transposed ? row * s.stride + column : column * s.stride + row] += m(r, c);
+      }
+  }
+  /** Adds `value` to the 3 diagonal entries (r0 + i, r0 + i) of a diagonal block, or to the
+   *  entries (r0 + i, c0 + i) of block (a, b). */
+  void addCornerDiagonal(const Slot& s, int r0, int c0, double value)
+  {
+    double* block = M.valuePtr() + s.offset;
+    for (int i = 0; i < 3; ++i)
+    {
+      const int row = r0 + i, column = c0 + i;
+      block[s.transposed ? row * s.stride + column : column * s.stride + row] += value;
+    }
+  }
+
   /** Adds a full matrix (row-major) to diagonal block a. */
   void addToDiagonalBlock(std::int64_t a, const double m[Size * Size])
   {

@@ -98,21 +98,18 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
       // de/d(w_j, t_j) = Jj = [-[arm]x, I], de/d(w_k, t_k) = Jk = [0, -I]; their products
       // written out ([a]x^T = -[a]x, [a]x^T [a]x = |a|^2 I - a a^T): c Jj^T Jj, c Jk^T Jk,
       // c Jj^T Jk, and the gradients c Jj^T r = c (arm x r, r), c Jk^T r = c (0, -r).
+      // Only their non-zero 3 x 3 corners are added (a third of the 6 x 6 entries).
       const Eigen::Matrix3d cross = c * crossMatrix(arm);
-      const Eigen::Matrix3d identity = c * Eigen::Matrix3d::Identity();
-      Matrix66 jj, kk = Matrix66::Zero(), jk = Matrix66::Zero();
-      jj.topLeftCorner<3, 3>() =
+      const Eigen::Matrix3d bend =
           c * (arm.squaredNorm() * Eigen::Matrix3d::Identity() - arm * arm.transpose());
-      jj.topRightCorner<3, 3>() = cross;
-      jj.bottomLeftCorner<3, 3>() = -cross;
-      jj.bottomRightCorner<3, 3>() = identity;
-      kk.bottomRightCorner<3, 3>() = identity;
-      jk.topRightCorner<3, 3>() = -cross;
-      jk.bottomRightCorner<3, 3>() = -identity;
-      const auto& slots = EdgeSlots[2 * index + direction];
-      hessian->addBlock(slots[0], jj.data());
-      hessian->addBlock(slots[1], kk.data());
-      hessian->addBlock(slots[2], jk.data());
+      const auto& slots = EdgeSlots[2 * index + direction]; // (j, j), (k, k), (j, k)
+      hessian->addCorner(slots[0], 0, 0, bend);
+      hessian->addCorner(slots[0], 0, 3, cross);
+      hessian->addCorner(slots[0], 3, 0, -cross);
+      hessian->addCornerDiagonal(slots[0], 3, 3, c);
+      hessian->addCornerDiagonal(slots[1], 3, 3, c);
+      hessian->addCorner(slots[2], 0, 3, -cross);
+      hessian->addCornerDiagonal(slots[2], 3, 3, -c);
       gradient->segment<3>(6 * j) += c * arm.cross(r);
       gradient->segment<3>(6 * j + 3) += c * r;
       gradient->segment<3>(6 * k + 3) -= c * r;
@@ -146,13 +143,11 @@ double GraphRegistration::stretching(const DeformationGraph::State& state, doubl
       continue;
     // ds/dt_k = u^T, ds/dt_j = -u^T (u = d / |d|): Gauss-Newton blocks on the translations.
     const Eigen::Vector3d u = d / length;
-    Matrix66 kk = Matrix66::Zero();
-    kk.bottomRightCorner<3, 3>() = weight * u * u.transpose();
-    const Matrix66 jk = -kk;
+    const Eigen::Matrix3d along = weight * u * u.transpose();
     const auto& slots = EdgeSlots[2 * index]; // (j, j), (k, k), (j, k)
-    hessian->addBlock(slots[0], kk.data());
-    hessian->addBlock(slots[1], kk.data());
-    hessian->addBlock(slots[2], jk.data());
+    hessian->addCorner(slots[0], 3, 3, along);
+    hessian->addCorner(slots[1], 3, 3, along);
+    hessian->addCorner(slots[2], 3, 3, -along);
     gradient->segment<3>(6 * j + 3) -= weight * excess * u;
     gradient->segment<3>(6 * k + 3) += weight * excess * u;
   }
