@@ -361,7 +361,7 @@ const char* Usage =
     "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
     "             [--no-pipeline] [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] "
     "[--graph-iterations N]\n"
-    "             [--fine-iterations N]\n"
+    "             [--fine-iterations N] [--acceleration N (0: plain coarse steps)]\n"
     "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
     "RATE] [--coverage-weight "
     "W] "
@@ -489,6 +489,9 @@ int main(int argc, char** argv)
         options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--no-recovery")
         options.recovery.enabled = false;
+      else if (arg == "--acceleration")
+        options.graph.acceleration =
+            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 20));
       else if (arg == "--no-stiff-retry")
         options.recovery.stiffRetry = false;
       else if (arg == "--fail-margin")

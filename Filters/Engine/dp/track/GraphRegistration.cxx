@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/GraphRegistration.h"
 
+#include "dp/track/AndersonAcceleration.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DistanceTerm.h"
 
@@ -42,6 +43,11 @@ constexpr double RetryDamping = 1.0;
 // the energy's own roughness (trilinear field, correspondences that change). On jumping such
 // steps took 5-6 factorisations each and, when a retry was kept, gained under 2e-5 of E.
 constexpr double Roughness = 1e-4;
+// With acceleration, a stage ends once a step moves no vertex farther than this (voxels, any
+// coordinate), as the fine level's solves do: later steps are the energy's noise.
+constexpr double SettledMove = 0.1;
+// Steps are accelerated once they move no vertex farther than this (voxels, any coordinate).
+constexpr double AcceleratedMove = 2.0;
 // The stretch term: the share of an edge's length that may change freely (skin over a joint).
 constexpr double StretchFreedom = 0.1;
 } // namespace
@@ -55,6 +61,13 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   const TriangleMesh& mesh = graph.mesh();
   VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
   resetReference();
+  if (!Arms.empty())
+  {
+    double sum = 0;
+    for (const Eigen::Vector3d& arm : Arms)
+      sum += arm.norm();
+    MeanArm = sum / static_cast<double>(Arms.size());
+  }
   NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
   // The blocks each directed edge (j, k) of E_reg adds to, found once: (j, j), (k, k), (j, k).
   for (const auto& edge : graph.edges())
@@ -310,30 +323,115 @@ double GraphRegistration::model(const DeformationGraph::State& state,
   return energy + regularisation(state, rigidity, &NodeModel, &gradient);
 }
 
+double GraphRegistration::linearise(const DeformationGraph::State& state,
+                                    const std::vector<EnergyTerm*>& terms, double rigidity,
+                                    std::vector<double>& x)
+{
+  Graph.deform(state, x.data());
+  for (EnergyTerm* t : terms)
+    t->linearise(x.data());
+  reweightEdges(state, RobustScale);
+  return model(state, terms, rigidity, NodeGradient);
+}
+
+double GraphRegistration::largestMove(const DeformationGraph::State& state,
+                                      const std::vector<double>& x) const
+{
+  std::vector<double> y(x.size());
+  Graph.deform(state, y.data());
+  double largest = 0;
+  for (std::size_t i = 0; i < y.size(); ++i)
+    largest = std::max(largest, std::abs(y[i] - x[i]));
+  return largest;
+}
+
+Eigen::VectorXd GraphRegistration::coordinates(const DeformationGraph::State& state,
+                                               const DeformationGraph::State& origin) const
+{
+  Eigen::VectorXd u(static_cast<Eigen::Index>(6 * state.rotation.size()));
+  for (std::size_t j = 0; j < state.rotation.size(); ++j)
+  {
+    const auto at = static_cast<Eigen::Index>(6 * j);
+    const Eigen::AngleAxisd turn(
+        Eigen::Matrix3d(state.rotation[j] * origin.rotation[j].transpose()));
+    u.segment<3>(at) = MeanArm * turn.angle() * turn.axis();
+    u.segment<3>(at + 3) = state.translation[j];
+  }
+  return u;
+}
+
+DeformationGraph::State
+GraphRegistration::fromCoordinates(const Eigen::VectorXd& u,
+                                   const DeformationGraph::State& origin) const
+{
+  DeformationGraph::State state = origin;
+  for (std::size_t j = 0; j < state.rotation.size(); ++j)
+  {
+    const auto at = static_cast<Eigen::Index>(6 * j);
+    const Eigen::Vector3d w = u.segment<3>(at) / MeanArm;
+    const double angle = w.norm();
+    if (angle > 0)
+      state.rotation[j] =
+          Eigen::AngleAxisd(angle, w / angle).toRotationMatrix() * origin.rotation[j];
+    state.translation[j] = u.segment<3>(at + 3);
+  }
+  return state;
+}
+
 int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                              double rigidity, int iterations)
 {
   std::vector<double> x(3 * Graph.mesh().numberOfVertices());
   double damping = StartDamping;
+  std::unique_ptr<AndersonAcceleration> anderson;
+  if (Acceleration > 0)
+    anderson = std::make_unique<AndersonAcceleration>(Acceleration);
+  const DeformationGraph::State origin = state; // the accelerator's coordinates start here
+  DeformationGraph::State plain;                // the plain step an accelerated state replaced
+  double startEnergy = 0;                       // E where that step started
+  bool accelerated = false;
   int step = 0;
   for (; step < iterations; ++step)
   {
-    Graph.deform(state, x.data());
-    for (EnergyTerm* t : terms)
-      t->linearise(x.data());
-    reweightEdges(state, RobustScale);
-    const double energy = model(state, terms, rigidity, NodeGradient);
+    double energy = linearise(state, terms, rigidity, x);
+    if (accelerated && energy > startEnergy)
+    {
+      // Worse than where its step started: back to the plain step, the history forgotten.
+      state = plain;
+      anderson->reset();
+      energy = linearise(state, terms, rigidity, x);
+    }
+    accelerated = false;
     if (!Analysed)
     {
       Solver.analyse(NodeModel);
       Analysed = true;
     }
+    const DeformationGraph::State start = anderson ? state : DeformationGraph::State();
     double decrease = 0;
     const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease);
-    if (!accepted || decrease <= Tolerance * std::abs(energy))
+    const double move = anderson && accepted ? largestMove(state, x) / Voxel : HUGE_VAL;
+    if (!accepted || decrease <= Tolerance * std::abs(energy) || move <= SettledMove)
     {
       step += accepted;
       break;
+    }
+    if (!anderson)
+      continue;
+    // Accelerated only in the tail, where steps are small and converge linearly: larger steps
+    // still jump between correspondences, and extrapolating them carried a passing leg's
+    // vertices toward the other leg's data (Tracker.KeepsALegThatPassesAnother). Not on the last
+    // step: an accelerated state is only kept once its energy is known.
+    Eigen::VectorXd next;
+    if (move > AcceleratedMove)
+      anderson->reset();
+    else if (step + 1 < iterations &&
+             anderson->next(coordinates(start, origin), coordinates(state, origin), next))
+    {
+      plain = state;
+      state = fromCoordinates(next, origin);
+      startEnergy = energy;
+      accelerated = true;
     }
   }
   return step;

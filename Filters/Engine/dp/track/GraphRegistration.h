@@ -36,6 +36,12 @@
  * from stiff and far-reaching (the data terms see points up to ~24 voxels away, robustly) to
  * supple and local, a few Levenberg-Marquardt steps each, correspondences re-decided every step.
  *
+ * The steps converge linearly (the data's points slide along the surface a little each step).
+ * With setAcceleration() (off by default) they are Anderson-accelerated (AndersonAcceleration)
+ * once a step moves no vertex farther than two voxels; an accelerated state whose energy is higher
+ * than where its step started gives way to the plain step and the history is cleared, and a stage
+ * also ends once a step moves no vertex a tenth of a voxel.
+ *
  * Limits: the normal equations are solved exactly by a sparse Cholesky factorisation of 6 x 6
  * blocks (6 x nodes unknowns); the schedule's reaches are in voxels of the distance field.
  */
@@ -79,6 +85,10 @@ public:
   double model(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                double rigidity, Eigen::VectorXd& gradient);
 
+  /** Anderson acceleration of the steps, combining `depth` earlier steps (0: plain steps; see
+   *  solve()). */
+  void setAcceleration(int depth) { Acceleration = depth; }
+
   /** k_s, the stretch term's weight against the bending term's (0: no stretch term). */
   void setStretchWeight(double weight) { StretchWeight = weight; }
 
@@ -105,6 +115,19 @@ private:
   Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::size_t index,
                                int direction) const;
   void reweightEdges(const DeformationGraph::State& state, double robustScale);
+  // Deforms to `state` (into x), re-decides the terms' correspondences and E_reg's weights there
+  // and builds the model: returns E at the state.
+  double linearise(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
+                   double rigidity, std::vector<double>& x);
+  // The largest coordinate change of a vertex from x to `state` (world units).
+  double largestMove(const DeformationGraph::State& state, const std::vector<double>& x) const;
+  // The state as coordinates for the accelerator, relative to `origin`: per node its rotation's
+  // angle-axis from origin's times the mean arm (so in length units, like the translation), then
+  // its translation; and back.
+  Eigen::VectorXd coordinates(const DeformationGraph::State& state,
+                              const DeformationGraph::State& origin) const;
+  DeformationGraph::State fromCoordinates(const Eigen::VectorXd& u,
+                                          const DeformationGraph::State& origin) const;
   // One Levenberg-Marquardt step on the model last built (energy E there): true if a step was
   // kept (state moved, decrease set); the damping carries over between steps.
   bool dampedStep(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
@@ -118,6 +141,8 @@ private:
   double Scale; // 1 / (L voxel)
   double Voxel;
   double StretchWeight = 1.0;
+  int Acceleration = 0;
+  double MeanArm = 1;                       // of the template's edges (coordinates())
   double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
   std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
   std::vector<Eigen::Vector3d> Arms;        // per directed edge (j, k): the reference of g_k - g_j

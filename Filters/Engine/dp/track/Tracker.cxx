@@ -71,6 +71,8 @@ void validate(const TrackerOptions& o)
         "graph rigidity and robust scale (>= 0)");
   check(o.graph.iterations >= 0, "graph iterations (>= 0)");
   check(o.graph.fineIterations >= 1, "fine iterations after the graph (>= 1)");
+  check(o.graph.acceleration >= 0 && o.graph.acceleration <= 20,
+        "graph acceleration depth (0 to 20 earlier steps)");
   check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
   check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
   check(nonNegative(o.graph.stretchWeight), "graph stretch weight (>= 0)");
@@ -249,6 +251,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
         Mesh, Template.data(), nodes, std::max<std::size_t>(1, options.graph.influences));
     P->Registration = std::make_unique<GraphRegistration>(*P->Graph, Cloth.lengthScale(), Voxel);
     P->Registration->setStretchWeight(options.graph.stretchWeight);
+    P->Registration->setAcceleration(options.graph.acceleration);
   }
 }
 
