@@ -418,7 +418,10 @@ TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
     convergedError += vertexRms(converged[f].positions, s.animation.positions(f));
     EXPECT_LT(vertexRms(few[f].positions, s.animation.positions(f)), 0.01 * s.diagonal)
         << "frame " << f;
-    if (few[f].failed)
+    // A frame that fails after the graph has its fine level solved on, then other starts
+    // tried: only the frames that passed at once show the limit. (Frame 1 fails at once with
+    // plain and with accelerated coarse steps; accelerated, a retry then passes.)
+    if (few[f].failed || few[f].retries > 0)
       continue;
     ++passed;
     EXPECT_GE(few[f].iterations, 1) << "frame " << f;
@@ -801,13 +804,13 @@ TEST(Tracker, KeepsALegThatPassesAnother)
   paper.coverage.weight = 0;
   paper.graph.enabled = false;
   paper.recovery.enabled = false;
-  // The defaults, and with the coarse level's Anderson acceleration (it extrapolates steps: from
-  // the start of a stage it carried the passing foot's vertices 2 cm toward the other leg).
-  dp::TrackerOptions accelerated;
-  accelerated.graph.acceleration = 3;
+  // The defaults (the coarse level's steps Anderson-accelerated: extrapolating from the start of
+  // a stage carried the passing foot's vertices 2 cm toward the other leg), and plain steps.
+  dp::TrackerOptions plain;
+  plain.graph.acceleration = 0;
   double worstError[3] = {0, 0, 0}, worstUncovered[3] = {0, 0, 0};
   int run = 0;
-  for (const dp::TrackerOptions& options : {paper, dp::TrackerOptions{}, accelerated})
+  for (const dp::TrackerOptions& options : {paper, dp::TrackerOptions{}, plain})
   {
     dp::Tracker tracker(mesh, legs.positions(0), options);
     for (std::size_t f = 0; f < legs.numberOfFrames(); ++f)

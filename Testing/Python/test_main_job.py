@@ -312,7 +312,9 @@ class TestBadInput(TempDirTestCase):
             out.write("end_header\n")
             np.savetxt(out, np.hstack([np.vstack([points, ball]), np.vstack([normals, outward])]),
                        fmt="%.7g")
-        result = self.run_main(self.path("seq"), "--vertices", 300)
+        # The default template size: at 300 vertices the waving sheet's boundary is marginal
+        # (30 frames: 5-6 frames fail without the ball, with plain or accelerated coarse steps).
+        result = self.run_main(self.path("seq"))
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("frame 3 failed after 2 retries", result.stderr)
         self.assertIn("frame(s) 3 failed after retries", result.stderr)

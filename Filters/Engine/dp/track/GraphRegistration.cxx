@@ -48,6 +48,9 @@ constexpr double Roughness = 1e-4;
 constexpr double SettledMove = 0.1;
 // Steps are accelerated once they move no vertex farther than this (voxels, any coordinate).
 constexpr double AcceleratedMove = 2.0;
+// An accelerated state moves no vertex farther than this from where the plain step put it
+// (voxels, any coordinate): beyond, it is brought back toward the plain step.
+constexpr double AcceleratedReach = 1.0;
 // The stretch term: the share of an edge's length that may change freely (skin over a joint).
 constexpr double StretchFreedom = 0.1;
 } // namespace
@@ -334,14 +337,12 @@ double GraphRegistration::linearise(const DeformationGraph::State& state,
   return model(state, terms, rigidity, NodeGradient);
 }
 
-double GraphRegistration::largestMove(const DeformationGraph::State& state,
-                                      const std::vector<double>& x) const
+double GraphRegistration::largestDifference(const std::vector<double>& a,
+                                            const std::vector<double>& b)
 {
-  std::vector<double> y(x.size());
-  Graph.deform(state, y.data());
   double largest = 0;
-  for (std::size_t i = 0; i < y.size(); ++i)
-    largest = std::max(largest, std::abs(y[i] - x[i]));
+  for (std::size_t i = 0; i < a.size(); ++i)
+    largest = std::max(largest, std::abs(a[i] - b[i]));
   return largest;
 }
 
@@ -381,7 +382,8 @@ GraphRegistration::fromCoordinates(const Eigen::VectorXd& u,
 int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                              double rigidity, int iterations)
 {
-  std::vector<double> x(3 * Graph.mesh().numberOfVertices());
+  const std::size_t n = 3 * Graph.mesh().numberOfVertices();
+  std::vector<double> x(n), y(Acceleration > 0 ? n : 0); // the mesh where a step starts, ends
   double damping = StartDamping;
   std::unique_ptr<AndersonAcceleration> anderson;
   if (Acceleration > 0)
@@ -410,7 +412,12 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     const DeformationGraph::State start = anderson ? state : DeformationGraph::State();
     double decrease = 0;
     const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease);
-    const double move = anderson && accepted ? largestMove(state, x) / Voxel : HUGE_VAL;
+    double move = HUGE_VAL;
+    if (anderson && accepted)
+    {
+      Graph.deform(state, y.data());
+      move = largestDifference(x, y) / Voxel;
+    }
     if (!accepted || decrease <= Tolerance * std::abs(energy) || move <= SettledMove)
     {
       step += accepted;
@@ -429,12 +436,31 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
              anderson->next(coordinates(start, origin), coordinates(state, origin), next))
     {
       plain = state;
-      state = fromCoordinates(next, origin);
+      state = towardAccelerated(plain, next, origin, y);
       startEnergy = energy;
       accelerated = true;
     }
   }
   return step;
+}
+
+DeformationGraph::State GraphRegistration::towardAccelerated(
+    const DeformationGraph::State& plain, Eigen::VectorXd accelerated,
+    const DeformationGraph::State& origin, const std::vector<double>& atPlain) const
+{
+  // The accelerated state, brought back toward the plain step (along the straight line between
+  // their coordinates) until no vertex lies farther than AcceleratedReach from where the plain
+  // step put it: an extrapolation beyond that carried horse-gallop's legs off their data (a
+  // part lost at its end, seeds 1 and 3, README).
+  std::vector<double> z(atPlain.size());
+  Graph.deform(fromCoordinates(accelerated, origin), z.data());
+  const double beyond = largestDifference(atPlain, z) / Voxel;
+  if (beyond > AcceleratedReach)
+  {
+    const Eigen::VectorXd u = coordinates(plain, origin);
+    accelerated = u + (AcceleratedReach / beyond) * (accelerated - u);
+  }
+  return fromCoordinates(accelerated, origin);
 }
 
 bool GraphRegistration::dampedStep(DeformationGraph::State& state,

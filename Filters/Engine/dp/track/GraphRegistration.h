@@ -38,7 +38,8 @@
  *
  * The steps converge linearly (the data's points slide along the surface a little each step).
  * With setAcceleration() (off by default) they are Anderson-accelerated (AndersonAcceleration)
- * once a step moves no vertex farther than two voxels; an accelerated state whose energy is higher
+ * once a step moves no vertex farther than two voxels; an accelerated state moves no vertex more
+ * than a voxel beyond the plain step (it is brought back toward it), one whose energy is higher
  * than where its step started gives way to the plain step and the history is cleared, and a stage
  * also ends once a step moves no vertex a tenth of a voxel.
  *
@@ -119,8 +120,14 @@ private:
   // and builds the model: returns E at the state.
   double linearise(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                    double rigidity, std::vector<double>& x);
-  // The largest coordinate change of a vertex from x to `state` (world units).
-  double largestMove(const DeformationGraph::State& state, const std::vector<double>& x) const;
+  // The largest difference of two meshes' coordinates (world units).
+  static double largestDifference(const std::vector<double>& a, const std::vector<double>& b);
+  // The accelerator's `accelerated` coordinates as a state, brought back toward the plain step
+  // (`plain`, its mesh `atPlain`) where they would move a vertex too far from it.
+  DeformationGraph::State towardAccelerated(const DeformationGraph::State& plain,
+                                            Eigen::VectorXd accelerated,
+                                            const DeformationGraph::State& origin,
+                                            const std::vector<double>& atPlain) const;
   // The state as coordinates for the accelerator, relative to `origin`: per node its rotation's
   // angle-axis from origin's times the mean arm (so in length units, like the translation), then
   // its translation; and back.
