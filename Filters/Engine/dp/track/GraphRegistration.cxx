@@ -450,8 +450,8 @@ DeformationGraph::State GraphRegistration::towardAccelerated(
 {
   // The accelerated state, brought back toward the plain step (along the straight line between
   // their coordinates) until no vertex lies farther than AcceleratedReach from where the plain
-  // step put it: an extrapolation beyond that carried horse-gallop's legs off their data (a
-  // part lost at its end, seeds 1 and 3, README).
+  // step put it. Without this limit two horse-gallop takes lost a part near their end (seeds 1
+  // and 3); with it they keep it (README, Speed, session 28).
   std::vector<double> z(atPlain.size());
   Graph.deform(fromCoordinates(accelerated, origin), z.data());
   const double beyond = largestDifference(atPlain, z) / Voxel;

@@ -37,11 +37,11 @@
  * supple and local, a few Levenberg-Marquardt steps each, correspondences re-decided every step.
  *
  * The steps converge linearly (the data's points slide along the surface a little each step).
- * With setAcceleration() (off by default) they are Anderson-accelerated (AndersonAcceleration)
- * once a step moves no vertex farther than two voxels; an accelerated state moves no vertex more
- * than a voxel beyond the plain step (it is brought back toward it), one whose energy is higher
- * than where its step started gives way to the plain step and the history is cleared, and a stage
- * also ends once a step moves no vertex a tenth of a voxel.
+ * With setAcceleration() (the tracker's default: three steps) they are Anderson-accelerated
+ * (AndersonAcceleration) once a step moves no vertex farther than two voxels; an accelerated state
+ * moves no vertex more than a voxel beyond the plain step (it is brought back toward it), one
+ * whose energy is higher than where its step started gives way to the plain step and the history
+ * is cleared, and a stage also ends once a step moves no vertex a tenth of a voxel.
  *
  * Limits: the normal equations are solved exactly by a sparse Cholesky factorisation of 6 x 6
  * blocks (6 x nodes unknowns); the schedule's reaches are in voxels of the distance field.

@@ -81,8 +81,9 @@ struct GraphOptions
   // Anderson acceleration of the Levenberg-Marquardt steps (AndersonAcceleration): the number of
   // earlier steps combined (0: plain steps, stages end on the energy's gain), once steps move no
   // vertex two voxels; an accelerated state moves no vertex more than a voxel beyond the plain
-  // step, and a stage also ends once a step moves no vertex a tenth of a voxel. About 1.2x
-  // faster on jumping, at the plain steps' accuracy over three seeds (README, Speed, session 28).
+  // step, and a stage also ends once a step moves no vertex a tenth of a voxel. 1.05-1.2x faster
+  // where frames are not retried, and over three seeds as accurate as plain steps or more
+  // (README, Speed, session 28).
   int acceleration = 3;
 };
 
