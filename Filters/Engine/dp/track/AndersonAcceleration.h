@@ -11,12 +11,12 @@
  * GMRES on u = g(u): an iteration that converges linearly (ICP-like, where correspondences slide
  * along the surface) converges much faster.
  *
- * The coarse level (GraphRegistration) can use it on its Levenberg-Marquardt steps, where the
+ * The coarse level (GraphRegistration) uses it on its Levenberg-Marquardt steps, where the
  * points -> mesh term's points slide along the surface a little each step (GraphOptions::
- * acceleration, off by default: README, Speed, session 27).
+ * acceleration, three steps by default: README, Speed, sessions 27 and 28).
  *
- * Limits: no safeguard of its own (the caller checks the accelerated iterate and resets the
- * history when it is worse); the coordinates should have comparable units (the caller scales
+ * Limits: no safeguard of its own (the caller limits how far the accelerated iterate may lie from
+ * the plain one, checks it and resets the history when it is worse); the coordinates should have comparable units (the caller scales
  * them); theta by a column-pivoting QR, so a rank-deficient history is handled.
  */
 #pragma once
