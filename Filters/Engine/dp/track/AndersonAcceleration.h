@@ -16,8 +16,9 @@
  * acceleration, three steps by default: README, Speed, sessions 27 and 28).
  *
  * Limits: no safeguard of its own (the caller limits how far the accelerated iterate may lie from
- * the plain one, checks it and resets the history when it is worse); the coordinates should have comparable units (the caller scales
- * them); theta by a column-pivoting QR, so a rank-deficient history is handled.
+ * the plain one, checks it and resets the history when it is worse); the coordinates should have
+ * comparable units (the caller scales them); theta by a column-pivoting QR, so a rank-deficient
+ * history is handled.
  */
 #pragma once
 
