@@ -383,7 +383,7 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
                              double rigidity, int iterations)
 {
   const std::size_t n = 3 * Graph.mesh().numberOfVertices();
-  std::vector<double> x(n), y(Acceleration > 0 ? n : 0); // the mesh where a step starts, ends
+  std::vector<double> x(n), y(n); // the mesh where a step starts, and its last trial
   double damping = StartDamping;
   std::unique_ptr<AndersonAcceleration> anderson;
   if (Acceleration > 0)
@@ -411,13 +411,9 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     }
     const DeformationGraph::State start = anderson ? state : DeformationGraph::State();
     double decrease = 0;
-    const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease);
-    double move = HUGE_VAL;
-    if (anderson && accepted)
-    {
-      Graph.deform(state, y.data());
-      move = largestDifference(x, y) / Voxel;
-    }
+    const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease, y);
+    // y holds the mesh of the step just kept.
+    const double move = anderson && accepted ? largestDifference(x, y) / Voxel : HUGE_VAL;
     if (!accepted || decrease <= Tolerance * std::abs(energy) || move <= SettledMove)
     {
       step += accepted;
@@ -432,11 +428,11 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     Eigen::VectorXd next;
     if (move > AcceleratedMove)
       anderson->reset();
-    else if (step + 1 < iterations &&
-             anderson->next(coordinates(start, origin), coordinates(state, origin), next))
+    else if (const Eigen::VectorXd atPlain = coordinates(state, origin);
+             step + 1 < iterations && anderson->next(coordinates(start, origin), atPlain, next))
     {
       plain = state;
-      state = towardAccelerated(plain, next, origin, y);
+      state = towardAccelerated(atPlain, next, origin, y);
       startEnergy = energy;
       accelerated = true;
     }
@@ -444,35 +440,33 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
   return step;
 }
 
-DeformationGraph::State GraphRegistration::towardAccelerated(
-    const DeformationGraph::State& plain, Eigen::VectorXd accelerated,
-    const DeformationGraph::State& origin, const std::vector<double>& atPlain) const
+DeformationGraph::State
+GraphRegistration::towardAccelerated(const Eigen::VectorXd& plain, Eigen::VectorXd accelerated,
+                                     const DeformationGraph::State& origin,
+                                     const std::vector<double>& plainMesh) const
 {
   // The accelerated state, brought back toward the plain step (along the straight line between
   // their coordinates) until no vertex lies farther than AcceleratedReach from where the plain
   // step put it. Without this limit two horse-gallop takes lost a part near their end (seeds 1
   // and 3); with it they keep it (README, Speed, session 28).
-  std::vector<double> z(atPlain.size());
+  std::vector<double> z(plainMesh.size());
   Graph.deform(fromCoordinates(accelerated, origin), z.data());
-  const double beyond = largestDifference(atPlain, z) / Voxel;
+  const double beyond = largestDifference(plainMesh, z) / Voxel;
   if (beyond > AcceleratedReach)
-  {
-    const Eigen::VectorXd u = coordinates(plain, origin);
-    accelerated = u + (AcceleratedReach / beyond) * (accelerated - u);
-  }
+    accelerated = plain + (AcceleratedReach / beyond) * (accelerated - plain);
   return fromCoordinates(accelerated, origin);
 }
 
 bool GraphRegistration::dampedStep(DeformationGraph::State& state,
                                    const std::vector<EnergyTerm*>& terms, double rigidity,
-                                   double energy, double& damping, double& decrease)
+                                   double energy, double& damping, double& decrease,
+                                   std::vector<double>& trial)
 {
   // Levenberg-Marquardt on the model just built: a step is kept when E falls by at least a tenth
   // of what the model promised; otherwise the damping grows tenfold, to at least RetryDamping
   // (each try costs a factorisation), at most eight tries. A rejected step whose model promised
   // less than Roughness of E ends the tries: more damping only promises less, and so little is
   // within the energy's noise.
-  std::vector<double> trial(3 * Graph.mesh().numberOfVertices());
   const Eigen::VectorXd diagonal = NodeModel.diagonal();
   const double floor = 1e-12 * std::max(diagonal.maxCoeff(), 1e-300);
   for (int attempt = 0; attempt < 8; ++attempt)

@@ -123,11 +123,11 @@ private:
   // The largest difference of two meshes' coordinates (world units).
   static double largestDifference(const std::vector<double>& a, const std::vector<double>& b);
   // The accelerator's `accelerated` coordinates as a state, brought back toward the plain step
-  // (`plain`, its mesh `atPlain`) where they would move a vertex too far from it.
-  DeformationGraph::State towardAccelerated(const DeformationGraph::State& plain,
+  // (its coordinates `plain`, its mesh `plainMesh`) where they would move a vertex too far from it.
+  DeformationGraph::State towardAccelerated(const Eigen::VectorXd& plain,
                                             Eigen::VectorXd accelerated,
                                             const DeformationGraph::State& origin,
-                                            const std::vector<double>& atPlain) const;
+                                            const std::vector<double>& plainMesh) const;
   // The state as coordinates for the accelerator, relative to `origin`: per node its rotation's
   // angle-axis from origin's times the mean arm (so in length units, like the translation), then
   // its translation; and back.
@@ -136,9 +136,10 @@ private:
   DeformationGraph::State fromCoordinates(const Eigen::VectorXd& u,
                                           const DeformationGraph::State& origin) const;
   // One Levenberg-Marquardt step on the model last built (energy E there): true if a step was
-  // kept (state moved, decrease set); the damping carries over between steps.
+  // kept (state moved, decrease set, `trial` its mesh); the damping carries over between steps.
   bool dampedStep(DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
-                  double rigidity, double energy, double& damping, double& decrease);
+                  double rigidity, double energy, double& damping, double& decrease,
+                  std::vector<double>& trial);
   double stretching(const DeformationGraph::State& state, double weight,
                     detail::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
   static DeformationGraph::State retract(const DeformationGraph::State& state,
