@@ -215,6 +215,98 @@ TEST(SurfaceLocator, ATieGoesToTheLowestTriangleWhateverTheHint)
   }
 }
 
+TEST(SurfaceLocator, FollowingASmallMoveReachesTheClosestPoint)
+{
+  // Points just outside a tube (a convex surface there: its only local minimum of the distance
+  // is the closest point), each followed from the closest triangle of a point up to 0.1 away
+  // (a step's move, a few triangles): the walk ends where brute force does.
+  const Shape s = tube(8, 10);
+  const dp::TriangleMesh mesh(s.triangles, s.positions.size() / 3);
+  const dp::SurfaceLocator locator(mesh, s.positions.data());
+  std::vector<double> normals(s.positions.size());
+  mesh.vertexNormals(s.positions.data(), normals.data());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  int moved = 0;
+  for (int i = 0; i < 300; ++i)
+  {
+    // A point of a random triangle, 0.02 off the surface, away from the tube's axis.
+    const std::size_t t = static_cast<std::size_t>(u(rng) * mesh.numberOfTriangles());
+    double a = u(rng), b = u(rng);
+    if (a + b > 1)
+    {
+      a = 1 - a;
+      b = 1 - b;
+    }
+    const double w[3] = {1 - a - b, a, b};
+    double p[3] = {0, 0, 0}, n[3] = {0, 0, 0};
+    for (int c = 0; c < 3; ++c)
+      for (int k = 0; k < 3; ++k)
+      {
+        p[k] += w[c] * s.positions[3 * s.triangles[3 * t + c] + k];
+        n[k] += w[c] * normals[3 * s.triangles[3 * t + c] + k];
+      }
+    const double outward = n[0] * p[0] + n[1] * p[1] >= 0 ? 1.0 : -1.0;
+    const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+      p[k] += 0.02 * outward * n[k] / length;
+    double q[3];
+    for (int k = 0; k < 3; ++k)
+      q[k] = p[k] + 0.1 * (2 * u(rng) - 1) / std::sqrt(3.0);
+    const std::int64_t from = locator.closest(q).triangle;
+    const dp::SurfaceLocator::Hit exact = locator.closest(p);
+    const dp::SurfaceLocator::Hit hit = locator.follow(p, from);
+    ASSERT_GE(hit.triangle, 0);
+    EXPECT_NEAR(hit.squaredDistance, exact.squaredDistance, 1e-12) << "point " << i;
+    moved += from != exact.triangle;
+    // Its weights give its point; a bound below its distance finds none.
+    for (int k = 0; k < 3; ++k)
+    {
+      double x = 0;
+      for (int c = 0; c < 3; ++c)
+        x += hit.barycentric[c] * s.positions[3 * s.triangles[3 * hit.triangle + c] + k];
+      EXPECT_NEAR(x, hit.point[k], 1e-12);
+    }
+    EXPECT_EQ(locator.follow(p, from, 0.99 * std::sqrt(exact.squaredDistance)).triangle, -1);
+  }
+  EXPECT_GT(moved, 100) << "most walks start away from the answer";
+}
+
+TEST(SurfaceLocator, FollowingStaysOnItsPartOfTheSurface)
+{
+  // Two parallel sheets, 0.3 apart; a point 0.1 below the upper one. Followed from the lower
+  // sheet, the walk finds the lower sheet's closest point (0.2 away): it is local, unlike the
+  // search.
+  std::vector<double> positions;
+  std::vector<std::int64_t> triangles;
+  const int n = 6;
+  for (int sheet = 0; sheet < 2; ++sheet)
+  {
+    const auto base = static_cast<std::int64_t>(positions.size() / 3);
+    for (int j = 0; j <= n; ++j)
+      for (int i = 0; i <= n; ++i)
+        positions.insert(positions.end(), {0.1 * i, 0.1 * j, 0.3 * sheet});
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i)
+      {
+        const std::int64_t a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+        triangles.insert(triangles.end(), {a, b, d, a, d, c});
+      }
+  }
+  const dp::TriangleMesh mesh(triangles, positions.size() / 3);
+  const dp::SurfaceLocator locator(mesh, positions.data());
+  const double p[3] = {0.33, 0.27, 0.2};
+  const dp::SurfaceLocator::Hit search = locator.closest(p);
+  EXPECT_NEAR(search.squaredDistance, 0.01, 1e-12);
+  EXPECT_GE(search.triangle, 2 * n * n) << "the upper sheet";
+  const dp::SurfaceLocator::Hit walk = locator.follow(p, 0); // a corner triangle of the lower one
+  EXPECT_NEAR(walk.squaredDistance, 0.04, 1e-12);
+  EXPECT_LT(walk.triangle, 2 * n * n) << "the lower sheet";
+  EXPECT_NEAR(walk.point[0], 0.33, 1e-12);
+  EXPECT_NEAR(walk.point[1], 0.27, 1e-12);
+  EXPECT_EQ(locator.follow(p, 0, 0.15).triangle, -1);
+}
+
 TEST(FrameData, SpreadsTheSubsampleEvenlyAndFlipsNormals)
 {
   Frame f(tube().positions);
@@ -399,6 +491,52 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
   for (const auto& m : flipped.matches())
     matched += m.triangle >= 0;
   EXPECT_EQ(matched, 0u);
+}
+
+TEST(CoverageTerm, FollowedMatchesAreTheSearchedOnes)
+{
+  // The mesh moved since the matches were searched: followed over the surface (and searched
+  // again where a walk ends farther than a voxel, 0.019 here), they are those a search of the
+  // whole surface finds.
+  Frame f(tube().positions);
+  const auto& tri = f.mesh.triangles();
+  for (const double shift : {0.005, 0.06})
+  {
+    std::vector<double> moved = jiggle(f.shape.positions, 0.001, 3);
+    for (std::size_t i = 0; i < moved.size(); i += 3)
+      moved[i] += shift;
+    dp::CoverageOptions c;
+    dp::CoverageTerm followed(*f.data, f.mesh, f.L, c);
+    c.followMatches = false;
+    dp::CoverageTerm searched(*f.data, f.mesh, f.L, c);
+    for (dp::CoverageTerm* term : {&followed, &searched})
+    {
+      term->linearise(f.shape.positions.data());
+      term->linearise(moved.data());
+    }
+    std::size_t matched = 0;
+    for (std::size_t i = 0; i < followed.matches().size(); ++i)
+    {
+      const auto &a = followed.matches()[i], &b = searched.matches()[i];
+      // The same closest point (where it is a vertex, any triangle around it may hold it).
+      ASSERT_EQ(a.triangle >= 0, b.triangle >= 0) << "shift " << shift << ", point " << i;
+      if (a.triangle < 0)
+        continue;
+      ++matched;
+      for (int k = 0; k < 3; ++k)
+      {
+        double pa = 0, pb = 0;
+        for (int v = 0; v < 3; ++v)
+        {
+          pa += a.barycentric[v] * moved[3 * tri[3 * a.triangle + v] + k];
+          pb += b.barycentric[v] * moved[3 * tri[3 * b.triangle + v] + k];
+        }
+        ASSERT_NEAR(pa, pb, 1e-12) << "shift " << shift << ", point " << i;
+      }
+      EXPECT_NEAR(a.weight, b.weight, 1e-12);
+    }
+    EXPECT_GT(matched, followed.matches().size() / 2);
+  }
 }
 
 TEST(FrameQuality, ATearIsTheLargestStiffEdgeGrowthInMeanEdgeLengths)

@@ -23,9 +23,17 @@
  * couples the three vertices of each triangle (the mesh's edges), or, on request, is replaced
  * by a diagonal upper bound that couples nothing (the coarse level's cheaper systems).
  *
+ * Closest points: the first linearisation, and the next after searchWholeSurface(), searches the
+ * whole surface (SurfaceLocator::closest, a tree query per point). With followMatches (the
+ * default) the others walk from each point's last triangle to a locally closest one
+ * (SurfaceLocator::follow, about four triangle tests a point), as the mesh moves little between
+ * the steps of a solve; a point that had no match, or whose walk ends farther than a voxel
+ * (where another part may be nearer) or beyond maxDistance, is searched everywhere.
+ *
  * Limits: the normal test needs oriented normals, consistent with the mesh's (outward/outward);
- * the closest point is searched exactly (SurfaceLocator), which costs a tree query per point and
- * linearisation.
+ * a followed match within a voxel of its point may still miss a nearer part of the surface
+ * (parts closer than a voxel; the tracker searches everything at each coarse stage's start and at
+ * the fine level's).
  */
 #pragma once
 
@@ -56,6 +64,8 @@ public:
    *  moved a fifth of a voxel since they were decided). */
   void linearise(const double* x) override;
   void couplings(std::vector<std::array<std::int64_t, 2>>& pairs) const override;
+  /** The next linearise() searches the whole surface for every point (see the file comment). */
+  void searchWholeSurface() { WholeSurface = true; }
 
   /** With a diagonal model, addModel() gives each vertex only its own block, an upper bound of
    *  the term (see addModel), so vertices are not coupled: cheaper systems, slower steps. */
@@ -93,6 +103,7 @@ private:
   std::vector<Match> Matches;
   std::vector<std::int64_t> Hints; // per match, the closest triangle last found (search hint)
   bool DiagonalModel = false;
+  bool WholeSurface = true; // the next linearise() searches the whole surface
   // Where the correspondences were last decided, and with which scale and reach.
   std::vector<double> LinearisedAt;
   double LinearisedScale = 0, LinearisedReach = 0;

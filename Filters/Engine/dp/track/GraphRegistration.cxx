@@ -526,6 +526,7 @@ int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTer
     {
       coverage->setRobustScale(reach / 3);
       coverage->setMaxDistance(reach);
+      coverage->searchWholeSurface(); // then followed over the surface within the stage
     }
     Graph.deform(state, x.data());
     distance.decide(x.data());

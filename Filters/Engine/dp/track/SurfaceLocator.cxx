@@ -92,13 +92,14 @@ void SurfaceLocator::build(const double* positions)
   const std::size_t nv = Mesh->numberOfVertices();
   Copy.assign(positions, positions + 3 * nv);
   Positions = Copy.data();
-  const auto& tri = Mesh->triangles();
+  const auto& triangles = Mesh->triangles();
   std::vector<double> centres(3 * nt);
   for (std::size_t t = 0; t < nt; ++t)
     for (int k = 0; k < 3; ++k)
-      centres[3 * t + k] = (Positions[3 * tri[3 * t] + k] + Positions[3 * tri[3 * t + 1] + k] +
-                            Positions[3 * tri[3 * t + 2] + k]) /
-                           3.0;
+      centres[3 * t + k] =
+          (Positions[3 * triangles[3 * t] + k] + Positions[3 * triangles[3 * t + 1] + k] +
+           Positions[3 * triangles[3 * t + 2] + k]) /
+          3.0;
   Order.resize(nt);
   std::iota(Order.begin(), Order.end(), 0);
   Nodes.clear();
@@ -117,6 +118,33 @@ void SurfaceLocator::build(const double* positions)
         LeafOf[static_cast<std::size_t>(Order[static_cast<std::size_t>(i)])] =
             static_cast<std::int32_t>(n);
   }
+  const auto& tri = Mesh->triangles();
+  AroundStart.assign(nv + 1, 0);
+  for (const std::int64_t v : tri)
+    ++AroundStart[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < nv; ++v)
+    AroundStart[v + 1] += AroundStart[v];
+  Around.resize(tri.size());
+  std::vector<std::int32_t> next(AroundStart.begin(), AroundStart.end() - 1);
+  for (std::size_t t = 0; t < nt; ++t) // ascending within a vertex: ties go to the lower index
+    for (int c = 0; c < 3; ++c)
+      Around[static_cast<std::size_t>(next[static_cast<std::size_t>(tri[3 * t + c])]++)] =
+          static_cast<std::int32_t>(t);
+  // Across each edge: the triangle sharing it (the first found, for an edge of more than two).
+  Across.assign(3 * nt, -1);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::int64_t a = tri[3 * t + (c + 1) % 3], b = tri[3 * t + (c + 2) % 3];
+      const auto v = static_cast<std::size_t>(a);
+      for (std::int32_t i = AroundStart[v]; i < AroundStart[v + 1] && Across[3 * t + c] < 0; ++i)
+      {
+        const auto other = static_cast<std::size_t>(Around[static_cast<std::size_t>(i)]);
+        if (other != t &&
+            (tri[3 * other] == b || tri[3 * other + 1] == b || tri[3 * other + 2] == b))
+          Across[3 * t + c] = static_cast<std::int64_t>(other);
+      }
+    }
   Wide.reserve(Nodes.size() / 3 + 1);
   collapse(0);
   WideParent.assign(Wide.size(), Place{});
@@ -397,6 +425,56 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
        place = WideParent[static_cast<std::size_t>(place.node)])
     descend(place.node, place.slot, p, search);
   return search.best;
+}
+
+SurfaceLocator::Hit SurfaceLocator::follow(const double p[3], std::int64_t from,
+                                           double maxDistance) const
+{
+  Hit best;
+  if (from < 0 || static_cast<std::size_t>(from) >= Mesh->numberOfTriangles())
+    return best;
+  const auto& tri = Mesh->triangles();
+  auto measure = [&](std::int64_t t, Hit& hit)
+  {
+    hit.triangle = t;
+    hit.squaredDistance =
+        closestPointOnTriangle(p, &Positions[3 * tri[3 * t]], &Positions[3 * tri[3 * t + 1]],
+                               &Positions[3 * tri[3 * t + 2]], hit.barycentric, hit.point);
+  };
+  measure(from, best);
+  // Each move lowers the distance strictly, so the walk cannot cycle; the cap only bounds a
+  // walk across a badly folded mesh.
+  for (int moves = 0; moves < 64; ++moves)
+  {
+    Hit candidate, nearest;
+    auto offer = [&](std::int64_t t)
+    {
+      if (t < 0 || t == best.triangle)
+        return;
+      measure(t, candidate);
+      if (candidate.squaredDistance < nearest.squaredDistance ||
+          (candidate.squaredDistance == nearest.squaredDistance && t < nearest.triangle))
+        nearest = candidate;
+    };
+    // The triangles across the three edges (from inside a surface that bends away, the next
+    // side may be nearer although the closest point lies inside this triangle) and, where the
+    // closest point is a corner, the triangles around it.
+    for (int c = 0; c < 3; ++c)
+      offer(Across[3 * static_cast<std::size_t>(best.triangle) + c]);
+    for (int c = 0; c < 3; ++c)
+      if (best.barycentric[c] == 1)
+      {
+        const auto v = static_cast<std::size_t>(tri[3 * best.triangle + c]);
+        for (std::int32_t a = AroundStart[v]; a < AroundStart[v + 1]; ++a)
+          offer(Around[static_cast<std::size_t>(a)]);
+      }
+    if (!(nearest.squaredDistance < best.squaredDistance))
+      break;
+    best = nearest;
+  }
+  if (!(best.squaredDistance < maxDistance * maxDistance))
+    return Hit{};
+  return best;
 }
 
 } // namespace dp

@@ -17,6 +17,12 @@
  * start, so most subtrees cost one box test. Ties go to the lower triangle index, so a hint
  * never changes the answer.
  *
+ * follow() is the cheap, local alternative for a point whose closest triangle was found a step
+ * ago: it walks over the surface from that triangle to the nearest of its neighbours (across its
+ * edges, and around the corner the closest point may be), until none is nearer: a local minimum
+ * of the distance, four triangle tests for most points. It is not exact: another part of the
+ * surface may be nearer.
+ *
  * Limits: after large deformations a refitted tree prunes less well (rebuild it then: build()
  * costs O(n log n)); degenerate (zero-area) triangles are handled (their closest point is on an
  * edge or a vertex).
@@ -61,6 +67,11 @@ public:
    *  its distance bounds the search, which then visits few boxes. */
   Hit closest(const double p[3], double maxDistance = std::numeric_limits<double>::infinity(),
               std::int64_t hint = -1) const;
+
+  /** The surface's locally closest point to p, walking from triangle `from` (see the file
+   *  comment); triangle = -1 when it is not within `maxDistance`. */
+  Hit follow(const double p[3], std::int64_t from,
+             double maxDistance = std::numeric_limits<double>::infinity()) const;
 
   const TriangleMesh* mesh() const { return Mesh; }
 
@@ -141,6 +152,11 @@ private:
   std::vector<Place> WideParent;    // per wide node: where its parent holds it (root: none)
   std::vector<Place> LeafPlace;     // per binary node that is a leaf: where Wide holds it
   std::vector<std::int32_t> LeafOf; // per triangle, the leaf that holds it
+  // The triangles around each vertex (follow()): those of vertex v are
+  // Around[AroundStart[v], AroundStart[v + 1]).
+  std::vector<std::int32_t> AroundStart, Around;
+  std::vector<std::int64_t> Across; // per triangle and corner c: the triangle across the edge
+                                    // opposite c (-1: none)
 };
 
 } // namespace dp

@@ -204,6 +204,7 @@ struct Tracker::Attempt
   DeformationGraph::State state;
   FrameQuality quality;
   int iterations = 0, coarseIterations = 0;
+  bool solvedOn = false; // the fine level went on from a capped try that failed
   std::vector<std::uint8_t> frozen, rejected;
   std::vector<double> residual;
   double internalEnergy = 0, distanceEnergy = 0;
@@ -431,6 +432,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   if (capped)
   {
     a = *capped; // its start and coarse level; the fine level goes on from where it stopped
+    a.solvedOn = true;
     x = capped->positions;
   }
   else
@@ -516,6 +518,7 @@ void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* covera
                                                               : FineCoverageScale * Voxel);
     coverage->setMaxDistance(Options.coverage.maxDistance > 0 ? Options.coverage.maxDistance
                                                               : FineCoverageReach * Voxel);
+    coverage->searchWholeSurface();
   }
   distance.decide(x.data());
   std::vector<double> target;
@@ -646,6 +649,7 @@ void Tracker::keep(Attempt&& best, FrameResult& result)
   result.rejected = std::move(best.rejected);
   result.frozen = std::move(best.frozen);
   result.iterations = best.iterations;
+  result.solvedOn = best.solvedOn;
   result.coarseIterations = best.coarseIterations;
   result.internalEnergy = best.internalEnergy;
   result.distanceEnergy = best.distanceEnergy;

@@ -75,7 +75,10 @@ struct FrameResult
   std::vector<std::uint8_t> frozen;   // PD: frozen at the end of the solve
   std::vector<std::uint8_t> rejected; // normal test or outlier cut-off dropped the data term
   int iterations = 0;                 // of the fine solve (the kept attempt)
-  int coarseIterations = 0;           // of the coarse level (the kept attempt)
+  // The kept attempt's fine level went on to convergence after its few steps
+  // (GraphOptions::fineIterations) left a frame that failed the quality check.
+  bool solvedOn = false;
+  int coarseIterations = 0; // of the coarse level (the kept attempt)
   double internalEnergy = 0;
   double distanceEnergy = 0;
   double unexplained = 0; // share of the data farther than 3 voxels from the mesh (FrameQuality)

@@ -50,6 +50,11 @@ struct CoverageOptions
   double robustScale = 0.0;        // Geman-McClure scale (world units); 0: plain least squares
   double maxDistance = 0.0;        // world units; 0: no cut-off
   std::size_t points = 0;          // size of the well-spread subsample; 0: 4 per vertex
+  // Within a solve, each point's closest point follows the surface from its last triangle
+  // (SurfaceLocator::follow) instead of being searched over the whole surface again, where it
+  // stays within a voxel; the tracker still searches everything where a coarse stage and the
+  // fine level start (CoverageTerm).
+  bool followMatches = true;
 };
 
 /** The coarse level: an embedded deformation graph (DeformationGraph, GraphRegistration). */
