@@ -365,7 +365,7 @@ const char* Usage =
     "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
     "RATE] [--coverage-weight "
     "W] "
-    "[--coverage-points N] [--exact-coverage] [--point-to-point SHARE] [--temporal-weight W] "
+    "[--coverage-points N] [--follow-matches] [--point-to-point SHARE] [--temporal-weight W] "
     "[--no-recovery]\n"
     "             [--no-stiff-retry]\n"
     "             [--fail-margin SHARE]\n"
@@ -484,8 +484,8 @@ int main(int argc, char** argv)
         options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
       else if (arg == "--point-to-point")
         options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--exact-coverage")
-        options.coverage.followMatches = false;
+      else if (arg == "--follow-matches")
+        options.coverage.followMatches = true;
       else if (arg == "--coverage-weight")
         options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
       else if (arg == "--temporal-weight")

@@ -808,12 +808,15 @@ TEST(Tracker, KeepsALegThatPassesAnother)
   paper.graph.enabled = false;
   paper.recovery.enabled = false;
   // The defaults (the coarse level's steps Anderson-accelerated: extrapolating from the start of
-  // a stage carried the passing foot's vertices 2 cm toward the other leg), and plain steps.
+  // a stage carried the passing foot's vertices 2 cm toward the other leg), plain steps, and the
+  // points -> mesh matches followed over the surface within a solve.
   dp::TrackerOptions plain;
   plain.graph.acceleration = 0;
-  double worstError[3] = {0, 0, 0}, worstUncovered[3] = {0, 0, 0};
+  dp::TrackerOptions followed;
+  followed.coverage.followMatches = true;
+  double worstError[4] = {0, 0, 0, 0}, worstUncovered[4] = {0, 0, 0, 0};
   int run = 0;
-  for (const dp::TrackerOptions& options : {paper, dp::TrackerOptions{}, plain})
+  for (const dp::TrackerOptions& options : {paper, dp::TrackerOptions{}, plain, followed})
   {
     dp::Tracker tracker(mesh, legs.positions(0), options);
     for (std::size_t f = 0; f < legs.numberOfFrames(); ++f)
@@ -831,7 +834,7 @@ TEST(Tracker, KeepsALegThatPassesAnother)
     ++run;
   }
   EXPECT_GT(worstUncovered[0], 0.03) << "the paper's energy was expected to lose the foot";
-  for (int r = 1; r < 3; ++r)
+  for (int r = 1; r < 4; ++r)
   {
     EXPECT_LT(worstUncovered[r], 0.01) << "run " << r << " lost part of a leg";
     EXPECT_LT(worstError[r], 0.02) << "run " << r << ": a leg's vertices were carried off";

@@ -506,6 +506,7 @@ TEST(CoverageTerm, FollowedMatchesAreTheSearchedOnes)
     for (std::size_t i = 0; i < moved.size(); i += 3)
       moved[i] += shift;
     dp::CoverageOptions c;
+    c.followMatches = true;
     dp::CoverageTerm followed(*f.data, f.mesh, f.L, c);
     c.followMatches = false;
     dp::CoverageTerm searched(*f.data, f.mesh, f.L, c);

@@ -24,7 +24,7 @@
  * by a diagonal upper bound that couples nothing (the coarse level's cheaper systems).
  *
  * Closest points: the first linearisation, and the next after searchWholeSurface(), searches the
- * whole surface (SurfaceLocator::closest, a tree query per point). With followMatches (the
+ * whole surface (SurfaceLocator::closest, a tree query per point). With followMatches (off by
  * default) the others walk from each point's last triangle to a locally closest one
  * (SurfaceLocator::follow, about four triangle tests a point), as the mesh moves little between
  * the steps of a solve; a point that had no match, or whose walk ends farther than a voxel

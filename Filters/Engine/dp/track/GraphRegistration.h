@@ -35,8 +35,8 @@
  * registerFrame() runs the schedule that gives the coarse level its capture range: three stages
  * from stiff and far-reaching (the data terms see points up to ~24 voxels away, robustly) to
  * supple and local, a few Levenberg-Marquardt steps each, correspondences re-decided every step
- * (the points -> mesh term's searched over the whole surface at each stage's start and followed
- * over it from step to step within the stage, CoverageTerm::searchWholeSurface()).
+ * (the points -> mesh term's searched over the whole surface at each stage's start and, with
+ * CoverageOptions::followMatches, followed over it from step to step within the stage).
  *
  * The steps converge linearly (the data's points slide along the surface a little each step).
  * With setAcceleration() (the tracker's default: three steps) they are Anderson-accelerated

@@ -53,8 +53,9 @@ struct CoverageOptions
   // Within a solve, each point's closest point follows the surface from its last triangle
   // (SurfaceLocator::follow) instead of being searched over the whole surface again, where it
   // stays within a voxel; the tracker still searches everything where a coarse stage and the
-  // fine level start (CoverageTerm).
-  bool followMatches = true;
+  // fine level start (CoverageTerm). Off by default: 1.2-1.3x faster a frame, but over three
+  // seeds jumping's vertex RMS was 2.8 % higher (README, Speed, session 29).
+  bool followMatches = false;
 };
 
 /** The coarse level: an embedded deformation graph (DeformationGraph, GraphRegistration). */
