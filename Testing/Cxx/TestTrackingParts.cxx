@@ -496,7 +496,7 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
 TEST(CoverageTerm, FollowedMatchesAreTheSearchedOnes)
 {
   // The mesh moved since the matches were searched: followed over the surface (and searched
-  // again where a walk ends farther than a voxel, 0.019 here), they are those a search of the
+  // again where a walk ends farther than a voxel, 0.018 here), they are those a search of the
   // whole surface finds.
   Frame f(tube().positions);
   const auto& tri = f.mesh.triangles();

@@ -11,10 +11,10 @@ namespace
 {
 constexpr double Pi = 3.14159265358979323846;
 // A followed match farther than this from its point (voxels) is searched over the whole surface
-// instead: near, the data and the mesh agree and the walk's local answer is the closest point;
-// far, the part the point was matched to may have moved away from it, and another part may be
-// nearer (horse-gallop's passing legs, seed 3: 16.0 and 23.9 mm vertex RMS, decimated/noisy,
-// with this limit and without it).
+// instead: near, the walk's local answer is taken (another part would have to lie within a
+// voxel too); far, the part the point was matched to may have moved away from it, and another
+// part may be nearer (horse-gallop's passing legs, seed 3: 16.0 and 23.9 mm vertex RMS,
+// decimated/noisy, with this limit and without it).
 constexpr double TrustedFollow = 1.0;
 } // namespace
 
