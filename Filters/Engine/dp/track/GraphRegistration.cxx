@@ -526,7 +526,7 @@ int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTer
     {
       coverage->setRobustScale(reach / 3);
       coverage->setMaxDistance(reach);
-      coverage->searchWholeSurface(); // then followed over the surface within the stage
+      coverage->searchWholeSurface(); // followed within the stage if CoverageOptions says so
     }
     Graph.deform(state, x.data());
     distance.decide(x.data());
