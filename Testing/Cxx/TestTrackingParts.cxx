@@ -669,6 +669,14 @@ TEST(DeformationGraph, BlendsAlongTheSurfaceNotAcrossGaps)
   }
 }
 
+// A 16 x 12 tube and a 20-node deformation graph on it.
+struct TubeGraph
+{
+  Shape shape = tube(16, 12);
+  dp::TriangleMesh mesh{shape.triangles, shape.positions.size() / 3};
+  dp::DeformationGraph graph{mesh, shape.positions.data(), 20, 4};
+};
+
 // The coarse level's test problem: a 16 x 12 tube, its frame's points and masses, and a 20-node
 // deformation graph with the registration over it.
 struct GraphProblem
@@ -799,9 +807,8 @@ TEST(GraphRegistration, LimbsBendButDoNotStretch)
 {
   // The regulariser alone on a graph stretched uniformly about its centre (every edge longer by
   // the same share): its gradient against central differences, and its growth with the stretch.
-  const Shape shape = tube(16, 12);
-  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
-  const dp::DeformationGraph graph(mesh, shape.positions.data(), 20, 4);
+  const TubeGraph tubeGraph;
+  const dp::DeformationGraph& graph = tubeGraph.graph;
   const double voxel = 0.01;
   dp::GraphRegistration registration(graph, 1.0, voxel);
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
@@ -910,9 +917,8 @@ TEST(GraphRegistration, RegulariserModelIsItsHessianWhereNoEdgeBends)
   // Under a rigid motion of the whole graph no edge bends or stretches (E_reg = 0, residuals 0),
   // so the Gauss-Newton model J^T J is E_reg's exact Hessian there: the model times a direction
   // against central differences of the gradient along it (rotation increments and translations).
-  const Shape shape = tube(16, 12);
-  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
-  const dp::DeformationGraph graph(mesh, shape.positions.data(), 20, 4);
+  const TubeGraph tubeGraph;
+  const dp::DeformationGraph& graph = tubeGraph.graph;
   dp::GraphRegistration registration(graph, 1.0, 0.01);
   const std::size_t nodes = graph.numberOfNodes();
   const Eigen::Matrix3d turn =
@@ -1057,21 +1063,20 @@ TEST(GraphRegistration, AcceleratedStatesStayWithinAVoxelOfThePlainStep)
   // (linearised right after the plain step it replaces was evaluated) moves no vertex more than
   // a voxel from that step (6.5 voxels without that limit, when written), and the solve still
   // ends at the goal (0.14 voxel off after 5 accelerated states).
-  const Shape shape = tube(16, 12);
-  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
-  const dp::DeformationGraph graph(mesh, shape.positions.data(), 20, 4);
+  const TubeGraph tubeGraph;
+  const dp::DeformationGraph& graph = tubeGraph.graph;
   const double voxel = 0.01;
   dp::GraphRegistration registration(graph, 1.0, voxel);
   registration.setAcceleration(3);
   SlowPull pull;
-  pull.goal = shape.positions;
+  pull.goal = tubeGraph.shape.positions;
   for (std::size_t i = 0; i < pull.goal.size(); i += 3)
     pull.goal[i] += 8 * voxel;
   StepRecorder recorder;
-  recorder.size = shape.positions.size();
+  recorder.size = tubeGraph.shape.positions.size();
   dp::DeformationGraph::State state = graph.identity();
   registration.solve(state, {&pull, &recorder}, 1.0, 40);
-  std::vector<double> x(shape.positions.size());
+  std::vector<double> x(tubeGraph.shape.positions.size());
   graph.deform(state, x.data());
   double offGoal = 0;
   for (std::size_t i = 0; i < x.size(); ++i)
