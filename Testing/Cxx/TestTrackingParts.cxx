@@ -37,6 +37,7 @@
 #include <functional>
 #include <memory>
 #include <random>
+#include <utility>
 
 namespace
 {
@@ -62,13 +63,16 @@ using dp::test::jiggle;
 // The frame data of a tube's samples (with their true normals), voxel = diagonal / 60.
 struct Frame
 {
-  Shape shape = tube();
+  Shape shape;
   dp::TriangleMesh mesh{shape.triangles, shape.positions.size() / 3};
   double voxel = dp::boundingBoxDiagonal(shape.positions) / 60;
   std::unique_ptr<dp::FrameData> data;
   std::vector<double> mass;
   double L = 0;
-  explicit Frame(const std::vector<double>& truth, bool estimateNormals = false)
+  // `truth`: the frame's vertex positions on `base`'s connectivity (the template).
+  explicit Frame(const std::vector<double>& truth, bool estimateNormals = false,
+                 Shape base = tube())
+      : shape(std::move(base))
   {
     dp::SamplerOptions o;
     o.pointsPerFrame = 3000;
@@ -681,18 +685,9 @@ struct TubeGraph
 // deformation graph with the registration over it.
 struct GraphProblem
 {
-  Frame f{tube(16, 12).positions};
-  std::unique_ptr<dp::DeformationGraph> graph;
-  std::unique_ptr<dp::GraphRegistration> registration;
-  GraphProblem()
-  {
-    f.shape = tube(16, 12);
-    f.mesh = dp::TriangleMesh(f.shape.triangles, f.shape.positions.size() / 3);
-    const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{});
-    f.mass = cloth.vertexMass();
-    graph = std::make_unique<dp::DeformationGraph>(f.mesh, f.shape.positions.data(), 20, 4);
-    registration = std::make_unique<dp::GraphRegistration>(*graph, f.L, f.voxel);
-  }
+  Frame f{tube(16, 12).positions, false, tube(16, 12)};
+  dp::DeformationGraph graph{f.mesh, f.shape.positions.data(), 20, 4};
+  dp::GraphRegistration registration{graph, f.L, f.voxel};
 };
 
 // The coarse level's data terms on a problem's frame, as registerFrame() uses them: the
@@ -754,8 +749,8 @@ TEST(GraphRegistration, NodeGradientMatchesFiniteDifferences)
   // (angle-axis increment) and translation.
   GraphProblem problem;
   const Frame& f = problem.f;
-  const dp::DeformationGraph& graph = *problem.graph;
-  dp::GraphRegistration& registration = *problem.registration;
+  const dp::DeformationGraph& graph = problem.graph;
+  dp::GraphRegistration& registration = problem.registration;
   // The distance to the points, squared: its model's gradient is exact (the distance to planes
   // holds the interpolation weights), so the test sees the projection alone.
   dp::DistanceTermOptions d;
@@ -865,8 +860,8 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
   // equals (J d)^T H (J d), with J d from central differences of the deformed positions.
   GraphProblem problem;
   const Frame& f = problem.f;
-  const dp::DeformationGraph& graph = *problem.graph;
-  dp::GraphRegistration& registration = *problem.registration;
+  const dp::DeformationGraph& graph = problem.graph;
+  dp::GraphRegistration& registration = problem.registration;
   CoarseTerms data(f, dp::DistanceTermOptions{});
   const std::vector<dp::EnergyTerm*> terms = data.all();
   const std::size_t nodes = graph.numberOfNodes();
