@@ -685,7 +685,8 @@ struct TubeGraph
 // deformation graph with the registration over it.
 struct GraphProblem
 {
-  Frame f{tube(16, 12).positions, false, tube(16, 12)};
+  Shape shape = tube(16, 12);
+  Frame f{shape.positions, false, shape};
   dp::DeformationGraph graph{f.mesh, f.shape.positions.data(), 20, 4};
   dp::GraphRegistration registration{graph, f.L, f.voxel};
 };
