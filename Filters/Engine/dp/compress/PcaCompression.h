@@ -119,8 +119,10 @@ struct CompressedSequence
 /**
  * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at
  * 3 * vertices * t). Throws std::invalid_argument for empty or non-finite input or a target
- * out of range. `progress` (may be empty) is called with a fraction in [0, 1]; returning false
- * aborts (std::runtime_error "aborted").
+ * out of range. `progress` (may be empty) is called with a fraction in [0, 1], on the caller's
+ * thread only; returning false aborts (std::runtime_error "aborted"). The candidate component
+ * counts are coded on several threads (TBB; as many at once as fit in 1 GiB of working memory):
+ * the result is the same, byte for byte, for any thread count.
  */
 CompressedSequence compressSequence(const double* positions, std::size_t vertices,
                                     std::size_t frames, const PcaOptions& options,
