@@ -249,11 +249,16 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
       std::printf(
           "  frame %3zu: rigid-free %5.1f vertex RMS %6.1f mm (start %6.1f coarse %6.1f), largest "
           "%6.1f mm, surface RMS %5.1f mm, "
-          "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f%s\n",
+          "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f, "
+          "retries %d (kept: %s)%s\n",
           f, rigidRms(r.positions), 1e3 * frameRms, rmsOf(r.startPositions),
           rmsOf(r.coarsePositions), 1e3 * figures.largestVertexError,
           1e3 * std::sqrt(figures.surfaceSquaredSum / nv), 100 * figures.uncovered,
           r.coarseIterations, r.iterations, 1e3 * r.seconds, r.unexplained, r.unsupported,
+          r.retries,
+          r.kept == 0   ? "predicted"
+          : r.kept == 1 ? "another start"
+                        : "stiff",
           r.failed ? " FAILED" : "");
     if (csv)
       *csv << label << ',' << f << ',' << 1e3 * frameRms << ',' << 1e3 * figures.largestVertexError
