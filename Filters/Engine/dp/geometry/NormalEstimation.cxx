@@ -68,10 +68,18 @@ class SpanningTreeOrientation
 {
 public:
   SpanningTreeOrientation(const double* points, const NeighbourLists& graph,
-                          std::vector<float>& normals, std::vector<std::uint32_t>* parts)
-      : Points(points), Graph(graph), Normals(normals), Parts(parts), Done(graph.degree.size(), 0),
-        Best(graph.degree.size()), Slot(graph.degree.size(), NotQueued)
+                          std::vector<float>& normals, std::vector<std::uint32_t>* parts,
+                          OrientationTree* tree)
+      : Points(points), Graph(graph), Normals(normals), Parts(parts), Tree(tree),
+        Done(graph.degree.size(), 0), Best(graph.degree.size()),
+        Slot(graph.degree.size(), NotQueued)
   {
+    if (Tree)
+    {
+      Tree->parent.assign(graph.degree.size(), 0);
+      Tree->order.clear();
+      Tree->order.reserve(graph.degree.size());
+    }
   }
 
   /** Orients the part of `seed` (if not done yet) from it, its normal made to point to +x. */
@@ -84,6 +92,7 @@ public:
     if (Normals[3 * seed] < 0)
       flip(seed);
     Done[seed] = 1;
+    record(seed, seed);
     offerNeighbours(seed);
     while (!Heap.empty())
     {
@@ -92,6 +101,7 @@ public:
       if (dot(from, to) < 0)
         flip(to);
       Done[to] = 1;
+      record(to, from);
       // Orientation carried across a sharp turn of the normals is the least sure: a new part.
       if (Parts)
         (*Parts)[to] = Best[to].weight > WeakOrientation ? ++Part : (*Parts)[from];
@@ -124,6 +134,13 @@ private:
     }
     const double across = length2 > 0 ? std::abs(along) / std::sqrt(length2) : 0.0;
     return static_cast<float>(1.0 - std::abs(dot(a, b)) + 0.5 * across);
+  }
+  void record(std::uint32_t point, std::uint32_t from)
+  {
+    if (!Tree)
+      return;
+    Tree->parent[point] = from;
+    Tree->order.push_back(point);
   }
   void flip(std::size_t i)
   {
@@ -214,6 +231,7 @@ private:
   const NeighbourLists& Graph;
   std::vector<float>& Normals;
   std::vector<std::uint32_t>* Parts;
+  OrientationTree* Tree;
   std::vector<char> Done;
   std::vector<Edge> Best;          // per queued point: its cheapest edge from the tree
   std::vector<std::uint32_t> Slot; // per point: its place in Heap, or NotQueued
@@ -223,11 +241,13 @@ private:
 } // namespace
 
 std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours,
-                                   std::vector<std::uint32_t>* parts)
+                                   std::vector<std::uint32_t>* parts, OrientationTree* tree)
 {
   std::vector<float> normals(3 * count, 0.0f);
   if (parts)
     parts->assign(count, 0);
+  if (tree)
+    *tree = {};
   if (count == 0)
     return normals;
   const std::size_t k = std::max<std::size_t>(3, std::min(neighbours, count));
@@ -238,10 +258,124 @@ std::vector<float> estimateNormals(const double* points, std::size_t count, std:
     order[i] = static_cast<std::uint32_t>(i);
   std::sort(order.begin(), order.end(),
             [&](std::uint32_t a, std::uint32_t b) { return points[3 * a] > points[3 * b]; });
-  SpanningTreeOrientation orientation(points, graph, normals, parts);
+  SpanningTreeOrientation orientation(points, graph, normals, parts, tree);
   for (std::uint32_t seed : order)
     orientation.orientPartOf(seed);
   return normals;
+}
+
+namespace
+{
+// Whether the edge from point p's parent to p lies inside a part (the parts' own boundaries are
+// the orientation's weak edges, each part voted on as a whole by the caller).
+bool innerEdge(const OrientationTree& tree, const std::vector<std::uint32_t>& parts,
+               std::uint32_t p)
+{
+  const std::uint32_t q = tree.parent[p];
+  return q != p && parts[q] == parts[p];
+}
+
+// The votes for and against in each point's branch (the point and what descends from it inside
+// its part), and each part's totals.
+struct BranchVotes
+{
+  std::vector<std::uint32_t> agree, disagree, asked;
+  std::vector<std::uint32_t> partAgree, partDisagree, partAsked;
+
+  BranchVotes(const OrientationTree& tree, const std::vector<std::uint32_t>& parts,
+              const std::vector<std::int8_t>& votes)
+      : agree(votes.size()), disagree(votes.size()), asked(votes.size())
+  {
+    for (std::size_t p = 0; p < votes.size(); ++p)
+    {
+      agree[p] = votes[p] == 1;
+      disagree[p] = votes[p] == -1;
+      asked[p] = votes[p] != NotAsked;
+    }
+    for (auto it = tree.order.rbegin(); it != tree.order.rend(); ++it)
+      if (innerEdge(tree, parts, *it))
+      {
+        agree[tree.parent[*it]] += agree[*it];
+        disagree[tree.parent[*it]] += disagree[*it];
+        asked[tree.parent[*it]] += asked[*it];
+      }
+    const std::uint32_t partCount = *std::max_element(parts.begin(), parts.end()) + 1;
+    partAgree.assign(partCount, 0);
+    partDisagree.assign(partCount, 0);
+    partAsked.assign(partCount, 0);
+    for (std::uint32_t p : tree.order)
+      if (!innerEdge(tree, parts, p)) // the top of its part
+      {
+        partAgree[parts[p]] += agree[p];
+        partDisagree[parts[p]] += disagree[p];
+        partAsked[parts[p]] += asked[p];
+      }
+  }
+};
+
+// The cut that turns the most disagreement around: below `branch` (inside) or the rest of its
+// part (outside).
+struct Cut
+{
+  std::uint32_t branch = 0;
+  bool inside = true;
+  std::uint32_t gain = 0;
+};
+
+Cut bestCut(const OrientationTree& tree, const std::vector<std::uint32_t>& parts,
+            const BranchVotes& v, const MendOptions& options)
+{
+  Cut best;
+  auto oneWay = [&](double with, double total) { return with >= options.share * total; };
+  for (std::uint32_t p : tree.order)
+  {
+    if (!innerEdge(tree, parts, p))
+      continue;
+    const double inA = v.agree[p], inD = v.disagree[p];
+    const double outA = v.partAgree[parts[p]] - inA, outD = v.partDisagree[parts[p]] - inD;
+    const double inAsked = v.asked[p], outAsked = v.partAsked[parts[p]] - inAsked;
+    // Each side must gather enough votes, from most of the points asked: where the reference
+    // meets only a few of a side's points it is elsewhere (a hand that moved through its own
+    // thickness meets the data's other side).
+    if (inA + inD < options.minimumVotes || outA + outD < options.minimumVotes ||
+        inA + inD < options.coverage * inAsked || outA + outD < options.coverage * outAsked)
+      continue;
+    if (oneWay(inD, inA + inD) && oneWay(outA, outA + outD) && inD - inA > best.gain)
+      best = {p, true, static_cast<std::uint32_t>(inD - inA)};
+    else if (oneWay(inA, inA + inD) && oneWay(outD, outA + outD) && outD - outA > best.gain)
+      best = {p, false, static_cast<std::uint32_t>(outD - outA)};
+  }
+  return best;
+}
+} // namespace
+
+std::size_t mendOrientation(const OrientationTree& tree, const std::vector<std::uint32_t>& parts,
+                            std::vector<std::int8_t>& votes, float* normals,
+                            const MendOptions& options)
+{
+  if (tree.order.empty() || parts.size() != votes.size() || tree.parent.size() != votes.size())
+    return 0;
+  std::size_t turned = 0;
+  std::vector<char> below(votes.size());
+  for (int cut = 0; cut < options.maximumCuts; ++cut)
+  {
+    const Cut c = bestCut(tree, parts, BranchVotes(tree, parts, votes), options);
+    if (c.gain == 0)
+      break;
+    const std::uint32_t part = parts[c.branch];
+    for (std::uint32_t p : tree.order) // parents first: a point is below once its parent is
+      below[p] = p == c.branch || (innerEdge(tree, parts, p) && below[tree.parent[p]]);
+    for (std::size_t p = 0; p < votes.size(); ++p)
+      if (parts[p] == part && (below[p] != 0) == c.inside)
+      {
+        for (int k = 0; k < 3; ++k)
+          normals[3 * p + k] = -normals[3 * p + k];
+        if (votes[p] != NotAsked)
+          votes[p] = static_cast<std::int8_t>(-votes[p]);
+        ++turned;
+      }
+  }
+  return turned;
 }
 
 } // namespace dp

@@ -172,9 +172,19 @@ void FrameData::takeOrEstimateNormals(const double* points, std::size_t count, c
     return;
   }
   std::vector<std::uint32_t> parts;
-  Normals = estimateNormals(points, count, 16, &parts);
+  Normals = estimateNormals(points, count, 16, &parts, &Tree);
   Parts = std::move(parts);
   PartCount = Parts.empty() ? 0 : *std::max_element(Parts.begin(), Parts.end()) + 1;
+}
+
+std::size_t FrameData::mendOrientation(const std::vector<std::int8_t>& spreadVotes)
+{
+  if (Tree.order.empty() || spreadVotes.size() != Spread.size())
+    return 0;
+  std::vector<std::int8_t> votes(Count, NotAsked);
+  for (std::size_t i = 0; i < Spread.size(); ++i)
+    votes[Spread[i]] = spreadVotes[i];
+  return dp::mendOrientation(Tree, Parts, votes, Normals.data());
 }
 
 void FrameData::chooseSpread(const double* points, std::size_t count,

@@ -29,6 +29,7 @@
 #pragma once
 
 #include "dp/field/DistanceField.h"
+#include "dp/geometry/NormalEstimation.h"
 
 #include <cstdint>
 #include <vector>
@@ -91,6 +92,10 @@ public:
         for (int c = 0; c < 3; ++c)
           Normals[3 * i + c] = -Normals[3 * i + c];
   }
+  /** Within the parts: turns around the branches of the orientation that the subsample's votes
+   *  (per spread() point: +1 agrees, -1 disagrees, 0 silent) disagree with as a whole
+   *  (mendOrientation). Returns the number of points turned; 0 for normals given. */
+  std::size_t mendOrientation(const std::vector<std::int8_t>& spreadVotes);
   /** Indices of the well-spread subsample, in increasing order. */
   const std::vector<std::uint32_t>& spread() const { return Spread; }
 
@@ -106,6 +111,7 @@ private:
   DistanceField Field;
   std::vector<float> Normals;
   std::vector<std::uint32_t> Parts; // of the estimated normals' orientation
+  OrientationTree Tree;             // the estimated normals' orientation spread along it
   std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
 };

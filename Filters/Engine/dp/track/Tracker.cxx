@@ -43,6 +43,10 @@ constexpr double FineCoverageReach = 8.0;
 constexpr double TearGrowth = 2.0;
 // Robust scale, in voxels, of the distance term that chooses the coarse level's start.
 constexpr double StartChoiceScale = 3.0;
+// A sure vote on a data normal's orientation (Tracker::orientData): the last shape's surface
+// within this many voxels, at most 45 degrees from parallel or antiparallel (cosine).
+constexpr double SureReach = 2.0;
+constexpr double SureCosine = 0.7;
 
 // Throws std::invalid_argument naming the first option out of its range (NaN included).
 void validate(const TrackerOptions& o)
@@ -298,10 +302,11 @@ void Tracker::orientData(FrameData& frame) const
   Mesh.vertexNormals(x.data(), normals.data());
   const auto& tri = Mesh.triangles();
   const std::size_t parts = std::max<std::size_t>(1, frame.numberOfParts());
-  // Each subsample point's vote (searched in parallel, counted in order): +1 agrees, -1
-  // disagrees, 0 no surface within 3 voxels.
+  // Each subsample point's votes (searched in parallel, counted in order): +1 agrees, -1
+  // disagrees, 0 no surface near. On its part: any surface within 3 voxels. Within its part
+  // (the sure vote): a surface within 2 voxels, at most 45 degrees from parallel either way.
   const std::vector<std::uint32_t>& spread = frame.spread();
-  std::vector<std::int8_t> vote(spread.size(), 0);
+  std::vector<std::int8_t> vote(spread.size(), 0), sure(spread.size(), 0);
   forEachIndex(spread.size(),
                [&](std::size_t i)
                {
@@ -309,12 +314,17 @@ void Tracker::orientData(FrameData& frame) const
                  const SurfaceLocator::Hit hit = locator.closest(frame.point(p), 3 * Voxel);
                  if (hit.triangle < 0)
                    return;
-                 double along = 0;
+                 double n[3] = {0, 0, 0};
                  for (int c = 0; c < 3; ++c)
                    for (int k = 0; k < 3; ++k)
-                     along += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k] *
-                              frame.normal(p)[k];
+                     n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
+                 const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+                 const double along = n[0] * frame.normal(p)[0] + n[1] * frame.normal(p)[1] +
+                                      n[2] * frame.normal(p)[2];
                  vote[i] = along >= 0 ? 1 : -1;
+                 if (hit.squaredDistance <= SureReach * SureReach * Voxel * Voxel &&
+                     std::abs(along) >= SureCosine * length)
+                   sure[i] = vote[i];
                });
   std::vector<double> agree(parts, 0), disagree(parts, 0);
   for (std::size_t i = 0; i < spread.size(); ++i)
@@ -330,7 +340,12 @@ void Tracker::orientData(FrameData& frame) const
         frame.flipNormals(part);
       else
         frame.flipNormals();
+      for (std::size_t i = 0; i < spread.size(); ++i)
+        if (frame.numberOfParts() == 0 || frame.part(spread[i]) == part)
+          sure[i] = static_cast<std::int8_t>(-sure[i]);
     }
+  // Then within each part: a branch of the orientation turned at a sharp edge (a foot's rim).
+  frame.mendOrientation(sure);
 }
 
 bool Tracker::failed(const Attempt& a) const

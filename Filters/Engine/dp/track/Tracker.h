@@ -214,6 +214,8 @@ private:
    *  frame that did not fail. */
   void remember(const FrameResult& result);
   void trackEmptyFrame(FrameResult& result);
+  /** Turns the frame's estimated normals to agree with the last shape: each part by its
+   *  majority, then the branches of the orientation that disagree as a whole. */
   void orientData(class FrameData& frame) const;
 
   TriangleMesh Mesh;
