@@ -44,16 +44,20 @@ std::vector<float> estimateNormals(const double* points, std::size_t count,
  * a whole. The tree can carry a wrong orientation across a sharp edge where PCA smears the
  * normals of both sides into one direction (the rim of a foot): everything beyond that edge is
  * then inward, while the edge's own weight looked sure. `votes` holds, per point, +1 where a
- * reference (the tracked mesh) agrees with its normal, -1 where it disagrees, 0 where it says
- * nothing. An edge of the tree inside a part is cut, and the wrong side's normals (and votes)
- * turned, when the votes on both sides of it are each at least `minimumVotes` and `share` one
- * way: agreeing on one side, disagreeing on the other. The edge whose wrong side holds the
- * most disagreement goes first, then the sums are taken again, at most `maximumCuts` times.
- * Returns the number of points turned.
+ * reference (the tracked mesh) agrees with its normal, -1 where it disagrees, 0 where it was
+ * asked and says nothing (no surface near), NotAsked where it was not asked. An edge of the
+ * tree inside a part is cut, and the wrong side's normals (and votes) turned, when the votes on
+ * both sides of it are each at least `minimumVotes`, from at least `coverage` of the side's
+ * asked points, and `share` one way: agreeing on one side, disagreeing on the other. The edge
+ * whose wrong side holds the most disagreement goes first (ties: the first in the tree's
+ * order), then the sums are taken again, at most `maximumCuts` times. Returns the number of
+ * points turned. Serial and deterministic, O(points) per cut.
  *
  * Limits: a side is a whole branch of the tree or the rest of its part, so only errors made at
- * one edge are found; the reference must be near (a vote only where the mesh is), and a side
- * too small to gather `minimumVotes` stays as it is.
+ * one edge each are found; the reference must be near and right (a reference displaced by
+ * about its own thickness can vote a right side wrong, which `coverage` guards against, not
+ * excludes); where between the last vote for and the first against the cut falls is a guess;
+ * a side too small to gather `minimumVotes` stays as it is.
  */
 struct MendOptions
 {
