@@ -340,11 +340,17 @@ void Tracker::orientData(FrameData& frame) const
         frame.flipNormals(part);
       else
         frame.flipNormals();
-      for (std::size_t i = 0; i < spread.size(); ++i)
-        if (frame.numberOfParts() == 0 || frame.part(spread[i]) == part)
-          sure[i] = static_cast<std::int8_t>(-sure[i]);
     }
-  // Then within each part: a branch of the orientation turned at a sharp edge (a foot's rim).
+  if (frame.numberOfParts() == 0)
+    return; // normals given: no orientation tree to mend
+  // Then within each part: a branch of the orientation turned at a sharp edge (a foot's rim),
+  // judged by the sure votes as the normals now stand.
+  for (std::size_t i = 0; i < spread.size(); ++i)
+  {
+    const std::uint32_t part = frame.part(spread[i]);
+    if (disagree[part] > agree[part])
+      sure[i] = static_cast<std::int8_t>(-sure[i]);
+  }
   frame.mendOrientation(sure);
 }
 
