@@ -798,7 +798,8 @@ TEST(Tracker, KeepsALegThatPassesAnother)
   // The front foot passes the hind one, 2 cm apart, moving 0.2 a frame (more than a leg's width
   // of 0.16): with the paper's energy the passing foot lags onto the other leg's data; the default
   // tracker keeps both legs. (Before the coarse level continued each node's turn about its own
-  // axis, not only its displacement, it lost the leg from 0.16 a frame: README, Tracking.)
+  // axis, not only its displacement, it lost the leg from 0.16 a frame: Documentation/
+  // TrackingHistory.md, The coarse level's start.)
   const PassingLegs legs(0.2, 10);
   const dp::TriangleMesh mesh(legs.triangles(), legs.numberOfVertices());
   dp::SamplerOptions sampling;

@@ -54,7 +54,8 @@ struct CoverageOptions
   // (SurfaceLocator::follow) instead of being searched over the whole surface again, where it
   // stays within a voxel; the tracker still searches everything where a coarse stage and the
   // fine level start (CoverageTerm). Off by default: 1.2-1.3x faster a frame, but over three
-  // seeds jumping's vertex RMS was 2.8 % higher (README, Speed, session 29).
+  // seeds jumping's vertex RMS was 2.8 % higher (Documentation/TrackingHistory.md, Speed,
+  // session 29).
   bool followMatches = false;
 };
 
@@ -82,14 +83,14 @@ struct GraphOptions
   // maxIterations bounds the other solvers, and Gauss-Newton without the graph). The graph has
   // placed the surface and a few steps fit its detail; solved to convergence, the fine level
   // lets vertices slide along the data, where no term holds them, and the tracked vertices end
-  // farther from the true ones (README, Speed, session 22).
+  // farther from the true ones (Documentation/TrackingHistory.md, Speed, session 22).
   int fineIterations = 3;
   // Anderson acceleration of the Levenberg-Marquardt steps (AndersonAcceleration): the number of
   // earlier steps combined (0: plain steps, stages end on the energy's gain), once steps move no
   // vertex two voxels; an accelerated state moves no vertex more than a voxel beyond the plain
   // step, and a stage also ends once a step moves no vertex a tenth of a voxel. 1.05-1.2x faster
   // where frames are not retried, and over three seeds as accurate as plain steps or more
-  // (README, Speed, session 28).
+  // (Documentation/TrackingHistory.md, Speed, session 28).
   int acceleration = 3;
 };
 
@@ -117,11 +118,11 @@ struct RecoveryOptions
  *  its shape. A vertex whose medial radius, over the template's 90th percentile, is below
  *  `from` keeps the cloth's stiffness; above `to` its edges' stretch stiffness is multiplied by
  *  `stretch` and its hinges' bending stiffness by `bend`; in between it blends smoothly.
- *  Measured with the creases' softening (README, Tracking; seed 1, stretch 1 -> 0.3): the
- *  captured human 18.2 / 18.3 / 30.9 / 28.8 -> 16.8 / 16.1 / 26.6 / 27.6 mm (decimated clean /
- *  noisy, reconstructed clean / noisy), the galloping horse better on three rows and
- *  worse reconstructed/clean (17.5 -> 19.5 mm, a leg drawn toward another over three frames;
- *  17.1 mm since a torn limb counts as a failed frame, RecoveryOptions::stiffRetry), the
+ *  Measured with the creases' softening (Documentation/TrackingHistory.md; seed 1, stretch
+ *  1 -> 0.3): the captured human 18.2 / 18.3 / 30.9 / 28.8 -> 16.8 / 16.1 / 26.6 / 27.6 mm
+ *  (decimated clean / noisy, reconstructed clean / noisy), the galloping horse better on three
+ *  rows and worse reconstructed/clean (17.5 -> 19.5 mm, a leg drawn toward another over three
+ *  frames; 17.1 mm since a torn limb counts as a failed frame, RecoveryOptions::stiffRetry), the
  *  melting horse (far from isometric) up to 10 mm worse: for slow non-rigid motion set
  *  stretch 1. Only vertices whose inner ball meets the surface's other side count as thick: a
  *  sheet, or a template open there, keeps its stiffness.
@@ -139,8 +140,9 @@ struct ThicknessSoftening
  *  thickness (the 90th percentile of the inner radii), the edges' stretch stiffness is
  *  multiplied by `stretch`. A creased template joins what the motion parts (arms that touch the
  *  body at frame 0, reconstructed as one surface; armpits, crotch, neck): stiff, those bridges
- *  drag the torso's skin along with the arm. Measured (README, Tracking): the reconstructed human
- *  34.2 -> 28.8 mm, the galloping horse better too, nothing lost. stretch = 1 switches it off. */
+ *  drag the torso's skin along with the arm. Measured (Documentation/TrackingHistory.md): the
+ *  reconstructed human 34.2 -> 28.8 mm, the galloping horse better too, nothing lost.
+ *  stretch = 1 switches it off. */
 struct CreaseSoftening
 {
   double stretch = 0.1;
