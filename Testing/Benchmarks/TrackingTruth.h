@@ -13,13 +13,13 @@
 #include "vtkCellArray.h"
 #include "vtkCellArrayIterator.h"
 #include "vtkGenericCell.h"
+#include "vtkMath.h"
 #include "vtkNew.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkQuadricDecimation.h"
 #include "vtkSmartPointer.h"
 #include "vtkStaticCellLocator.h"
-#include "vtkTriangle.h"
 
 #include <algorithm>
 #include <cmath>
@@ -139,6 +139,33 @@ inline const char* templateName(TemplateKind kind)
                                                : "full";
 }
 
+/** The barycentric coordinates w of p (on or near the triangle abc) in 3D: p's projection onto
+ *  the triangle's plane is w[0] a + w[1] b + w[2] c. (vtkTriangle::BarycentricCoords works in
+ *  x and y only: on a triangle standing upright in z its weights are meaningless.) */
+inline void barycentricCoordinates(const double p[3], const double a[3], const double b[3],
+                                   const double c[3], double w[3])
+{
+  double ab[3], ac[3], ap[3];
+  for (int k = 0; k < 3; ++k)
+  {
+    ab[k] = b[k] - a[k];
+    ac[k] = c[k] - a[k];
+    ap[k] = p[k] - a[k];
+  }
+  const double d00 = vtkMath::Dot(ab, ab), d01 = vtkMath::Dot(ab, ac), d11 = vtkMath::Dot(ac, ac);
+  const double d20 = vtkMath::Dot(ap, ab), d21 = vtkMath::Dot(ap, ac);
+  const double denominator = d00 * d11 - d01 * d01;
+  if (!(denominator > 0))
+  {
+    w[0] = 1; // a degenerate triangle: its first corner
+    w[1] = w[2] = 0;
+    return;
+  }
+  w[1] = (d11 * d20 - d01 * d21) / denominator;
+  w[2] = (d00 * d21 - d01 * d20) / denominator;
+  w[0] = 1 - w[1] - w[2];
+}
+
 /** Frame 0 decimated to about `vertices` (quadric decimation, volume kept). */
 inline vtkSmartPointer<vtkPolyData> decimated(vtkPolyData* input, std::size_t vertices)
 {
@@ -207,7 +234,7 @@ inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, st
       b[k] = frame0[3 * v[1] + k];
       c[k] = frame0[3 * v[2] + k];
     }
-    vtkTriangle::BarycentricCoords(closest, a, b, c, w);
+    barycentricCoordinates(closest, a, b, c, w);
     // A decimated vertex sits on the surface; a reconstructed one up to half a voxel off it,
     // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is then
     // that offset.
