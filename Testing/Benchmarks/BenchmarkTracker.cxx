@@ -102,6 +102,159 @@ struct Run
   std::size_t worstFrame = 0, frames = 0;
 };
 
+// A run's sums over its frames, turned into its figures once the last frame is in.
+class RunSums
+{
+public:
+  void add(std::size_t frame, const dp::FrameResult& r, const FrameFigures& figures,
+           const std::vector<double>& truth, double cycleSeconds)
+  {
+    Seconds += cycleSeconds;
+    R.time.data += r.timings.data;
+    R.time.prediction += r.timings.prediction;
+    R.time.coarse += r.timings.coarse;
+    R.time.fine += r.timings.fine;
+    R.time.quality += r.timings.quality;
+    R.retried += r.retries > 0;
+    R.coarseSteps += static_cast<std::size_t>(r.coarseIterations);
+    R.fineSteps += static_cast<std::size_t>(r.iterations);
+    R.flagged += r.failed;
+    JitterSums.add(r.positions, truth);
+    VertexSum += figures.vertexSquaredSum;
+    SurfaceSum += figures.surfaceSquaredSum;
+    UncoveredSum += figures.uncovered;
+    R.largestVertexError = std::max(R.largestVertexError, figures.largestVertexError);
+    if (figures.uncovered > R.uncoveredWorst || R.frames == 0)
+    {
+      R.uncoveredWorst = figures.uncovered;
+      R.worstFrame = frame;
+    }
+    ++R.frames;
+  }
+
+  Run finish(std::size_t vertices) const
+  {
+    Run run = R;
+    const double tracked = static_cast<double>(run.frames);
+    const double samples = tracked * static_cast<double>(vertices);
+    run.vertexRms = std::sqrt(VertexSum / samples);
+    run.surfaceRms = std::sqrt(SurfaceSum / samples);
+    run.uncoveredMean = UncoveredSum / tracked;
+    run.jitter = JitterSums.ratio();
+    run.msPerFrame = 1e3 * Seconds / tracked;
+    return run;
+  }
+
+private:
+  Run R;
+  Jitter JitterSums;
+  double VertexSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
+};
+
+// Feeds a tracker its frames as the main job does (vtkDeformableTrackFilter): frame f + 1's data
+// is prepared on another thread while frame f is tracked, and a frame's time is the wall time of
+// that cycle (tracking it and preparing the next, whichever ends last). --no-pipeline: each frame
+// prepared, then tracked.
+class FramePipeline
+{
+public:
+  explicit FramePipeline(dp::Tracker& tracker) : Tracker(tracker) {}
+
+  // Tracks `cloud` (prepared already when it was the last call's `next`) while `next` (null:
+  // none) is prepared; `seconds` gets the cycle's wall time.
+  dp::FrameResult track(const dp::PointCloud& cloud, const dp::PointCloud* next, double& seconds)
+  {
+    const auto cycle = std::chrono::steady_clock::now();
+    if (!Ready)
+      Ready = prepare(cloud);
+    std::future<dp::PreparedFrame> preparing;
+    if (S.pipeline && next)
+      preparing = std::async(std::launch::async, [this, next] { return prepare(*next); });
+    const dp::FrameResult r = Tracker.track(std::move(*Ready));
+    Ready.reset();
+    if (preparing.valid())
+      Ready = preparing.get();
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - cycle).count();
+    return r;
+  }
+
+private:
+  dp::PreparedFrame prepare(const dp::PointCloud& c) const
+  {
+    return Tracker.prepare(c.points.data(), c.numberOfPoints(),
+                           c.hasNormals() ? c.normals.data() : nullptr);
+  }
+
+  dp::Tracker& Tracker;
+  std::optional<dp::PreparedFrame> Ready;
+};
+
+// The RMS distance (mm) of positions y to the true ones; -1 for none (an attempt not made).
+double rmsAgainst(const std::vector<double>& y, const std::vector<double>& truth)
+{
+  double e = 0;
+  for (std::size_t i = 0; i < y.size(); ++i)
+    e += (y[i] - truth[i]) * (y[i] - truth[i]);
+  return y.empty() ? -1.0 : 1e3 * std::sqrt(e / static_cast<double>(truth.size() / 3));
+}
+
+// The error (mm, RMS) left once the best rigid motion is taken out (Kabsch): local, not global,
+// error.
+double rigidFreeRms(const std::vector<double>& y, const std::vector<double>& truth)
+{
+  const std::size_t n = y.size() / 3;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  for (std::size_t v = 0; v < n; ++v)
+  {
+    a += Eigen::Vector3d(&y[3 * v]);
+    b += Eigen::Vector3d(&truth[3 * v]);
+  }
+  a /= static_cast<double>(n);
+  b /= static_cast<double>(n);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (std::size_t v = 0; v < n; ++v)
+    C += (Eigen::Vector3d(&truth[3 * v]) - b) * (Eigen::Vector3d(&y[3 * v]) - a).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
+  double e = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v])).squaredNorm();
+  return 1e3 * std::sqrt(e / static_cast<double>(n));
+}
+
+// --verbose: one line a frame.
+void printFrame(std::size_t f, const dp::FrameResult& r, const FrameFigures& figures,
+                const std::vector<double>& truth)
+{
+  const double nv = static_cast<double>(truth.size() / 3);
+  std::printf(
+      "  frame %3zu: rigid-free %5.1f vertex RMS %6.1f mm (start %6.1f coarse %6.1f), largest "
+      "%6.1f mm, surface RMS %5.1f mm, "
+      "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f, "
+      "retries %d (kept: %s)%s\n",
+      f, rigidFreeRms(r.positions, truth), 1e3 * std::sqrt(figures.vertexSquaredSum / nv),
+      rmsAgainst(r.startPositions, truth), rmsAgainst(r.coarsePositions, truth),
+      1e3 * figures.largestVertexError, 1e3 * std::sqrt(figures.surfaceSquaredSum / nv),
+      100 * figures.uncovered, r.coarseIterations, r.iterations, 1e3 * r.seconds, r.unexplained,
+      r.unsupported, r.retries,
+      r.kept == 0   ? "predicted"
+      : r.kept == 1 ? "another start"
+                    : "stiff",
+      r.failed ? " FAILED" : "");
+}
+
+// --csv: one row a frame.
+void writeCsvRow(std::ostream& csv, const std::string& label, std::size_t f,
+                 const dp::FrameResult& r, const FrameFigures& figures, double vertices)
+{
+  csv << label << ',' << f << ',' << 1e3 * std::sqrt(figures.vertexSquaredSum / vertices) << ','
+      << 1e3 * figures.largestVertexError << ','
+      << 1e3 * std::sqrt(figures.surfaceSquaredSum / vertices) << ',' << 100 * figures.uncovered
+      << ',' << r.iterations << ',' << 1e3 * r.seconds << '\n';
+}
+
 void dumpFrame(const std::string& folder, std::size_t frame, const std::vector<double>& positions,
                const std::vector<double>& truth, const std::vector<std::int64_t>& triangles,
                const dp::PointCloud& data)
@@ -150,21 +303,11 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   truthSampling.pointsPerFrame = S.truthSamples;
   truthSampling.seed = S.seed + 1000003; // other points than the data's
   truthSampling.normals = false;
-  Run run;
-  Jitter jitter;
-  double vertexSum = 0, surfaceSum = 0, uncoveredSum = 0, seconds = 0;
+  RunSums sums;
+  FramePipeline pipeline(tracker);
   const std::size_t first = std::min(S.startFrame, frames - 1);
-  // As the main job runs (vtkDeformableTrackFilter): frame f + 1's data is prepared on another
-  // thread while frame f is tracked; a frame's time is the wall time of that cycle (tracking it
-  // and preparing the next, whichever ends last). --no-pipeline: prepared, then tracked.
-  auto prepare = [&tracker](const dp::PointCloud& c)
-  {
-    return tracker.prepare(c.points.data(), c.numberOfPoints(),
-                           c.hasNormals() ? c.normals.data() : nullptr);
-  };
   dp::PointCloud cloud =
       dp::sampleSurface(mesh.positions(first), mesh.triangles(), sampling, first);
-  std::optional<dp::PreparedFrame> ready;
   for (std::size_t f = first; f < frames; ++f)
   {
     const std::vector<double> truthMesh = mesh.positions(f);
@@ -175,108 +318,24 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
     else if (S.oracle == "same")
       tracker.restartFrom(groundTruth(t, truthMesh, mesh.triangles()));
-    const auto cycle = std::chrono::steady_clock::now();
-    if (!ready)
-      ready = prepare(cloud);
-    std::future<dp::PreparedFrame> preparing;
-    if (S.pipeline && f + 1 < frames)
-      preparing = std::async(std::launch::async, prepare, std::cref(next));
-    const dp::FrameResult r = tracker.track(std::move(*ready));
-    ready.reset();
-    if (preparing.valid())
-      ready = preparing.get();
-    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - cycle).count();
-    run.time.data += r.timings.data;
-    run.time.prediction += r.timings.prediction;
-    run.time.coarse += r.timings.coarse;
-    run.time.fine += r.timings.fine;
-    run.time.quality += r.timings.quality;
-    run.retried += r.retries > 0;
-    run.coarseSteps += static_cast<std::size_t>(r.coarseIterations);
-    run.fineSteps += static_cast<std::size_t>(r.iterations);
-    run.flagged += r.failed;
+    double seconds = 0;
+    const dp::FrameResult r = pipeline.track(cloud, f + 1 < frames ? &next : nullptr, seconds);
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
     const dp::PointCloud truthCloud =
         dp::sampleSurface(truthMesh, mesh.triangles(), truthSampling, f);
     const FrameFigures figures =
         compareFrame(r.positions, t.triangles, truth, truthMesh, mesh.triangles(),
                      truthCloud.points, S.uncoveredLimit);
-    jitter.add(r.positions, truth);
-    vertexSum += figures.vertexSquaredSum;
-    surfaceSum += figures.surfaceSquaredSum;
-    uncoveredSum += figures.uncovered;
-    run.largestVertexError = std::max(run.largestVertexError, figures.largestVertexError);
-    if (figures.uncovered > run.uncoveredWorst || f == first)
-    {
-      run.uncoveredWorst = figures.uncovered;
-      run.worstFrame = f;
-    }
-    const double nv = static_cast<double>(t.vertices());
-    const double frameRms = std::sqrt(figures.vertexSquaredSum / nv);
-    auto rmsOf = [&](const std::vector<double>& y)
-    {
-      double e = 0;
-      for (std::size_t i = 0; i < y.size(); ++i)
-        e += (y[i] - truth[i]) * (y[i] - truth[i]);
-      return y.empty() ? -1.0 : 1e3 * std::sqrt(e / nv);
-    };
-    // The error left once the best rigid motion is taken out (Kabsch): local, not global, error.
-    auto rigidRms = [&](const std::vector<double>& y)
-    {
-      const std::size_t n = y.size() / 3;
-      Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-      for (std::size_t v = 0; v < n; ++v)
-      {
-        a += Eigen::Vector3d(&y[3 * v]);
-        b += Eigen::Vector3d(&truth[3 * v]);
-      }
-      a /= static_cast<double>(n);
-      b /= static_cast<double>(n);
-      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-      for (std::size_t v = 0; v < n; ++v)
-        C += (Eigen::Vector3d(&truth[3 * v]) - b) * (Eigen::Vector3d(&y[3 * v]) - a).transpose();
-      Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
-      Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-      D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
-      const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
-      double e = 0;
-      for (std::size_t v = 0; v < n; ++v)
-        e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v]))
-                 .squaredNorm();
-      return 1e3 * std::sqrt(e / static_cast<double>(n));
-    };
+    sums.add(f, r, figures, truth, seconds);
     if (S.verbose)
-      std::printf(
-          "  frame %3zu: rigid-free %5.1f vertex RMS %6.1f mm (start %6.1f coarse %6.1f), largest "
-          "%6.1f mm, surface RMS %5.1f mm, "
-          "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f, "
-          "retries %d (kept: %s)%s\n",
-          f, rigidRms(r.positions), 1e3 * frameRms, rmsOf(r.startPositions),
-          rmsOf(r.coarsePositions), 1e3 * figures.largestVertexError,
-          1e3 * std::sqrt(figures.surfaceSquaredSum / nv), 100 * figures.uncovered,
-          r.coarseIterations, r.iterations, 1e3 * r.seconds, r.unexplained, r.unsupported,
-          r.retries,
-          r.kept == 0   ? "predicted"
-          : r.kept == 1 ? "another start"
-                        : "stiff",
-          r.failed ? " FAILED" : "");
+      printFrame(f, r, figures, truth);
     if (csv)
-      *csv << label << ',' << f << ',' << 1e3 * frameRms << ',' << 1e3 * figures.largestVertexError
-           << ',' << 1e3 * std::sqrt(figures.surfaceSquaredSum / nv) << ','
-           << 100 * figures.uncovered << ',' << r.iterations << ',' << 1e3 * r.seconds << '\n';
+      writeCsvRow(*csv, label, f, r, figures, static_cast<double>(t.vertices()));
     if (!S.dumpFolder.empty())
       dumpFrame(S.dumpFolder + "/" + label, f, r.positions, truth, t.triangles, cloud);
     cloud = next;
   }
-  const std::size_t tracked = frames - first;
-  const double samples = static_cast<double>(tracked * t.vertices());
-  run.frames = tracked;
-  run.vertexRms = std::sqrt(vertexSum / samples);
-  run.surfaceRms = std::sqrt(surfaceSum / samples);
-  run.uncoveredMean = uncoveredSum / static_cast<double>(tracked);
-  run.jitter = jitter.ratio();
-  run.msPerFrame = 1e3 * seconds / static_cast<double>(tracked);
-  return run;
+  return sums.finish(t.vertices());
 }
 
 // The paper's Fig. 4: time per frame against the vertex count, on the procedural bending tube
@@ -383,191 +442,244 @@ const char* Usage =
     "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
-} // namespace
-
-int main(int argc, char** argv)
+// What to run: the sequences, templates and conditions of the table, and the tracker's options.
+struct Plan
 {
-  using namespace dp::cli;
   std::string data = "../shared/data";
   std::vector<std::string> sequences = {"jumping", "horse-gallop", "horse-collapse"};
   std::vector<std::size_t> sizes = {1000};
   std::vector<TemplateKind> kinds = {TemplateKind::Decimated, TemplateKind::Reconstructed};
   std::vector<Condition> conditions = {{"clean", false}, {"noisy", true}};
-  std::size_t frames = 0;
+  std::size_t frames = 0; // 0: all
   double height = 1.70;
   bool ablation = false, scaling = false;
   dp::TrackerOptions options;
+};
+
+// The option parsers below each take the option at argv[i] when it is theirs (true), reading its
+// value (i moves past it), and throw dp::cli::UsageError for a bad value.
+
+// The data and the templates.
+bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan& plan)
+{
+  using namespace dp::cli;
+  if (arg == "--data")
+    plan.data = optionValue(argc, argv, i);
+  else if (arg == "--sequence")
+    plan.sequences = splitList(optionValue(argc, argv, i));
+  else if (arg == "--frames")
+    plan.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+  else if (arg == "--height")
+    plan.height = parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+  else if (arg == "--points")
+    S.points = parseCount(arg, optionValue(argc, argv, i), 1, 10000000);
+  else if (arg == "--seed")
+    S.seed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
+  else if (arg == "--condition")
+  {
+    plan.conditions.clear();
+    for (const std::string& c : splitList(optionValue(argc, argv, i)))
+      plan.conditions.push_back({c, oneOf(arg, c, "clean", "noisy")});
+  }
+  else if (arg == "--noise")
+    S.noise = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+  else if (arg == "--holes")
+    S.holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
+  else if (arg == "--hole-radius")
+    S.holeRadius = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+  else if (arg == "--given-normals")
+    S.givenNormals = true;
+  else if (arg == "--template")
+  {
+    plan.kinds.clear();
+    for (const std::string& k : splitList(optionValue(argc, argv, i)))
+      plan.kinds.push_back(
+          oneOf(arg, k == "simplified" ? "decimated" : k, "decimated", "reconstructed")
+              ? TemplateKind::Reconstructed
+              : TemplateKind::Decimated);
+  }
+  else if (arg == "--vertices")
+  {
+    plan.sizes.clear();
+    for (const std::string& n : splitList(optionValue(argc, argv, i)))
+      plan.sizes.push_back(parseCount(arg, n, 0, 10000000));
+  }
+  else if (arg == "--reconstruction-voxel")
+    S.reconstruction.voxelSize = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
+  else if (arg == "--hole-reach")
+    S.reconstruction.holeReach = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else
+    return false;
+  return true;
+}
+
+// The fine level's energy and solver.
+bool parseEnergyOption(const std::string& arg, int argc, char** argv, int& i,
+                       dp::TrackerOptions& options)
+{
+  using namespace dp::cli;
+  if (arg == "--solver")
+  {
+    const std::string s = optionValue(argc, argv, i);
+    options.solver = s == "lbfgs" ? dp::TrackerSolver::LBFGS
+                     : s == "sd"  ? dp::TrackerSolver::SteepestDescent
+                                  : dp::TrackerSolver::GaussNewton;
+  }
+  else if (arg == "--distance-weight")
+    options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--normal-test")
+    options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
+  else if (arg == "--measure")
+    options.distanceMeasure = oneOf(arg, optionValue(argc, argv, i), "planes", "points")
+                                  ? dp::DistanceMeasure::Points
+                                  : dp::DistanceMeasure::Planes;
+  else if (arg == "--penalty")
+    options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
+  else if (arg == "--tolerance")
+    options.tolerance = parseDouble(arg, optionValue(argc, argv, i), 1e-15, 1);
+  else if (arg == "--max-iterations")
+    options.maxIterations =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 1000000));
+  else if (arg == "--rest-update")
+    options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else if (arg == "--temporal-weight")
+    options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--stiffness")
+  {
+    const std::string v = optionValue(argc, argv, i);
+    if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
+                    &options.cloth.bend) != 3)
+      throw UsageError("--stiffness wants stretch,shear,bend");
+  }
+  else if (arg == "--soften-thick")
+  {
+    const std::string v = optionValue(argc, argv, i);
+    dp::ThicknessSoftening& soft = options.softening;
+    if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &soft.stretch, &soft.bend, &soft.from,
+                    &soft.to) != 4)
+      throw UsageError("--soften-thick wants stretch,bend,from,to");
+  }
+  else if (arg == "--soften-creases")
+  {
+    const std::string v = optionValue(argc, argv, i);
+    dp::CreaseSoftening& creases = options.creases;
+    if (std::sscanf(v.c_str(), "%lf,%lf", &creases.stretch, &creases.width) != 2)
+      throw UsageError("--soften-creases wants stretch,width");
+  }
+  else
+    return false;
+  return true;
+}
+
+// The start, the coarse level, the points -> mesh term and the recovery.
+bool parseScheduleOption(const std::string& arg, int argc, char** argv, int& i,
+                         dp::TrackerOptions& options)
+{
+  using namespace dp::cli;
+  if (arg == "--no-mp")
+    options.motionPrediction = false;
+  else if (arg == "--no-rigid")
+    options.rigidAlignment = false;
+  else if (arg == "--no-graph")
+    options.graph.enabled = false;
+  else if (arg == "--graph-nodes")
+    options.graph.nodes = parseCount(arg, optionValue(argc, argv, i), 1, 1000000);
+  else if (arg == "--graph-iterations")
+    options.graph.iterations =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
+  else if (arg == "--fine-iterations")
+    options.graph.fineIterations =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100000));
+  else if (arg == "--acceleration")
+    options.graph.acceleration =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 20));
+  else if (arg == "--rigidity")
+    options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--rigidity-scale")
+    options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--stretch-weight")
+    options.graph.stretchWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--plasticity")
+    options.graph.yieldRate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else if (arg == "--coverage-weight")
+    options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--coverage-points")
+    options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+  else if (arg == "--follow-matches")
+    options.coverage.followMatches = true;
+  else if (arg == "--point-to-point")
+    options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else if (arg == "--no-recovery")
+    options.recovery.enabled = false;
+  else if (arg == "--no-stiff-retry")
+    options.recovery.stiffRetry = false;
+  else if (arg == "--fail-margin")
+    options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else
+    return false;
+  return true;
+}
+
+// What the benchmark runs besides the table, and what it writes.
+bool parseOutputOption(const std::string& arg, int argc, char** argv, int& i, Plan& plan)
+{
+  using namespace dp::cli;
+  if (arg == "--no-pipeline")
+    S.pipeline = false;
+  else if (arg == "--verbose")
+    S.verbose = true;
+  else if (arg == "--csv")
+    S.csvFile = optionValue(argc, argv, i);
+  else if (arg == "--dump")
+    S.dumpFolder = optionValue(argc, argv, i);
+  else if (arg == "--oracle")
+    S.oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
+  else if (arg == "--start-frame")
+    S.startFrame = parseCount(arg, optionValue(argc, argv, i), 0, 100000);
+  else if (arg == "--ablation")
+    plan.ablation = true;
+  else if (arg == "--scaling")
+    plan.scaling = true;
+  else if (arg == "--scaling-sizes")
+  {
+    ScalingSizes.clear();
+    for (const std::string& n : splitList(optionValue(argc, argv, i)))
+      ScalingSizes.push_back(parseCount(arg, n, 3, 10000000));
+  }
+  else
+    return false;
+  return true;
+}
+
+// Reads the command line into `plan`; an exit status when the benchmark should stop there
+// (--help, an unknown option, a bad value).
+std::optional<int> parseArguments(int argc, char** argv, Plan& plan)
+{
   try
   {
     for (int i = 1; i < argc; ++i)
     {
       const std::string arg = argv[i];
-      if (arg == "--data")
-        data = optionValue(argc, argv, i);
-      else if (arg == "--sequence")
-        sequences = splitList(optionValue(argc, argv, i));
-      else if (arg == "--vertices")
-      {
-        sizes.clear();
-        for (const std::string& n : splitList(optionValue(argc, argv, i)))
-          sizes.push_back(parseCount(arg, n, 0, 10000000));
-      }
-      else if (arg == "--template")
-      {
-        kinds.clear();
-        for (const std::string& k : splitList(optionValue(argc, argv, i)))
-          kinds.push_back(
-              oneOf(arg, k == "simplified" ? "decimated" : k, "decimated", "reconstructed")
-                  ? TemplateKind::Reconstructed
-                  : TemplateKind::Decimated);
-      }
-      else if (arg == "--condition")
-      {
-        conditions.clear();
-        for (const std::string& c : splitList(optionValue(argc, argv, i)))
-          conditions.push_back({c, oneOf(arg, c, "clean", "noisy")});
-      }
-      else if (arg == "--frames")
-        frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
-      else if (arg == "--height")
-        height = parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
-      else if (arg == "--points")
-        S.points = parseCount(arg, optionValue(argc, argv, i), 1, 10000000);
-      else if (arg == "--noise")
-        S.noise = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
-      else if (arg == "--holes")
-        S.holes = parseCount(arg, optionValue(argc, argv, i), 0, 1000);
-      else if (arg == "--hole-radius")
-        S.holeRadius = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
-      else if (arg == "--given-normals")
-        S.givenNormals = true;
-      else if (arg == "--seed")
-        S.seed = parseCount(arg, optionValue(argc, argv, i), 0, 1000000000);
-      else if (arg == "--solver")
-      {
-        const std::string s = optionValue(argc, argv, i);
-        options.solver = s == "lbfgs" ? dp::TrackerSolver::LBFGS
-                         : s == "sd"  ? dp::TrackerSolver::SteepestDescent
-                                      : dp::TrackerSolver::GaussNewton;
-      }
-      else if (arg == "--ablation")
-        ablation = true;
-      else if (arg == "--scaling")
-        scaling = true;
-      else if (arg == "--scaling-sizes")
-      {
-        ScalingSizes.clear();
-        for (const std::string& n : splitList(optionValue(argc, argv, i)))
-          ScalingSizes.push_back(parseCount(arg, n, 3, 10000000));
-      }
-      else if (arg == "--rest-update")
-        options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--measure")
-        options.distanceMeasure = oneOf(arg, optionValue(argc, argv, i), "planes", "points")
-                                      ? dp::DistanceMeasure::Points
-                                      : dp::DistanceMeasure::Planes;
-      else if (arg == "--no-mp")
-        options.motionPrediction = false;
-      else if (arg == "--no-pipeline")
-        S.pipeline = false;
-      else if (arg == "--no-rigid")
-        options.rigidAlignment = false;
-      else if (arg == "--no-graph")
-        options.graph.enabled = false;
-      else if (arg == "--graph-nodes")
-        options.graph.nodes = parseCount(arg, optionValue(argc, argv, i), 1, 1000000);
-      else if (arg == "--graph-iterations")
-        options.graph.iterations =
-            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
-      else if (arg == "--fine-iterations")
-        options.graph.fineIterations =
-            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100000));
-      else if (arg == "--rigidity")
-        options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--stretch-weight")
-        options.graph.stretchWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--plasticity")
-        options.graph.yieldRate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--rigidity-scale")
-        options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--coverage-points")
-        options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
-      else if (arg == "--point-to-point")
-        options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--follow-matches")
-        options.coverage.followMatches = true;
-      else if (arg == "--coverage-weight")
-        options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--temporal-weight")
-        options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--no-recovery")
-        options.recovery.enabled = false;
-      else if (arg == "--acceleration")
-        options.graph.acceleration =
-            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 20));
-      else if (arg == "--no-stiff-retry")
-        options.recovery.stiffRetry = false;
-      else if (arg == "--fail-margin")
-        options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--penalty")
-        options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
-      else if (arg == "--reconstruction-voxel")
-        S.reconstruction.voxelSize = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
-      else if (arg == "--hole-reach")
-        S.reconstruction.holeReach = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-      else if (arg == "--oracle")
-        S.oracle = oneOf(arg, optionValue(argc, argv, i), "same", "previous") ? "previous" : "same";
-      else if (arg == "--start-frame")
-        S.startFrame = parseCount(arg, optionValue(argc, argv, i), 0, 100000);
-      else if (arg == "--verbose")
-        S.verbose = true;
-      else if (arg == "--csv")
-        S.csvFile = optionValue(argc, argv, i);
-      else if (arg == "--dump")
-        S.dumpFolder = optionValue(argc, argv, i);
-      else if (arg == "--distance-weight")
-        options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-      else if (arg == "--tolerance")
-        options.tolerance = parseDouble(arg, optionValue(argc, argv, i), 1e-15, 1);
-      else if (arg == "--max-iterations")
-        options.maxIterations =
-            static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 1000000));
-      else if (arg == "--normal-test")
-        options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
-      else if (arg == "--stiffness")
-      {
-        const std::string v = optionValue(argc, argv, i);
-        if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
-                        &options.cloth.bend) != 3)
-          throw UsageError("--stiffness wants stretch,shear,bend");
-      }
-      else if (arg == "--soften-thick")
-      {
-        const std::string v = optionValue(argc, argv, i);
-        dp::ThicknessSoftening& soft = options.softening;
-        if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &soft.stretch, &soft.bend, &soft.from,
-                        &soft.to) != 4)
-          throw UsageError("--soften-thick wants stretch,bend,from,to");
-      }
-      else if (arg == "--soften-creases")
-      {
-        const std::string v = optionValue(argc, argv, i);
-        dp::CreaseSoftening& creases = options.creases;
-        if (std::sscanf(v.c_str(), "%lf,%lf", &creases.stretch, &creases.width) != 2)
-          throw UsageError("--soften-creases wants stretch,width");
-      }
-      else
+      if (!parseDataOption(arg, argc, argv, i, plan) &&
+          !parseEnergyOption(arg, argc, argv, i, plan.options) &&
+          !parseScheduleOption(arg, argc, argv, i, plan.options) &&
+          !parseOutputOption(arg, argc, argv, i, plan))
       {
         std::cout << Usage;
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
   }
-  catch (const UsageError& e)
+  catch (const dp::cli::UsageError& e)
   {
     std::cerr << e.what() << "\n";
     return 2;
   }
+  return std::nullopt;
+}
+
+void printMachine(double height)
+{
   std::printf("machine: %s, %u hardware threads; %zu samples per frame, %s normals; figures at "
               "%s; ms/frame %s\n",
               cpuModel().c_str(), std::thread::hardware_concurrency(), S.points,
@@ -576,9 +688,95 @@ int main(int argc, char** argv)
               S.pipeline ? "with each frame's data prepared beside the frame before (the main "
                            "job's pipeline; the data stage's time overlaps)"
                          : "with each frame prepared, then tracked (--no-pipeline)");
-  if (scaling)
+}
+
+// One row of the table and, under it, its stages' times and steps.
+void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condition& condition,
+              double diagonal)
+{
+  std::printf("%-14s %6zu %-6s %8.1f (%5.2f%%) %9.1f %8.1f %9.2f %7.2f (%3zu) %8.2fx "
+              "%8.1f\n",
+              templateName(kind), vertices, condition.name.c_str(), 1e3 * r.vertexRms,
+              100 * r.vertexRms / diagonal, 1e3 * r.largestVertexError, 1e3 * r.surfaceRms,
+              100 * r.uncoveredMean, 100 * r.uncoveredWorst, r.worstFrame, r.jitter, r.msPerFrame);
+  const double perFrame = 1e3 / static_cast<double>(r.frames);
+  std::printf("%14s ms/frame: data %.1f, prediction %.1f, coarse %.1f, fine %.1f, quality "
+              "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
+              "", perFrame * r.time.data, perFrame * r.time.prediction, perFrame * r.time.coarse,
+              perFrame * r.time.fine, perFrame * r.time.quality, r.retried, r.flagged);
+  std::printf("%14s steps/frame: coarse %.2f, fine %.2f (kept attempts)\n", "",
+              static_cast<double>(r.coarseSteps) / static_cast<double>(r.frames),
+              static_cast<double>(r.fineSteps) / static_cast<double>(r.frames));
+  std::fflush(stdout);
+}
+
+// The paper's Table 2: motion prediction (MP) and provisional determination (PD) on and off.
+void runAblation(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
+                 const Condition& condition, std::size_t frames, const std::string& label)
+{
+  std::printf("ablation (%zu-vertex template): %8s %8s %14s %12s\n", t.vertices(), "MP", "PD",
+              "vertex RMS mm", "ms/frame");
+  for (int mode = 0; mode < 4; ++mode)
   {
-    scalingTable(options, frames ? frames : 4);
+    dp::TrackerOptions o = options;
+    o.motionPrediction = mode & 1;
+    o.provisionalDetermination = mode & 2;
+    const Run a = track(mesh, t, o, condition, frames, nullptr, label);
+    std::printf("%31s %8s %8s %14.1f %12.1f\n", "", o.motionPrediction ? "on" : "off",
+                o.provisionalDetermination ? "on" : "off", 1e3 * a.vertexRms, a.msPerFrame);
+  }
+}
+
+// The table's rows of one sequence: every template size and kind under every condition.
+void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
+{
+  std::unique_ptr<dp::AnimatedMesh> stored = loadAnimation(plan.data, name);
+  if (!stored)
+    return;
+  const double factor = plan.height > 0 ? plan.height / largestExtent(stored->positions(0)) : 1.0;
+  const ScaledAnimation mesh(std::move(stored), factor);
+  const std::size_t n =
+      plan.frames ? std::min(plan.frames, mesh.numberOfFrames()) : mesh.numberOfFrames();
+  const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
+  std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f m, solver %s\n",
+              name.c_str(), n, mesh.numberOfFrames(), mesh.numberOfVertices(), diagonal,
+              solverName(plan.options.solver));
+  std::printf("%-14s %6s %-6s %17s %9s %8s %17s %7s %9s %8s\n", "template", "verts", "data",
+              "vertex RMS mm (%)", "largest", "surface", "uncovered% mean", "worst", "jitter",
+              "ms/frame");
+  for (std::size_t size : plan.sizes)
+    for (TemplateKind kind : plan.kinds)
+      for (const Condition& condition : plan.conditions)
+      {
+        const TemplateKind k = size == 0 ? TemplateKind::Full : kind;
+        const dp::PointCloud frame0 = dp::sampleSurface(mesh.positions(0), mesh.triangles(),
+                                                        samplingFor(condition, S.points), 0);
+        const Template t = makeTemplate(mesh, k, size, frame0, S.reconstruction);
+        const std::string label = name + "-" + templateName(k) + "-" +
+                                  std::to_string(t.vertices()) + "-" + condition.name;
+        if (S.verbose)
+          std::printf("  %s: template %zu vertices, %.1f%% of its triangles poorly shaped\n",
+                      label.c_str(), t.vertices(),
+                      100 * dp::TriangleMesh(t.triangles, t.vertices())
+                                .poorlyShapedShare(t.positions.data()));
+        const Run r = track(mesh, t, plan.options, condition, n, csv, label);
+        printRun(r, k, t.vertices(), condition, diagonal);
+        if (plan.ablation)
+          runAblation(mesh, t, plan.options, condition, n, label);
+      }
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  Plan plan;
+  if (const std::optional<int> status = parseArguments(argc, argv, plan))
+    return *status;
+  printMachine(plan.height);
+  if (plan.scaling)
+  {
+    scalingTable(plan.options, plan.frames ? plan.frames : 4);
     return 0;
   }
   std::unique_ptr<std::ofstream> csv;
@@ -587,69 +785,7 @@ int main(int argc, char** argv)
     csv = std::make_unique<std::ofstream>(S.csvFile);
     *csv << "run,frame,vertex_rms_mm,largest_mm,surface_rms_mm,uncovered_percent,iterations,ms\n";
   }
-  for (const std::string& name : sequences)
-  {
-    std::unique_ptr<dp::AnimatedMesh> stored = loadAnimation(data, name);
-    if (!stored)
-      continue;
-    const double factor = height > 0 ? height / largestExtent(stored->positions(0)) : 1.0;
-    const ScaledAnimation mesh(std::move(stored), factor);
-    const std::size_t n = frames ? std::min(frames, mesh.numberOfFrames()) : mesh.numberOfFrames();
-    const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
-    std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f m, solver %s\n",
-                name.c_str(), n, mesh.numberOfFrames(), mesh.numberOfVertices(), diagonal,
-                solverName(options.solver));
-    std::printf("%-14s %6s %-6s %17s %9s %8s %17s %7s %9s %8s\n", "template", "verts", "data",
-                "vertex RMS mm (%)", "largest", "surface", "uncovered% mean", "worst", "jitter",
-                "ms/frame");
-    for (std::size_t size : sizes)
-      for (TemplateKind kind : kinds)
-        for (const Condition& condition : conditions)
-        {
-          const TemplateKind k = size == 0 ? TemplateKind::Full : kind;
-          const dp::PointCloud frame0 = dp::sampleSurface(mesh.positions(0), mesh.triangles(),
-                                                          samplingFor(condition, S.points), 0);
-          const Template t = makeTemplate(mesh, k, size, frame0, S.reconstruction);
-          const std::string label = name + "-" + templateName(k) + "-" +
-                                    std::to_string(t.vertices()) + "-" + condition.name;
-          if (S.verbose)
-            std::printf("  %s: template %zu vertices, %.1f%% of its triangles poorly shaped\n",
-                        label.c_str(), t.vertices(),
-                        100 * dp::TriangleMesh(t.triangles, t.vertices())
-                                  .poorlyShapedShare(t.positions.data()));
-          const Run r = track(mesh, t, options, condition, n, csv.get(), label);
-          std::printf("%-14s %6zu %-6s %8.1f (%5.2f%%) %9.1f %8.1f %9.2f %7.2f (%3zu) %8.2fx "
-                      "%8.1f\n",
-                      templateName(k), t.vertices(), condition.name.c_str(), 1e3 * r.vertexRms,
-                      100 * r.vertexRms / diagonal, 1e3 * r.largestVertexError, 1e3 * r.surfaceRms,
-                      100 * r.uncoveredMean, 100 * r.uncoveredWorst, r.worstFrame, r.jitter,
-                      r.msPerFrame);
-          const double perFrame = 1e3 / static_cast<double>(r.frames);
-          std::printf("%14s ms/frame: data %.1f, prediction %.1f, coarse %.1f, fine %.1f, quality "
-                      "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
-                      "", perFrame * r.time.data, perFrame * r.time.prediction,
-                      perFrame * r.time.coarse, perFrame * r.time.fine, perFrame * r.time.quality,
-                      r.retried, r.flagged);
-          std::printf("%14s steps/frame: coarse %.2f, fine %.2f (kept attempts)\n", "",
-                      static_cast<double>(r.coarseSteps) / static_cast<double>(r.frames),
-                      static_cast<double>(r.fineSteps) / static_cast<double>(r.frames));
-          std::fflush(stdout);
-          if (ablation)
-          {
-            std::printf("ablation (%zu-vertex template): %8s %8s %14s %12s\n", t.vertices(), "MP",
-                        "PD", "vertex RMS mm", "ms/frame");
-            for (int mode = 0; mode < 4; ++mode)
-            {
-              dp::TrackerOptions o = options;
-              o.motionPrediction = mode & 1;
-              o.provisionalDetermination = mode & 2;
-              const Run a = track(mesh, t, o, condition, n, nullptr, label);
-              std::printf("%31s %8s %8s %14.1f %12.1f\n", "", o.motionPrediction ? "on" : "off",
-                          o.provisionalDetermination ? "on" : "off", 1e3 * a.vertexRms,
-                          a.msPerFrame);
-            }
-          }
-        }
-  }
+  for (const std::string& name : plan.sequences)
+    runSequence(name, plan, csv.get());
   return 0;
 }
