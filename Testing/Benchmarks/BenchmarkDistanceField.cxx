@@ -23,6 +23,7 @@
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSMPTools.h"
+#include "vtkSmartPointer.h"
 #include "vtkUnsignedDistance.h"
 
 #include <tbb/global_control.h>
@@ -105,42 +106,48 @@ void finish(Errors& e)
   e.rms = e.count ? std::sqrt(e.rms / static_cast<double>(e.count)) : 0;
 }
 
-void runCase(const Figure& figure, std::size_t pointCount, double voxel, double band, int boxVoxels,
-             std::size_t repeats, bool withVTK)
+// The paper's dense box of boxVoxels^3 voxels around the points, at the voxel size
+// (vtkUnsignedDistance fills all of it; ours only the band).
+struct DenseBox
 {
-  dp::SamplerOptions sampling;
-  sampling.pointsPerFrame = pointCount;
-  sampling.normals = false;
-  const std::vector<double> points =
-      dp::sampleSurface(figure.positions, figure.triangles, sampling, 0).points;
-  const std::size_t n = points.size() / 3;
-
-  // The grid: the paper's dense box of boxVoxels^3 voxels around the figure, at the voxel size
-  // (vtkUnsignedDistance fills all of it; ours only the band).
-  double lo[3], hi[3];
+  double lo[3], hi[3], voxel;
   int dims[3];
-  for (int k = 0; k < 3; ++k)
-  {
-    double a = points[k], b = points[k];
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      a = std::min(a, points[3 * i + k]);
-      b = std::max(b, points[3 * i + k]);
-    }
-    const double centre = voxel * std::round(0.5 * (a + b) / voxel);
-    lo[k] = centre - voxel * (boxVoxels / 2);
-    hi[k] = lo[k] + voxel * (boxVoxels - 1);
-    dims[k] = boxVoxels;
-  }
-  std::printf("\n== %zu points on %s (1.7 m), voxel %.0f mm, band %.0f mm; box %d x %d x %d "
-              "= %.1f M voxels\n",
-              n, figure.name.c_str(), voxel * 1e3, band * 1e3, dims[0], dims[1], dims[2],
-              static_cast<double>(dims[0]) * dims[1] * dims[2] / 1e6);
 
+  DenseBox(const std::vector<double>& points, double voxelSize, int boxVoxels) : voxel(voxelSize)
+  {
+    const std::size_t n = points.size() / 3;
+    for (int k = 0; k < 3; ++k)
+    {
+      double a = points[k], b = points[k];
+      for (std::size_t i = 0; i < n; ++i)
+      {
+        a = std::min(a, points[3 * i + k]);
+        b = std::max(b, points[3 * i + k]);
+      }
+      const double centre = voxel * std::round(0.5 * (a + b) / voxel);
+      lo[k] = centre - voxel * (boxVoxels / 2);
+      hi[k] = lo[k] + voxel * (boxVoxels - 1);
+      dims[k] = boxVoxels;
+    }
+  }
+  double millionVoxels() const { return static_cast<double>(dims[0]) * dims[1] * dims[2] / 1e6; }
+  vtkIdType index(const int ijk[3]) const
+  {
+    return ijk[0] +
+           static_cast<vtkIdType>(dims[0]) * (ijk[1] + static_cast<vtkIdType>(dims[1]) * ijk[2]);
+  }
+};
+
+// Our sparse field built `repeats` times on all threads and on one (medians printed); the last
+// build is kept.
+dp::DistanceField timeOurBuild(const std::vector<double>& points, double voxel, double band,
+                               std::size_t repeats, std::vector<double>& threaded,
+                               std::vector<double>& oneThread)
+{
   dp::DistanceFieldOptions options;
   options.voxelSize = voxel;
   options.bandWidth = band;
-  std::vector<double> ours, oursOneThread;
+  const std::size_t n = points.size() / 3;
   double rssBefore = residentMiB(), rssAfter = 0;
   dp::DistanceField field;
   for (std::size_t r = 0; r < repeats; ++r)
@@ -148,46 +155,50 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
     dp::DistanceField f;
     double t = now();
     f.build(points.data(), n, options);
-    ours.push_back(now() - t);
+    threaded.push_back(now() - t);
     if (r == 0)
       rssAfter = residentMiB();
     {
-      const tbb::global_control oneThread(tbb::global_control::max_allowed_parallelism, 1);
+      const tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
       dp::DistanceField g;
       t = now();
       g.build(points.data(), n, options);
-      oursOneThread.push_back(now() - t);
+      oneThread.push_back(now() - t);
     }
     field = std::move(f);
   }
   std::printf("ours (OpenVDB band): build %.1f ms on 1 thread, %.1f ms on %u threads (medians of "
               "%zu); %zu active voxels; field memory %.1f MiB (resident +%.1f MiB)\n",
-              1e3 * median(oursOneThread), 1e3 * median(ours), std::thread::hardware_concurrency(),
+              1e3 * median(oneThread), 1e3 * median(threaded), std::thread::hardware_concurrency(),
               repeats, field.activeVoxelCount(),
               static_cast<double>(field.memoryBytes()) / (1 << 20), rssAfter - rssBefore);
+  return field;
+}
 
-  // Accuracy at the grid's voxel centres within the band, against the exact nearest point.
-  Errors oursGrid, vtkGrid;
+// Every second voxel centre of the box (each axis) within the band of the points.
+std::vector<double> centresInBand(const dp::DistanceField& field, const DenseBox& box, double band)
+{
   std::vector<double> centres;
-  for (int k = 0; k < dims[2]; k += 2)
-    for (int j = 0; j < dims[1]; j += 2)
-      for (int i = 0; i < dims[0]; i += 2)
+  for (int k = 0; k < box.dims[2]; k += 2)
+    for (int j = 0; j < box.dims[1]; j += 2)
+      for (int i = 0; i < box.dims[0]; i += 2)
       {
-        const double x[3] = {lo[0] + i * voxel, lo[1] + j * voxel, lo[2] + k * voxel};
+        const double x[3] = {box.lo[0] + i * box.voxel, box.lo[1] + j * box.voxel,
+                             box.lo[2] + k * box.voxel};
         double d2 = 0;
         field.nearestPoint(x, &d2);
         if (d2 <= band * band)
           centres.insert(centres.end(), x, x + 3);
       }
-  for (std::size_t c = 0; c < centres.size(); c += 3)
-  {
-    double d2 = 0;
-    field.nearestPoint(&centres[c], &d2);
-    accumulate(oursGrid, field.sample(&centres[c]).distance - std::sqrt(d2));
-  }
-  finish(oursGrid);
+  return centres;
+}
 
-  // Sampling throughput at random positions within the band.
+// A million random positions within the band (near random points); prints the field's sampling
+// throughput there, serial and parallel, and returns the positions with their samples.
+std::vector<double> timeSampling(const dp::DistanceField& field, const std::vector<double>& points,
+                                 double band, std::vector<dp::DistanceSample>& out)
+{
+  const std::size_t n = points.size() / 3;
   std::mt19937_64 rng(3);
   std::uniform_int_distribution<std::size_t> pick(0, n - 1);
   std::uniform_real_distribution<double> offset(-band / std::sqrt(3.0), band / std::sqrt(3.0));
@@ -199,7 +210,7 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
     for (int k = 0; k < 3; ++k)
       q[3 * i + k] = points[3 * p + k] + offset(rng);
   }
-  std::vector<dp::DistanceSample> out(queries);
+  out.assign(queries, {});
   double t = now();
   for (std::size_t i = 0; i < queries; ++i)
     out[i] = field.sample(&q[3 * i]);
@@ -214,12 +225,136 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
               "queries fully in the band)\n",
               queries / serial / 1e6, queries / parallel / 1e6, std::thread::hardware_concurrency(),
               100.0 * static_cast<double>(inBand) / queries);
+  return q;
+}
+
+// vtkUnsignedDistance over the whole box, `repeats` times (the times in `seconds`).
+vtkSmartPointer<vtkImageData> timeVtkUnsignedDistance(const std::vector<double>& points,
+                                                      const DenseBox& box, double band,
+                                                      std::size_t repeats,
+                                                      std::vector<double>& seconds)
+{
+  const std::size_t n = points.size() / 3;
+  vtkNew<vtkPoints> vtkPts;
+  vtkPts->SetDataTypeToDouble();
+  vtkPts->SetNumberOfPoints(static_cast<vtkIdType>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    vtkPts->SetPoint(static_cast<vtkIdType>(i), &points[3 * i]);
+  vtkNew<vtkPolyData> cloud;
+  cloud->SetPoints(vtkPts);
+  vtkNew<vtkUnsignedDistance> reference;
+  for (std::size_t r = 0; r < repeats; ++r)
+  {
+    reference->SetInputData(cloud);
+    reference->SetDimensions(box.dims);
+    reference->SetBounds(box.lo[0], box.hi[0], box.lo[1], box.hi[1], box.lo[2], box.hi[2]);
+    reference->SetAdjustBounds(false);
+    reference->SetRadius(band);
+    reference->CappingOn();
+    reference->SetOutputScalarTypeToFloat();
+    reference->Modified();
+    const double start = now();
+    reference->Update();
+    seconds.push_back(now() - start);
+  }
+  return reference->GetOutput();
+}
+
+// VTK's image against the exact distances at the voxel centres in the band.
+Errors vtkErrorsAtCentres(vtkImageData* image, const DenseBox& box, const dp::DistanceField& field,
+                          const std::vector<double>& centres)
+{
+  vtkDataArray* values = image->GetPointData()->GetScalars();
+  Errors e;
+  for (std::size_t c = 0; c < centres.size(); c += 3)
+  {
+    int ijk[3];
+    for (int k = 0; k < 3; ++k)
+      ijk[k] = static_cast<int>(std::lround((centres[c + k] - box.lo[k]) / box.voxel));
+    double d2 = 0;
+    field.nearestPoint(&centres[c], &d2);
+    accumulate(e, values->GetTuple1(box.index(ijk)) - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
+// Off the grid VTK's image must be interpolated (trilinear), as any user of it would: its errors
+// at the first 20 000 positions q whose eight voxels are all within VTK's radius.
+Errors vtkTrilinearErrors(vtkImageData* image, const DenseBox& box, const dp::DistanceField& field,
+                          const std::vector<double>& q, double band)
+{
+  vtkDataArray* values = image->GetPointData()->GetScalars();
+  Errors e;
+  for (std::size_t i = 0; i < 20000; ++i)
+  {
+    const double* x = &q[3 * i];
+    double g[3];
+    int b[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      g[k] = (x[k] - box.lo[k]) / box.voxel;
+      b[k] = std::clamp(static_cast<int>(std::floor(g[k])), 0, box.dims[k] - 2);
+      g[k] -= b[k];
+    }
+    double value = 0;
+    bool capped = false;
+    for (int corner = 0; corner < 8; ++corner)
+    {
+      const int o[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
+      const double w =
+          (o[0] ? g[0] : 1 - g[0]) * (o[1] ? g[1] : 1 - g[1]) * (o[2] ? g[2] : 1 - g[2]);
+      const int ijk[3] = {b[0] + o[0], b[1] + o[1], b[2] + o[2]};
+      const double cornerValue = values->GetTuple1(box.index(ijk));
+      capped = capped || cornerValue > band;
+      value += w * cornerValue;
+    }
+    if (capped)
+      continue; // beyond VTK's radius the image holds only the cap value
+    double d2 = 0;
+    field.nearestPoint(x, &d2);
+    accumulate(e, value - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
+// The sparse field against vtkUnsignedDistance on the dense box: build times, memory, sampling
+// throughput and accuracy against exact nearest-point distances.
+void runCase(const Figure& figure, std::size_t pointCount, double voxel, double band, int boxVoxels,
+             std::size_t repeats, bool withVTK)
+{
+  dp::SamplerOptions sampling;
+  sampling.pointsPerFrame = pointCount;
+  sampling.normals = false;
+  const std::vector<double> points =
+      dp::sampleSurface(figure.positions, figure.triangles, sampling, 0).points;
+  const DenseBox box(points, voxel, boxVoxels);
+  std::printf("\n== %zu points on %s (1.7 m), voxel %.0f mm, band %.0f mm; box %d x %d x %d "
+              "= %.1f M voxels\n",
+              points.size() / 3, figure.name.c_str(), voxel * 1e3, band * 1e3, box.dims[0],
+              box.dims[1], box.dims[2], box.millionVoxels());
+  std::vector<double> ours, oursOneThread;
+  const dp::DistanceField field = timeOurBuild(points, voxel, band, repeats, ours, oursOneThread);
+
+  // Accuracy at the grid's voxel centres within the band, against the exact nearest point.
+  const std::vector<double> centres = centresInBand(field, box, band);
+  Errors oursGrid;
+  for (std::size_t c = 0; c < centres.size(); c += 3)
+  {
+    double d2 = 0;
+    field.nearestPoint(&centres[c], &d2);
+    accumulate(oursGrid, field.sample(&centres[c]).distance - std::sqrt(d2));
+  }
+  finish(oursGrid);
+  std::vector<dp::DistanceSample> samples;
+  const std::vector<double> q = timeSampling(field, points, band, samples);
   Errors oursRandom;
   for (std::size_t i = 0; i < 20000; ++i)
   {
     double d2 = 0;
     field.nearestPoint(&q[3 * i], &d2);
-    accumulate(oursRandom, out[i].distance - std::sqrt(d2));
+    accumulate(oursRandom, samples[i].distance - std::sqrt(d2));
   }
   finish(oursRandom);
 
@@ -231,82 +366,15 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
                 oursRandom.rms / voxel);
     return;
   }
-
-  vtkNew<vtkPoints> vtkPts;
-  vtkPts->SetDataTypeToDouble();
-  vtkPts->SetNumberOfPoints(static_cast<vtkIdType>(n));
-  for (std::size_t i = 0; i < n; ++i)
-    vtkPts->SetPoint(static_cast<vtkIdType>(i), &points[3 * i]);
-  vtkNew<vtkPolyData> cloud;
-  cloud->SetPoints(vtkPts);
   std::vector<double> theirs;
-  vtkNew<vtkUnsignedDistance> reference;
-  for (std::size_t r = 0; r < repeats; ++r)
-  {
-    reference->SetInputData(cloud);
-    reference->SetDimensions(dims);
-    reference->SetBounds(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]);
-    reference->SetAdjustBounds(false);
-    reference->SetRadius(band);
-    reference->CappingOn();
-    reference->SetOutputScalarTypeToFloat();
-    reference->Modified();
-    const double start = now();
-    reference->Update();
-    theirs.push_back(now() - start);
-  }
-  vtkImageData* image = reference->GetOutput();
-  vtkDataArray* values = image->GetPointData()->GetScalars();
-  for (std::size_t c = 0; c < centres.size(); c += 3)
-  {
-    int ijk[3];
-    for (int k = 0; k < 3; ++k)
-      ijk[k] = static_cast<int>(std::lround((centres[c + k] - lo[k]) / voxel));
-    const vtkIdType id = ijk[0] + static_cast<vtkIdType>(dims[0]) *
-                                      (ijk[1] + static_cast<vtkIdType>(dims[1]) * ijk[2]);
-    double d2 = 0;
-    field.nearestPoint(&centres[c], &d2);
-    accumulate(vtkGrid, values->GetTuple1(id) - std::sqrt(d2));
-  }
-  finish(vtkGrid);
-  // Off the grid, VTK's image must be interpolated (trilinear), as any user of it would.
-  Errors vtkRandom;
-  for (std::size_t i = 0; i < 20000; ++i)
-  {
-    const double* x = &q[3 * i];
-    double g[3];
-    int b[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      g[k] = (x[k] - lo[k]) / voxel;
-      b[k] = std::clamp(static_cast<int>(std::floor(g[k])), 0, dims[k] - 2);
-      g[k] -= b[k];
-    }
-    double value = 0;
-    bool capped = false;
-    for (int corner = 0; corner < 8; ++corner)
-    {
-      const int o[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
-      const double w =
-          (o[0] ? g[0] : 1 - g[0]) * (o[1] ? g[1] : 1 - g[1]) * (o[2] ? g[2] : 1 - g[2]);
-      const vtkIdType id =
-          (b[0] + o[0]) + static_cast<vtkIdType>(dims[0]) *
-                              ((b[1] + o[1]) + static_cast<vtkIdType>(dims[1]) * (b[2] + o[2]));
-      const double cornerValue = values->GetTuple1(id);
-      capped = capped || cornerValue > band;
-      value += w * cornerValue;
-    }
-    if (capped)
-      continue; // beyond VTK's radius the image holds only the cap value
-    double d2 = 0;
-    field.nearestPoint(x, &d2);
-    accumulate(vtkRandom, value - std::sqrt(d2));
-  }
-  finish(vtkRandom);
-
+  const vtkSmartPointer<vtkImageData> image =
+      timeVtkUnsignedDistance(points, box, band, repeats, theirs);
+  const Errors vtkGrid = vtkErrorsAtCentres(image, box, field, centres);
+  const Errors vtkRandom = vtkTrilinearErrors(image, box, field, q, band);
   std::printf("vtkUnsignedDistance (dense %d^3 box, radius = band, %d SMP thread(s)): %.1f ms "
               "(median of %zu)\n",
-              dims[0], vtkSMPTools::GetEstimatedNumberOfThreads(), 1e3 * median(theirs), repeats);
+              box.dims[0], vtkSMPTools::GetEstimatedNumberOfThreads(), 1e3 * median(theirs),
+              repeats);
   std::printf("build speed-up, ours vs vtkUnsignedDistance: %.1fx (both on 1 thread), %.1fx (ours "
               "threaded)\n",
               median(theirs) / median(oursOneThread), median(theirs) / median(ours));
