@@ -151,6 +151,22 @@ void fillArrays(vtkImageData* output, const std::vector<vtkIdType>& ids,
     output->GetPointData()->AddArray(nearestNormal);
   }
 }
+
+// The image's grid: the extent's dimensions over `bounds`, where a flat axis (no extent, or
+// bounds of zero width) gets a spacing of a 200th of the points' diagonal.
+dp::ImageGrid gridOver(const int extent[6], const double bounds[6], double diagonal)
+{
+  const dp::ImageGrid grid = gridOver(extent, bounds, diagonal);
+  return grid;
+}
+
+void addFieldValue(vtkImageData* output, const char* name, double value)
+{
+  vtkNew<vtkDoubleArray> a;
+  a->SetName(name);
+  a->InsertNextValue(value);
+  output->GetFieldData()->AddArray(a);
+}
 } // namespace
 
 int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
@@ -239,15 +255,8 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   output->SetOrigin(grid.origin.data());
   output->SetSpacing(grid.spacing.data());
   fillArrays(output, target.ids, normals, field);
-  auto addValue = [output](const char* name, double value)
-  {
-    vtkNew<vtkDoubleArray> a;
-    a->SetName(name);
-    a->InsertNextValue(value);
-    output->GetFieldData()->AddArray(a);
-  };
-  addValue("BandWidth", band.bandWidth);
-  addValue("BandVoxels", static_cast<double>(band.bandVoxels));
+  addFieldValue(output, "BandWidth", band.bandWidth);
+  addFieldValue(output, "BandVoxels", static_cast<double>(band.bandVoxels));
   this->UpdateProgress(1.0);
   return 1;
 }
