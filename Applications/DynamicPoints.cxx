@@ -405,11 +405,7 @@ private:
   // Tracks frame after frame; each finished frame is written and listed in the .pvd at once.
   void track()
   {
-    const fs::path folder = Output / "tracked";
-    fs::create_directories(folder);
-    for (const auto& entry : fs::directory_iterator(folder)) // a previous run's frames
-      if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
-        fs::remove(entry.path());
+    const fs::path folder = clearedFrameFolder();
     vtkNew<vtkXMLPolyDataWriter> writer;
     // Inline data: appended data trips ParaView 5.11's XML readers here (README, platform notes).
     writer->SetDataModeToBinary();
@@ -440,30 +436,9 @@ private:
         break;
       }
       if (f == 0)
-      {
-        double b[6];
-        mesh->GetBounds(b);
-        Diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
-                             (b[5] - b[4]) * (b[5] - b[4]));
-        MeshVertices = mesh->GetNumberOfPoints();
-        MeshTriangles = mesh->GetNumberOfPolys();
-      }
-      char name[32];
-      std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
-      const fs::path file = folder / name;
-      const std::string partial = file.string() + ".partial";
-      writer->SetInputData(mesh);
-      writer->SetFileName(partial.c_str());
-      if (!writer->Write())
-      {
-        Bar.clear();
-        std::cerr << "error: " << file.string() << ": cannot write\n";
-        Failed = true;
+        describeMesh(mesh);
+      if (!writeFrame(writer, folder, f, time, mesh))
         break;
-      }
-      fs::rename(partial, file);
-      Written.emplace_back(time, (fs::path("tracked") / name).string());
-      writeAtomically(Pvd, pvdText(Written));
       record(f, time, mesh);
       if (nextFailed)
       {
@@ -472,6 +447,58 @@ private:
       }
     }
     Bar.clear();
+    summariseTracking();
+  }
+
+  // OUTPUT/tracked, without a previous run's frames.
+  fs::path clearedFrameFolder() const
+  {
+    const fs::path folder = Output / "tracked";
+    fs::create_directories(folder);
+    for (const auto& entry : fs::directory_iterator(folder))
+      if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
+        fs::remove(entry.path());
+    return folder;
+  }
+
+  // The tracked mesh's size, from its first frame, for the summary and the report.
+  void describeMesh(vtkPolyData* mesh)
+  {
+    double b[6];
+    mesh->GetBounds(b);
+    Diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+                         (b[5] - b[4]) * (b[5] - b[4]));
+    MeshVertices = mesh->GetNumberOfPoints();
+    MeshTriangles = mesh->GetNumberOfPolys();
+  }
+
+  // Writes frame f (beside its name, renamed when complete) and lists it in the .pvd; false,
+  // said on stderr, when it cannot be written.
+  bool writeFrame(vtkXMLPolyDataWriter* writer, const fs::path& folder, int f, double time,
+                  vtkPolyData* mesh)
+  {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
+    const fs::path file = folder / name;
+    const std::string partial = file.string() + ".partial";
+    writer->SetInputData(mesh);
+    writer->SetFileName(partial.c_str());
+    if (!writer->Write())
+    {
+      Bar.clear();
+      std::cerr << "error: " << file.string() << ": cannot write\n";
+      Failed = true;
+      return false;
+    }
+    fs::rename(partial, file);
+    Written.emplace_back(time, (fs::path("tracked") / name).string());
+    writeAtomically(Pvd, pvdText(Written));
+    return true;
+  }
+
+  // What was tracked, and a warning naming the frames that failed.
+  void summariseTracking() const
+  {
     if (Interrupted)
       std::cerr << "interrupted: " << Written.size() << " of " << Frames << " frame(s) tracked, in "
                 << Pvd.string() << "; nothing compressed\n";
@@ -600,6 +627,7 @@ private:
     }
   }
 
+  // report.json and report.png.
   void writeReport() const
   {
     nlohmann::json report;
@@ -613,51 +641,21 @@ private:
         {"triangles", MeshTriangles}};
     report["boundingBoxDiagonal"] = Diagonal;
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
-    std::vector<double> rms, largest, ms, unexplained, unsupported, stretch;
-    std::vector<std::size_t> failed;
+    std::vector<double> ms;
     int retried = 0;
     for (const FrameRecord& r : Records)
     {
-      perFrame.push_back({{"frame", r.frame},
-                          {"time", r.time},
-                          {"points", r.points},
-                          {"iterations", r.iterations},
-                          {"rmsResidual", r.rmsResidual},
-                          {"maxResidual", r.maxResidual},
-                          {"milliseconds", r.milliseconds},
-                          {"overlappedMilliseconds", r.overlappedMilliseconds},
-                          {"unexplained", r.unexplained},
-                          {"unsupported", r.unsupported},
-                          {"largestStretch", r.largestStretch},
-                          {"retries", r.retries},
-                          {"failed", r.failed},
-                          {"stageMilliseconds", stagesJson(r.stageMilliseconds)}});
-      unexplained.push_back(100 * r.unexplained);
-      unsupported.push_back(100 * r.unsupported);
-      stretch.push_back(r.largestStretch);
+      perFrame.push_back(frameJson(r));
       retried += r.retries > 0 ? 1 : 0;
       if (r.failed)
-      {
-        failed.push_back(static_cast<std::size_t>(r.frame));
         failedFrames.push_back(r.frame);
-      }
-      rms.push_back(Diagonal > 0 ? 100 * r.rmsResidual / Diagonal : r.rmsResidual);
-      largest.push_back(Diagonal > 0 ? 100 * r.maxResidual / Diagonal : r.maxResidual);
       ms.push_back(r.milliseconds);
     }
     report["perFrame"] = perFrame;
     report["framesRetried"] = retried;
     report["framesFailed"] = failedFrames;
     report["medianMillisecondsPerFrame"] = medianOf(ms);
-    std::array<double, 6> stageMedians{};
-    for (std::size_t k = 0; k < StageNames.size(); ++k)
-    {
-      std::vector<double> stage;
-      for (const FrameRecord& r : Records)
-        stage.push_back(r.stageMilliseconds[k]);
-      stageMedians[k] = medianOf(std::move(stage));
-    }
-    report["medianStageMillisecondsPerFrame"] = stagesJson(stageMedians);
+    report["medianStageMillisecondsPerFrame"] = stageMediansJson();
     const fs::path plot = Output / "report.png";
     nlohmann::json outputs = {{"tracked", Pvd.string()}, {"plot", plot.string()}};
     if (!Compression.empty())
@@ -670,6 +668,59 @@ private:
     report["wallSeconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - Started).count();
     writeAtomically(Output / "report.json", report.dump(1) + "\n");
+    writePlot(plot);
+    std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
+  }
+
+  static nlohmann::json frameJson(const FrameRecord& r)
+  {
+    return {{"frame", r.frame},
+            {"time", r.time},
+            {"points", r.points},
+            {"iterations", r.iterations},
+            {"rmsResidual", r.rmsResidual},
+            {"maxResidual", r.maxResidual},
+            {"milliseconds", r.milliseconds},
+            {"overlappedMilliseconds", r.overlappedMilliseconds},
+            {"unexplained", r.unexplained},
+            {"unsupported", r.unsupported},
+            {"largestStretch", r.largestStretch},
+            {"retries", r.retries},
+            {"failed", r.failed},
+            {"stageMilliseconds", stagesJson(r.stageMilliseconds)}};
+  }
+
+  // Each stage's median milliseconds over the frames.
+  nlohmann::json stageMediansJson() const
+  {
+    std::array<double, 6> stageMedians{};
+    for (std::size_t k = 0; k < StageNames.size(); ++k)
+    {
+      std::vector<double> stage;
+      for (const FrameRecord& r : Records)
+        stage.push_back(r.stageMilliseconds[k]);
+      stageMedians[k] = medianOf(std::move(stage));
+    }
+    return stagesJson(stageMedians);
+  }
+
+  // report.png: the distance to the points, the quality, the largest stretch and the time, per
+  // frame, the failed frames marked.
+  void writePlot(const fs::path& plot) const
+  {
+    std::vector<double> rms, largest, ms, unexplained, unsupported, stretch;
+    std::vector<std::size_t> failed;
+    for (const FrameRecord& r : Records)
+    {
+      unexplained.push_back(100 * r.unexplained);
+      unsupported.push_back(100 * r.unsupported);
+      stretch.push_back(r.largestStretch);
+      if (r.failed)
+        failed.push_back(static_cast<std::size_t>(r.frame));
+      rms.push_back(Diagonal > 0 ? 100 * r.rmsResidual / Diagonal : r.rmsResidual);
+      largest.push_back(Diagonal > 0 ? 100 * r.maxResidual / Diagonal : r.maxResidual);
+      ms.push_back(r.milliseconds);
+    }
     const dp::cli::PlotPanel residualPanel{
         "distance to the points, % of diagonal",
         {{"RMS", rms, {31, 119, 180}}, {"largest", largest, {255, 127, 14}}},
@@ -689,7 +740,6 @@ private:
     dp::cli::writeFramePlot(plot.string(),
                             "DynamicPoints: " + fs::path(InputName).filename().string(),
                             {residualPanel, qualityPanel, stretchPanel, timePanel});
-    std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
   }
 
   const Settings S;
