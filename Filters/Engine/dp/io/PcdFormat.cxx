@@ -6,6 +6,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <limits>
 
 namespace dp
@@ -137,6 +138,56 @@ struct PcdHeader
   std::string data; // ascii, binary or binary_compressed (lower case)
 };
 
+// A header line's failure, naming the file and the line.
+using HeaderFailure = std::function<void(const std::string& why)>;
+
+// SIZE or COUNT: one whole number per field. SIZE is 1 to 8 bytes, COUNT a field's values:
+// anything past 2^20 is not a PCD header.
+std::vector<int> perFieldNumbers(const std::vector<std::string_view>& values,
+                                 std::size_t fieldCount, std::string_view written,
+                                 const HeaderFailure& fail)
+{
+  if (values.size() != fieldCount)
+    fail(std::string(written) + " has " + std::to_string(values.size()) + " entries for " +
+         std::to_string(fieldCount) + " fields");
+  std::vector<int> numbers;
+  for (std::string_view value : values)
+  {
+    double v = 0;
+    if (!detail::parseNumber(value, v) || v <= 0 || !detail::wholeNumberWithin(v, 1 << 20))
+      fail("bad " + std::string(written) + " entry '" + std::string(value) + "'");
+    numbers.push_back(static_cast<int>(v));
+  }
+  return numbers;
+}
+
+// TYPE: F, I or U per field.
+void parseTypes(const std::vector<std::string_view>& values, std::vector<PcdField>& fields,
+                const HeaderFailure& fail)
+{
+  if (values.size() != fields.size())
+    fail("TYPE does not match FIELDS");
+  for (std::size_t k = 0; k < values.size(); ++k)
+  {
+    fields[k].type = values[k].empty() ? '?' : values[k][0];
+    if (fields[k].type != 'F' && fields[k].type != 'I' && fields[k].type != 'U')
+      fail("unknown TYPE '" + std::string(values[k]) + "'");
+  }
+}
+
+// WIDTH, HEIGHT or POINTS: one whole number, at most LargestCount, so it can be counted and
+// multiplied.
+std::size_t parseCountValue(const std::vector<std::string_view>& values, std::string_view written,
+                            const HeaderFailure& fail)
+{
+  double v = -1;
+  if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0 ||
+      !detail::wholeNumberWithin(v, detail::LargestCount))
+    fail("bad " + std::string(written) + " value '" +
+         (values.empty() ? std::string() : std::string(values[0])) + "'");
+  return static_cast<std::size_t>(v);
+}
+
 // Reads the header lines off the front of `text`, which is left at the data.
 PcdHeader parseHeader(const std::string& path, std::string_view& text)
 {
@@ -146,7 +197,7 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
   std::size_t width = 0, height = 1;
   std::string_view line;
   int lineNumber = 0;
-  auto fail = [&](const std::string& why)
+  const HeaderFailure fail = [&](const std::string& why)
   { throw FileError(path, "PCD header line " + std::to_string(lineNumber) + ": " + why); };
 
   while (h.data.empty())
@@ -159,27 +210,11 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
     std::string_view rest = line;
     const std::string_view written = detail::nextToken(rest);
     const std::string keyword = detail::toLower(written);
-    if (keyword.empty() || keyword[0] == '#')
+    if (keyword.empty() || keyword[0] == '#' || keyword == "version" || keyword == "viewpoint")
       continue;
     std::vector<std::string_view> values;
     for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
       values.push_back(t);
-    auto numbers = [&](auto assign)
-    {
-      if (values.size() != fields.size())
-        fail(std::string(written) + " has " + std::to_string(values.size()) + " entries for " +
-             std::to_string(fields.size()) + " fields");
-      for (std::size_t k = 0; k < values.size(); ++k)
-      {
-        double v = 0;
-        // SIZE is 1 to 8 bytes, COUNT a field's values: anything past 2^20 is not a PCD header.
-        if (!detail::parseNumber(values[k], v) || v <= 0 || !detail::wholeNumberWithin(v, 1 << 20))
-          fail("bad " + std::string(written) + " entry '" + std::string(values[k]) + "'");
-        assign(fields[k], static_cast<int>(v));
-      }
-    };
-    if (keyword == "version" || keyword == "viewpoint")
-      continue;
     if (keyword == "fields")
     {
       for (auto v : values)
@@ -187,44 +222,30 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
     }
     else if (keyword == "size")
     {
-      numbers([&](PcdField& f, int v) { f.size = v; });
-      for (auto& f : fields)
-        if (f.size != 1 && f.size != 2 && f.size != 4 && f.size != 8)
-          fail("unsupported field size " + std::to_string(f.size));
-    }
-    else if (keyword == "type")
-    {
-      if (values.size() != fields.size())
-        fail("TYPE does not match FIELDS");
-      for (std::size_t k = 0; k < values.size(); ++k)
+      const std::vector<int> sizes = perFieldNumbers(values, fields.size(), written, fail);
+      for (std::size_t k = 0; k < fields.size(); ++k)
       {
-        fields[k].type = values[k].empty() ? '?' : values[k][0];
-        if (fields[k].type != 'F' && fields[k].type != 'I' && fields[k].type != 'U')
-          fail("unknown TYPE '" + std::string(values[k]) + "'");
+        fields[k].size = sizes[k];
+        if (sizes[k] != 1 && sizes[k] != 2 && sizes[k] != 4 && sizes[k] != 8)
+          fail("unsupported field size " + std::to_string(sizes[k]));
       }
     }
+    else if (keyword == "type")
+      parseTypes(values, fields, fail);
     else if (keyword == "count")
-      numbers([&](PcdField& f, int v) { f.count = v; });
-    else if (keyword == "width" || keyword == "height" || keyword == "points")
     {
-      double v = -1;
-      // Whole and at most LargestCount, so it can be counted and multiplied.
-      if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0 ||
-          !detail::wholeNumberWithin(v, detail::LargestCount))
-        fail("bad " + std::string(written) + " value '" +
-             (values.empty() ? std::string() : std::string(values[0])) + "'");
-      const auto count = static_cast<std::size_t>(v);
-      if (keyword == "width")
-        width = count, haveWidth = true;
-      else if (keyword == "height")
-        height = count;
-      else
-        h.points = count, havePoints = true;
+      const std::vector<int> counts = perFieldNumbers(values, fields.size(), written, fail);
+      for (std::size_t k = 0; k < fields.size(); ++k)
+        fields[k].count = counts[k];
     }
+    else if (keyword == "width")
+      width = parseCountValue(values, written, fail), haveWidth = true;
+    else if (keyword == "height")
+      height = parseCountValue(values, written, fail);
+    else if (keyword == "points")
+      h.points = parseCountValue(values, written, fail), havePoints = true;
     else if (keyword == "data")
-    {
       h.data = values.empty() ? "?" : detail::toLower(values[0]);
-    }
     else
       fail("unknown keyword '" + std::string(written) + "'");
   }

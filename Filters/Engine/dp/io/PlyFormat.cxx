@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <optional>
 
 namespace dp
@@ -178,6 +179,69 @@ struct PlyHeader
   std::size_t bodyOffset = 0;
 };
 
+// A header line's failure, naming the file and the line.
+using HeaderFailure = std::function<void(const std::string& why)>;
+
+// "format <kind> <version>" (after the keyword).
+Encoding parseFormatLine(std::string_view rest, const HeaderFailure& fail)
+{
+  const std::string_view kind = detail::nextToken(rest);
+  if (kind == "ascii")
+    return Encoding::Ascii;
+  if (kind == "binary_little_endian")
+    return Encoding::Little;
+  if (kind == "binary_big_endian")
+    return Encoding::Big;
+  fail("unknown format '" + std::string(kind) + "'");
+  return Encoding::Ascii; // not reached: fail throws
+}
+
+// "element <name> <count>" (after the keyword).
+PlyElement parseElementLine(std::string_view rest, std::string_view line, const HeaderFailure& fail)
+{
+  PlyElement element;
+  element.name = std::string(detail::nextToken(rest));
+  double count = -1;
+  if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) || count < 0 ||
+      !detail::wholeNumberWithin(count, detail::LargestCount))
+  {
+    fail("malformed element line '" + std::string(line) + "'");
+  }
+  element.count = static_cast<std::size_t>(count);
+  return element;
+}
+
+// "property <type> <name>" or "property list <count type> <type> <name>" (after the keyword).
+PlyProperty parsePropertyLine(std::string_view rest, std::string_view line,
+                              const HeaderFailure& fail)
+{
+  PlyProperty property;
+  std::string_view typeName = detail::nextToken(rest);
+  if (typeName == "list")
+  {
+    property.isList = true;
+    const auto countType = parsePlyType(detail::nextToken(rest));
+    typeName = detail::nextToken(rest);
+    if (!countType)
+    {
+      fail("unknown list count type in '" + std::string(line) + "'");
+    }
+    property.countType = *countType;
+  }
+  const auto type = parsePlyType(typeName);
+  if (!type)
+  {
+    fail("unknown property type '" + std::string(typeName) + "'");
+  }
+  property.type = *type;
+  property.name = std::string(detail::nextToken(rest));
+  if (property.name.empty())
+  {
+    fail("property without a name");
+  }
+  return property;
+}
+
 PlyHeader parseHeader(const std::string& path, const std::string& bytes)
 {
   PlyHeader header;
@@ -189,6 +253,8 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
   }
   bool sawFormat = false;
   int lineNumber = 1;
+  const HeaderFailure fail = [&](const std::string& why)
+  { throw FileError(path, "PLY header line " + std::to_string(lineNumber) + ": " + why); };
   while (true)
   {
     if (!detail::nextLine(text, line))
@@ -198,8 +264,6 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
     ++lineNumber;
     std::string_view rest = line;
     const std::string_view keyword = detail::nextToken(rest);
-    auto fail = [&](const std::string& why)
-    { throw FileError(path, "PLY header line " + std::to_string(lineNumber) + ": " + why); };
     if (keyword == "end_header")
     {
       break;
@@ -210,61 +274,18 @@ PlyHeader parseHeader(const std::string& path, const std::string& bytes)
     }
     if (keyword == "format")
     {
-      const std::string_view kind = detail::nextToken(rest);
-      if (kind == "ascii")
-        header.encoding = Encoding::Ascii;
-      else if (kind == "binary_little_endian")
-        header.encoding = Encoding::Little;
-      else if (kind == "binary_big_endian")
-        header.encoding = Encoding::Big;
-      else
-        fail("unknown format '" + std::string(kind) + "'");
+      header.encoding = parseFormatLine(rest, fail);
       sawFormat = true;
     }
     else if (keyword == "element")
-    {
-      PlyElement element;
-      element.name = std::string(detail::nextToken(rest));
-      double count = -1;
-      if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) ||
-          count < 0 || !detail::wholeNumberWithin(count, detail::LargestCount))
-      {
-        fail("malformed element line '" + std::string(line) + "'");
-      }
-      element.count = static_cast<std::size_t>(count);
-      header.elements.push_back(std::move(element));
-    }
+      header.elements.push_back(parseElementLine(rest, line, fail));
     else if (keyword == "property")
     {
       if (header.elements.empty())
       {
         fail("property before any element");
       }
-      PlyProperty property;
-      std::string_view typeName = detail::nextToken(rest);
-      if (typeName == "list")
-      {
-        property.isList = true;
-        const auto countType = parsePlyType(detail::nextToken(rest));
-        typeName = detail::nextToken(rest);
-        if (!countType)
-        {
-          fail("unknown list count type in '" + std::string(line) + "'");
-        }
-        property.countType = *countType;
-      }
-      const auto type = parsePlyType(typeName);
-      if (!type)
-      {
-        fail("unknown property type '" + std::string(typeName) + "'");
-      }
-      property.type = *type;
-      property.name = std::string(detail::nextToken(rest));
-      if (property.name.empty())
-      {
-        fail("property without a name");
-      }
-      header.elements.back().properties.push_back(property);
+      header.elements.back().properties.push_back(parsePropertyLine(rest, line, fail));
     }
     else
     {
