@@ -22,6 +22,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <string>
 #include <sys/resource.h>
 #include <thread>
@@ -40,26 +41,29 @@ against parsing the same files with the engine (dp::readPLY), and reports memory
 The sequence is generated in DIR (default: /tmp/dynamicpoints-bench-read) if absent.
 )";
 
-} // namespace
-
-int main(int argc, char** argv)
+struct Plan
 {
-  using namespace dp::cli;
   std::size_t frames = 200, points = 20000, repeats = 5;
   std::string dir = "/tmp/dynamicpoints-bench-read";
+};
+
+// Reads the command line into `plan`; an exit status when the benchmark should stop there.
+std::optional<int> parseArguments(int argc, char** argv, Plan& plan)
+{
+  using namespace dp::cli;
   try
   {
     for (int i = 1; i < argc; ++i)
     {
       const std::string arg = argv[i];
       if (arg == "--frames")
-        frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+        plan.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
       else if (arg == "--points")
-        points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+        plan.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
       else if (arg == "--repeats")
-        repeats = parseCount(arg, optionValue(argc, argv, i), 1, 1000);
+        plan.repeats = parseCount(arg, optionValue(argc, argv, i), 1, 1000);
       else if (arg == "--dir")
-        dir = optionValue(argc, argv, i);
+        plan.dir = optionValue(argc, argv, i);
       else
       {
         std::cout << Usage;
@@ -72,42 +76,49 @@ int main(int argc, char** argv)
     std::cerr << e.what() << "\n" << Usage;
     return 2;
   }
+  return std::nullopt;
+}
 
-  dir += "/" + std::to_string(frames) + "x" + std::to_string(points);
+// The sequence's .series file, the sequence sampled on the bending tube first when absent.
+std::string sampledSequence(const Plan& plan)
+{
+  const std::string dir =
+      plan.dir + "/" + std::to_string(plan.frames) + "x" + std::to_string(plan.points);
   const std::string series = dir + "/points.series";
   if (!std::filesystem::exists(series))
   {
-    std::cout << "generating " << frames << " frames x " << points << " points in " << dir << "\n";
+    std::cout << "generating " << plan.frames << " frames x " << plan.points << " points in " << dir
+              << "\n";
     dp::BendingTube::Options tube;
-    tube.frames = frames;
+    tube.frames = plan.frames;
     dp::SamplerOptions sampling;
-    sampling.pointsPerFrame = points;
+    sampling.pointsPerFrame = plan.points;
     dp::writeSampledSequence(dp::BendingTube(tube), sampling, dir);
   }
-  const dp::FrameSequence sequence = dp::FrameSequence::fromSeriesFile(series);
-  std::uintmax_t bytes = 0;
-  for (const auto& f : sequence.frames())
-    bytes += std::filesystem::file_size(f.path);
+  return series;
+}
 
-  std::printf("machine: %s, %u hardware threads; single-threaded reads\n", cpuModel().c_str(),
-              std::thread::hardware_concurrency());
-  std::printf("input: %zu frames x %zu points, binary little-endian PLY with normals, %.1f MiB "
-              "(%.0f kB per frame)\n",
-              sequence.size(), points, static_cast<double>(bytes) / (1 << 20),
-              static_cast<double>(bytes) / 1024.0 / static_cast<double>(sequence.size()));
-  std::printf("repeats: %zu (medians shown; the files are in the page cache after the first)\n\n",
-              repeats);
+// Per-frame times of each run (seconds) and the resident memory the first run saw.
+struct ReadTimes
+{
+  std::vector<double> parse, source, reverse;
+  double rssBefore = 0, rssAfterFirstFrames = 0, rssAtEnd = 0;
+};
 
-  std::vector<double> parseTimes, sourceTimes, reverseTimes;
-  double rssAfterFirstFrames = 0, rssAtEnd = 0;
-  const double rssBefore = residentMiB();
+// Times parsing every frame, then reading them through the source in order and in reverse;
+// false (said on stderr) when the two ways count different points.
+bool timeReads(const dp::FrameSequence& sequence, const std::string& series, std::size_t repeats,
+               ReadTimes& t)
+{
+  const double frames = static_cast<double>(sequence.size());
+  t.rssBefore = residentMiB();
   for (std::size_t r = 0; r < repeats; ++r)
   {
     double start = now();
     std::size_t total = 0;
     for (const auto& f : sequence.frames())
       total += dp::readPLY(f.path).numberOfPoints();
-    parseTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
+    t.parse.push_back((now() - start) / frames);
 
     vtkNew<vtkPointSequenceSource> source;
     source->SetFileName(series.c_str());
@@ -119,26 +130,29 @@ int main(int argc, char** argv)
       source->UpdateTimeStep(sequence[f].time);
       viaSource += static_cast<std::size_t>(source->GetOutput()->GetNumberOfPoints());
       if (r == 0 && f == std::min<std::size_t>(9, sequence.size() - 1))
-        rssAfterFirstFrames = residentMiB();
+        t.rssAfterFirstFrames = residentMiB();
     }
-    sourceTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
+    t.source.push_back((now() - start) / frames);
     if (r == 0)
-      rssAtEnd = residentMiB();
+      t.rssAtEnd = residentMiB();
 
     start = now();
     for (std::size_t f = sequence.size(); f-- > 0;)
       source->UpdateTimeStep(sequence[f].time);
-    reverseTimes.push_back((now() - start) / static_cast<double>(sequence.size()));
+    t.reverse.push_back((now() - start) / frames);
     if (viaSource != total)
     {
       std::cerr << "point counts differ: " << viaSource << " via the source, " << total
                 << " parsed directly\n";
-      return 1;
+      return false;
     }
   }
+  return true;
+}
 
-  const double parse = median(parseTimes), source = median(sourceTimes),
-               reverse = median(reverseTimes);
+void printTimes(const ReadTimes& t, std::size_t frames)
+{
+  const double parse = median(t.parse), source = median(t.source), reverse = median(t.reverse);
   std::printf("%-44s %10s %10s\n", "per frame", "ms", "frames/s");
   std::printf("%-44s %10.3f %10.1f\n", "engine parse only (dp::readPLY)", 1e3 * parse, 1 / parse);
   std::printf("%-44s %10.3f %10.1f\n", "vtkPointSequenceSource, frames in order", 1e3 * source,
@@ -149,7 +163,33 @@ int main(int argc, char** argv)
               reverse / parse);
   std::printf("memory: resident %.1f MiB before, %.1f MiB after frame 10, %.1f MiB after frame "
               "%zu (growth over the sequence %.1f MiB); peak %.1f MiB\n",
-              rssBefore, rssAfterFirstFrames, rssAtEnd, sequence.size(),
-              rssAtEnd - rssAfterFirstFrames, peakMiB());
+              t.rssBefore, t.rssAfterFirstFrames, t.rssAtEnd, frames,
+              t.rssAtEnd - t.rssAfterFirstFrames, peakMiB());
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  Plan plan;
+  if (const std::optional<int> status = parseArguments(argc, argv, plan))
+    return *status;
+  const std::string series = sampledSequence(plan);
+  const dp::FrameSequence sequence = dp::FrameSequence::fromSeriesFile(series);
+  std::uintmax_t bytes = 0;
+  for (const auto& f : sequence.frames())
+    bytes += std::filesystem::file_size(f.path);
+  std::printf("machine: %s, %u hardware threads; single-threaded reads\n", cpuModel().c_str(),
+              std::thread::hardware_concurrency());
+  std::printf("input: %zu frames x %zu points, binary little-endian PLY with normals, %.1f MiB "
+              "(%.0f kB per frame)\n",
+              sequence.size(), plan.points, static_cast<double>(bytes) / (1 << 20),
+              static_cast<double>(bytes) / 1024.0 / static_cast<double>(sequence.size()));
+  std::printf("repeats: %zu (medians shown; the files are in the page cache after the first)\n\n",
+              plan.repeats);
+  ReadTimes times;
+  if (!timeReads(sequence, series, plan.repeats, times))
+    return 1;
+  printTimes(times, sequence.size());
   return 0;
 }
