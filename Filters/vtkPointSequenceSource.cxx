@@ -29,6 +29,7 @@
 #include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <sstream>
@@ -139,9 +140,9 @@ void cloudToPolyData(const dp::PointCloud& cloud, vtkPolyData* output)
   }
 }
 
-// Reads .vtp / .vtu / .vtk with VTK's readers into `output` (points, point data, polygons).
-// Returns the number of points dropped for non-finite coordinates.
-vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPolyData* output)
+// The point set in a .vtp / .vtu / .vtk file, read by VTK's readers; a FileError naming the file
+// and the reader's complaint when it cannot be read or holds no points.
+vtkSmartPointer<vtkPointSet> readPointSet(const std::string& path, dp::PointFileFormat format)
 {
   if (!std::ifstream(path).good())
   {
@@ -175,13 +176,19 @@ vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPo
     const std::string what = errors->Messages.str();
     throw dp::FileError(path, "VTK reader failed" + (what.empty() ? std::string() : ": " + what));
   }
-  vtkPointSet* input = vtkPointSet::SafeDownCast(reader->GetOutputDataObject(0));
+  vtkSmartPointer<vtkPointSet> input = vtkPointSet::SafeDownCast(reader->GetOutputDataObject(0));
   if (!input)
   {
     throw dp::FileError(path, "holds no point set (only polydata, unstructured or structured "
                               "grids have points to read)");
   }
+  return input;
+}
 
+// The input's points with finite coordinates, and their point data, into `output`; each input
+// point's index there (-1: dropped).
+std::vector<vtkIdType> copyFinitePoints(vtkPointSet* input, vtkPolyData* output)
+{
   const vtkIdType n = input->GetNumberOfPoints();
   std::vector<vtkIdType> newIndex(n, -1);
   vtkIdType kept = 0;
@@ -192,7 +199,6 @@ vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPo
     if (std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))
       newIndex[i] = kept++;
   }
-  vtkPolyData* inputPolys = vtkPolyData::SafeDownCast(input);
   if (kept == n)
   {
     if (n > 0)
@@ -215,29 +221,44 @@ vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPo
     output->SetPoints(points);
   }
   output->SetVerts(vertexCells(kept));
-  if (inputPolys && inputPolys->GetNumberOfPolys() > 0)
+  return newIndex;
+}
+
+// The polygons whose points were all kept, renumbered, into `output`.
+void copyKeptPolygons(vtkPolyData* input, const std::vector<vtkIdType>& newIndex,
+                      vtkPolyData* output)
+{
+  vtkNew<vtkCellArray> polys;
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  std::vector<vtkIdType> face;
+  auto iter = vtk::TakeSmartPointer(input->GetPolys()->NewIterator());
+  for (iter->GoToFirstCell(); !iter->IsDoneWithTraversal(); iter->GoToNextCell())
   {
-    vtkNew<vtkCellArray> polys;
-    const vtkIdType* ids = nullptr;
-    vtkIdType count = 0;
-    std::vector<vtkIdType> face;
-    auto iter = vtk::TakeSmartPointer(inputPolys->GetPolys()->NewIterator());
-    for (iter->GoToFirstCell(); !iter->IsDoneWithTraversal(); iter->GoToNextCell())
+    iter->GetCurrentCell(count, ids);
+    face.assign(ids, ids + count);
+    bool valid = true;
+    for (auto& id : face)
     {
-      iter->GetCurrentCell(count, ids);
-      face.assign(ids, ids + count);
-      bool valid = true;
-      for (auto& id : face)
-      {
-        valid = valid && newIndex[id] >= 0;
-        id = valid ? newIndex[id] : 0;
-      }
-      if (valid)
-        polys->InsertNextCell(count, face.data());
+      valid = valid && newIndex[id] >= 0;
+      id = valid ? newIndex[id] : 0;
     }
-    output->SetPolys(polys);
+    if (valid)
+      polys->InsertNextCell(count, face.data());
   }
-  return n - kept;
+  output->SetPolys(polys);
+}
+
+// Reads .vtp / .vtu / .vtk with VTK's readers into `output` (points, point data, polygons).
+// Returns the number of points dropped for non-finite coordinates.
+vtkIdType readVTKFile(const std::string& path, dp::PointFileFormat format, vtkPolyData* output)
+{
+  const vtkSmartPointer<vtkPointSet> input = readPointSet(path, format);
+  const std::vector<vtkIdType> newIndex = copyFinitePoints(input, output);
+  vtkPolyData* inputPolys = vtkPolyData::SafeDownCast(input);
+  if (inputPolys && inputPolys->GetNumberOfPolys() > 0)
+    copyKeptPolygons(inputPolys, newIndex, output);
+  return static_cast<vtkIdType>(std::count(newIndex.begin(), newIndex.end(), -1));
 }
 
 bool isSeriesFile(const std::string& name)

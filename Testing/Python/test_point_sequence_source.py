@@ -265,6 +265,33 @@ class TestBadInput(TempDirTestCase):
         self.assertIn("nan.xyz", rec.warning_text)
         self.assertEqual(rec.errors, [])
 
+    def test_nan_points_of_a_vtk_file_are_dropped_with_their_faces(self):
+        # A fan of 19 triangles around point 0 over points 1..20: point 5 is NaN, so the two
+        # triangles that use it go, the others keep their points, renumbered past the gap.
+        pd = vtk_polydata(with_faces=True)
+        xyz = XYZ.copy()  # the polydata's points share XYZ's memory: not in place
+        xyz[5, 0] = np.nan
+        points = vtkPoints()
+        points.SetData(dsa.numpyTovtkDataArray(xyz, "Points"))
+        pd.SetPoints(points)
+        writer = vtkXMLPolyDataWriter()
+        writer.SetInputData(pd)
+        writer.SetFileName(self.path("nan.vtp"))
+        self.assertEqual(writer.Write(), 1)
+        out, source, rec = read_one(self.path("nan.vtp"))
+        self.assertEqual(source.GetNumberOfDroppedPoints(), 1)
+        self.assertIn("dropped 1 point(s)", rec.warning_text)
+        kept = np.delete(XYZ, 5, axis=0)
+        np.testing.assert_allclose(out.Points, kept, atol=1e-12)
+        np.testing.assert_array_equal(out.PointData["RGB"], np.delete(COLORS, 5, axis=0))
+        self.assertEqual(out.GetNumberOfVerts(), len(kept))
+        faces = out.GetPolys()
+        self.assertEqual(faces.GetNumberOfCells(), 17)
+        ids = np.array(dsa.vtkDataArrayToVTKArray(faces.GetConnectivityArray())).reshape(-1, 3)
+        expected = [[0, i, i + 1] for i in range(1, 20) if 5 not in (i, i + 1)]
+        expected = [[v - (v > 5) for v in face] for face in expected]
+        np.testing.assert_array_equal(ids, expected)
+
     def test_empty_frame_is_a_warning_and_an_empty_output(self):
         open(self.path("empty.ply"), "w").write(
             "ply\nformat binary_little_endian 1.0\nelement vertex 0\nproperty float x\n"
