@@ -123,93 +123,100 @@ private:
   std::vector<Text> Texts;
 };
 
-} // namespace
-
-void writeFramePlot(const std::string& path, const std::string& title,
-                    const std::vector<PlotPanel>& panels, int width, int panelHeight)
+// Where a panel sits on the canvas and the range of its values: maps frames and values to
+// pixels.
+struct PanelArea
 {
-  const int titleHeight = 40;
-  const int height = titleHeight + panelHeight * static_cast<int>(panels.size());
-  Canvas canvas(width, height);
-  canvas.text(title, width / 2, height - 12, 18, 1, 2, true);
-  const int left = 90, right = 170, bottom = 45, top = 32;
-  const std::array<unsigned char, 3> grey{200, 200, 200}, black{40, 40, 40};
-  for (std::size_t p = 0; p < panels.size(); ++p)
+  int x0, x1, y0, y1;
+  double low, high, xMax;
+
+  double px(double frame) const { return x0 + (x1 - x0) * frame / xMax; }
+  double py(double value) const { return y0 + (y1 - y0) * (value - low) / (high - low); }
+};
+
+// The panel's area between the margins, and its value range: from zero (values here are sizes
+// and times) to a little above the largest finite value.
+PanelArea areaOf(const PlotPanel& panel, int x0, int x1, int y0, int y1)
+{
+  std::size_t frames = 0;
+  double low = std::numeric_limits<double>::infinity(), high = -low;
+  for (const PlotLine& l : panel.lines)
   {
-    const PlotPanel& panel = panels[p];
-    const int y0 = height - titleHeight - panelHeight * static_cast<int>(p + 1) + bottom;
-    const int y1 = y0 + panelHeight - bottom - top;
-    const int x0 = left, x1 = width - right;
-    std::size_t frames = 0;
-    double low = std::numeric_limits<double>::infinity(), high = -low;
-    for (const PlotLine& l : panel.lines)
-    {
-      frames = std::max(frames, l.values.size());
-      for (double v : l.values)
-        if (std::isfinite(v))
-        {
-          low = std::min(low, v);
-          high = std::max(high, v);
-        }
-    }
-    if (!std::isfinite(low))
-      low = 0, high = 1;
-    low = std::min(low, 0.0); // values here are sizes and times: show them from zero
-    if (high <= low)
-      high = low + 1;
-    high += 0.05 * (high - low);
-    const double xMax = std::max<double>(1, static_cast<double>(frames) - 1);
-    auto px = [&](double f) { return x0 + (x1 - x0) * f / xMax; };
-    auto py = [&](double v) { return y0 + (y1 - y0) * (v - low) / (high - low); };
-
-    for (double t : niceTicks(low, high, 5))
-    {
-      canvas.colour(grey);
-      canvas.line(x0, py(t), x1, py(t));
-      canvas.text(tickText(t), x0 - 6, static_cast<int>(py(t)), 12, 2, 1);
-    }
-    for (double t : niceTicks(0, xMax, 10))
-    {
-      if (t != std::round(t)) // frames are whole
-        continue;
-      canvas.colour(grey);
-      canvas.line(px(t), y0, px(t), y1);
-      canvas.text(tickText(t), static_cast<int>(px(t)), y0 - 6, 12, 1, 2);
-    }
-    canvas.colour(black);
-    canvas.line(x0, y0, x1, y0);
-    canvas.line(x0, y0, x0, y1);
-    canvas.text("frame", (x0 + x1) / 2, y0 - 26, 13, 1, 2);
-    canvas.text(panel.yLabel, x0, y1 + 6, 13, 0, 0); // above the axis: no rotated text
-
-    int legendY = y1 - 10;
-    if (!panel.marks.empty())
-    {
-      const std::array<unsigned char, 3> red{214, 39, 40};
-      canvas.colour(red);
-      for (std::size_t f : panel.marks)
-        canvas.line(px(static_cast<double>(f)), y0, px(static_cast<double>(f)), y1, 1);
-      canvas.line(x1 + 24, legendY - 8, x1 + 24, legendY + 8, 1);
-      canvas.text(panel.marksLabel, x1 + 42, legendY, 12, 0, 1);
-      legendY -= 22;
-    }
-    for (const PlotLine& l : panel.lines)
-    {
-      canvas.colour(l.colour);
-      for (std::size_t f = 1; f < l.values.size(); ++f)
-        if (std::isfinite(l.values[f - 1]) && std::isfinite(l.values[f]))
-          canvas.line(px(static_cast<double>(f - 1)), py(l.values[f - 1]),
-                      px(static_cast<double>(f)), py(l.values[f]), 2);
-      if (l.values.size() == 1 && std::isfinite(l.values[0]))
-        canvas.box(static_cast<int>(px(0)) - 2, static_cast<int>(px(0)) + 2,
-                   static_cast<int>(py(l.values[0])) - 2, static_cast<int>(py(l.values[0])) + 2);
-      canvas.line(x1 + 12, legendY, x1 + 36, legendY, 3);
-      canvas.text(l.label, x1 + 42, legendY, 12, 0, 1);
-      legendY -= 22;
-    }
+    frames = std::max(frames, l.values.size());
+    for (double v : l.values)
+      if (std::isfinite(v))
+      {
+        low = std::min(low, v);
+        high = std::max(high, v);
+      }
   }
+  if (!std::isfinite(low))
+    low = 0, high = 1;
+  low = std::min(low, 0.0);
+  if (high <= low)
+    high = low + 1;
+  high += 0.05 * (high - low);
+  return {x0, x1, y0, y1, low, high, std::max<double>(1, static_cast<double>(frames) - 1)};
+}
 
-  vtkSmartPointer<vtkImageData> image = canvas.finish();
+// The grid, its tick labels, the axes and their labels.
+void drawAxes(Canvas& canvas, const PanelArea& a, const std::string& yLabel)
+{
+  const std::array<unsigned char, 3> grey{200, 200, 200}, black{40, 40, 40};
+  for (double t : niceTicks(a.low, a.high, 5))
+  {
+    canvas.colour(grey);
+    canvas.line(a.x0, a.py(t), a.x1, a.py(t));
+    canvas.text(tickText(t), a.x0 - 6, static_cast<int>(a.py(t)), 12, 2, 1);
+  }
+  for (double t : niceTicks(0, a.xMax, 10))
+  {
+    if (t != std::round(t)) // frames are whole
+      continue;
+    canvas.colour(grey);
+    canvas.line(a.px(t), a.y0, a.px(t), a.y1);
+    canvas.text(tickText(t), static_cast<int>(a.px(t)), a.y0 - 6, 12, 1, 2);
+  }
+  canvas.colour(black);
+  canvas.line(a.x0, a.y0, a.x1, a.y0);
+  canvas.line(a.x0, a.y0, a.x0, a.y1);
+  canvas.text("frame", (a.x0 + a.x1) / 2, a.y0 - 26, 13, 1, 2);
+  canvas.text(yLabel, a.x0, a.y1 + 6, 13, 0, 0); // above the axis: no rotated text
+}
+
+// The marked frames, the lines, and the legend to the right of the panel.
+void drawData(Canvas& canvas, const PanelArea& a, const PlotPanel& panel)
+{
+  int legendY = a.y1 - 10;
+  if (!panel.marks.empty())
+  {
+    const std::array<unsigned char, 3> red{214, 39, 40};
+    canvas.colour(red);
+    for (std::size_t f : panel.marks)
+      canvas.line(a.px(static_cast<double>(f)), a.y0, a.px(static_cast<double>(f)), a.y1, 1);
+    canvas.line(a.x1 + 24, legendY - 8, a.x1 + 24, legendY + 8, 1);
+    canvas.text(panel.marksLabel, a.x1 + 42, legendY, 12, 0, 1);
+    legendY -= 22;
+  }
+  for (const PlotLine& l : panel.lines)
+  {
+    canvas.colour(l.colour);
+    for (std::size_t f = 1; f < l.values.size(); ++f)
+      if (std::isfinite(l.values[f - 1]) && std::isfinite(l.values[f]))
+        canvas.line(a.px(static_cast<double>(f - 1)), a.py(l.values[f - 1]),
+                    a.px(static_cast<double>(f)), a.py(l.values[f]), 2);
+    if (l.values.size() == 1 && std::isfinite(l.values[0]))
+      canvas.box(static_cast<int>(a.px(0)) - 2, static_cast<int>(a.px(0)) + 2,
+                 static_cast<int>(a.py(l.values[0])) - 2, static_cast<int>(a.py(l.values[0])) + 2);
+    canvas.line(a.x1 + 12, legendY, a.x1 + 36, legendY, 3);
+    canvas.text(l.label, a.x1 + 42, legendY, 12, 0, 1);
+    legendY -= 22;
+  }
+}
+
+// The image as a PNG, beside its name and renamed when complete.
+void writePng(const std::string& path, vtkImageData* image)
+{
   const std::string partial = path + ".partial";
   vtkNew<vtkPNGWriter> writer;
   writer->SetInputData(image);
@@ -221,6 +228,27 @@ void writeFramePlot(const std::string& path, const std::string& title,
   std::filesystem::rename(partial, path, error);
   if (error)
     throw std::runtime_error(path + ": " + error.message());
+}
+
+} // namespace
+
+void writeFramePlot(const std::string& path, const std::string& title,
+                    const std::vector<PlotPanel>& panels, int width, int panelHeight)
+{
+  const int titleHeight = 40;
+  const int height = titleHeight + panelHeight * static_cast<int>(panels.size());
+  Canvas canvas(width, height);
+  canvas.text(title, width / 2, height - 12, 18, 1, 2, true);
+  const int left = 90, right = 170, bottom = 45, top = 32;
+  for (std::size_t p = 0; p < panels.size(); ++p)
+  {
+    const int y0 = height - titleHeight - panelHeight * static_cast<int>(p + 1) + bottom;
+    const PanelArea area =
+        areaOf(panels[p], left, width - right, y0, y0 + panelHeight - bottom - top);
+    drawAxes(canvas, area, panels[p].yLabel);
+    drawData(canvas, area, panels[p]);
+  }
+  writePng(path, canvas.finish());
 }
 
 } // namespace dp::cli
