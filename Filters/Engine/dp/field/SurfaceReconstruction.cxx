@@ -111,11 +111,21 @@ void evaluate(const Input& in, openvdb::FloatGrid& grid, double h, std::size_t k
 // too (a concave corner of the outside, the hollow of a cupped ear) is no hole: it takes that
 // sign, so no surface appears there where a few band voxels next to it have the other one (a
 // part too thin for the voxels).
-void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord>& holes,
-                      float background)
+// What each hole voxel's six neighbours are: other hole voxels (their index in `around`, else
+// -1), and of the others the sum of their values (`fixed`), whether they are pieces outside the
+// band of either sign (`meets`: bit 0 an inside piece, bit 1 an outside piece), and their signs
+// in the band (`band`: positive ones less negative ones).
+struct HoleNeighbours
 {
-  if (holes.empty())
-    return;
+  std::vector<std::array<int, 6>> around;
+  std::vector<float> fixed;
+  std::vector<std::uint8_t> meets;
+  std::vector<int> band;
+};
+
+HoleNeighbours holeNeighbours(const openvdb::FloatGrid& grid,
+                              const std::vector<openvdb::Coord>& holes)
+{
   openvdb::Int32Grid::Ptr index = openvdb::Int32Grid::create(-1);
   {
     auto acc = index->getAccessor();
@@ -123,35 +133,40 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
       acc.setValueOn(holes[i], static_cast<int>(i));
   }
   const std::size_t n = holes.size();
-  std::vector<std::array<int, 6>> around(n);
-  std::vector<float> fixed(n, 0.0f), value(n, 0.0f);
-  std::vector<std::uint8_t> meets(n, 0); // bit 0: an inside piece, bit 1: an outside piece
-  std::vector<int> band(n, 0);           // band neighbours: positive ones less negative ones
+  HoleNeighbours h{std::vector<std::array<int, 6>>(n), std::vector<float>(n, 0.0f),
+                   std::vector<std::uint8_t>(n, 0), std::vector<int>(n, 0)};
+  auto acc = index->getConstAccessor();
+  auto values = grid.getConstAccessor();
+  for (std::size_t i = 0; i < n; ++i)
   {
-    auto acc = index->getConstAccessor();
-    auto values = grid.getConstAccessor();
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      int e = 0;
-      for (int axis = 0; axis < 3; ++axis)
-        for (int side = -1; side <= 1; side += 2)
-        {
-          openvdb::Coord v = holes[i];
-          v[axis] += side;
-          const int j = acc.getValue(v);
-          around[i][e++] = j;
-          if (j >= 0)
-            continue;
-          const float neighbour = values.getValue(v);
-          fixed[i] += neighbour;
-          if (!values.isValueOn(v))
-            meets[i] |= neighbour < 0 ? 1 : 2;
-          else
-            band[i] += neighbour < 0 ? -1 : 1;
-        }
-    }
+    int e = 0;
+    for (int axis = 0; axis < 3; ++axis)
+      for (int side = -1; side <= 1; side += 2)
+      {
+        openvdb::Coord v = holes[i];
+        v[axis] += side;
+        const int j = acc.getValue(v);
+        h.around[i][e++] = j;
+        if (j >= 0)
+          continue;
+        const float neighbour = values.getValue(v);
+        h.fixed[i] += neighbour;
+        if (!values.isValueOn(v))
+          h.meets[i] |= neighbour < 0 ? 1 : 2;
+        else
+          h.band[i] += neighbour < 0 ? -1 : 1;
+      }
   }
-  // Connected parts of hole voxels, and what they meet.
+  return h;
+}
+
+// Which hole voxels are free to take the interpolation: not those of a connected part that
+// meets pieces of one sign only and whose band neighbours mostly have that sign too; those get
+// that sign's background value in `value`.
+std::vector<char> freeHoleVoxels(const HoleNeighbours& h, float background,
+                                 std::vector<float>& value)
+{
+  const std::size_t n = h.around.size();
   std::vector<int> part(n, -1);
   std::vector<std::uint8_t> partMeets;
   std::vector<long> partBand;
@@ -169,9 +184,9 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
     {
       const std::size_t i = stack.back();
       stack.pop_back();
-      partMeets[p] |= meets[i];
-      partBand[p] += band[i];
-      for (int j : around[i])
+      partMeets[p] |= h.meets[i];
+      partBand[p] += h.band[i];
+      for (int j : h.around[i])
         if (j >= 0 && part[j] < 0)
         {
           part[j] = p;
@@ -188,21 +203,32 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
     if (!free[i])
       value[i] = m == 1 ? -background : background;
   }
+  return free;
+}
+
+void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord>& holes,
+                      float background)
+{
+  if (holes.empty())
+    return;
+  const HoleNeighbours h = holeNeighbours(grid, holes);
+  std::vector<float> value(holes.size(), 0.0f);
+  const std::vector<char> free = freeHoleVoxels(h, background, value);
   const int rounds = 200;
   const float omega = 1.9f;
   for (int round = 0; round < rounds; ++round)
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < holes.size(); ++i)
     {
       if (!free[i])
         continue;
-      float sum = fixed[i];
-      for (int j : around[i])
+      float sum = h.fixed[i];
+      for (int j : h.around[i])
         if (j >= 0)
           sum += value[j];
       value[i] += omega * (sum / 6 - value[i]);
     }
   auto acc = grid.getAccessor();
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < holes.size(); ++i)
     acc.setValue(holes[i], value[i]);
 }
 
@@ -707,8 +733,10 @@ void dropUnsupported(FineMesh& mesh, const Input& in, double reach)
 
 } // namespace
 
-ReconstructedMesh reconstructSurface(const double* points, const float* normals, std::size_t count,
-                                     const ReconstructionOptions& options)
+namespace
+{
+void validateReconstruction(const double* points, const float* normals, std::size_t count,
+                            const ReconstructionOptions& options)
 {
   if (count < 16)
     throw std::invalid_argument("surface reconstruction needs at least 16 points, not " +
@@ -725,16 +753,11 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
     if (!std::isfinite(points[i]) || !std::isfinite(normals[i]))
       throw std::invalid_argument("surface reconstruction: point " + std::to_string(i / 3) +
                                   " has a non-finite coordinate or normal");
-  static std::once_flag once;
-  std::call_once(once, [] { openvdb::initialize(); });
+}
 
-  const std::vector<double> all(points, points + 3 * count);
-  const double diagonal = boundingBoxDiagonal(all);
-  if (!(diagonal > 0))
-    throw std::invalid_argument("surface reconstruction: all points coincide");
-
-  const detail::KdTree tree(points, count);
-  // The typical sample spacing: the median nearest-neighbour distance of a subsample.
+// The typical sample spacing: the median nearest-neighbour distance of a subsample.
+double typicalSpacing(const detail::KdTree& tree, const double* points, std::size_t count)
+{
   std::vector<double> gaps;
   const std::size_t stride = std::max<std::size_t>(1, count / 2000);
   for (std::size_t i = 0; i < count; i += stride)
@@ -748,10 +771,49 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
     throw std::invalid_argument("surface reconstruction: all points coincide");
   std::nth_element(gaps.begin(), gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2),
                    gaps.end());
-  const double spacing = gaps[gaps.size() / 2];
-  const Input in{points, normals, count, tree, spacing};
+  return gaps[gaps.size() / 2];
+}
 
-  const double h = options.voxelSize > 0 ? options.voxelSize : VoxelPerSpacing * spacing;
+// Turns the triangles the way the data's normals face (outward for estimateNormals' and a
+// scanner's), by a vote of every triangle for the normal of the point nearest to it. (The
+// tracker compares the template's normals with the data's.)
+void orientLikeTheData(ReconstructedMesh& mesh, const Input& in)
+{
+  double vote = 0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+  {
+    Vec3 corner[3];
+    for (int e = 0; e < 3; ++e)
+    {
+      const double* p = &mesh.positions[3 * static_cast<std::size_t>(mesh.triangles[t + e])];
+      corner[e] = {p[0], p[1], p[2]};
+    }
+    const Vec3 n = cross(corner[1] - corner[0], corner[2] - corner[0]);
+    const Vec3 centre = (1.0 / 3.0) * (corner[0] + corner[1] + corner[2]);
+    const float* m = in.normals + 3 * in.tree.nearest(centre.data());
+    vote += n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
+  }
+  if (vote < 0)
+    for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
+      std::swap(mesh.triangles[t + 1], mesh.triangles[t + 2]);
+}
+} // namespace
+
+ReconstructedMesh reconstructSurface(const double* points, const float* normals, std::size_t count,
+                                     const ReconstructionOptions& options)
+{
+  validateReconstruction(points, normals, count, options);
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+
+  const std::vector<double> all(points, points + 3 * count);
+  const double diagonal = boundingBoxDiagonal(all);
+  if (!(diagonal > 0))
+    throw std::invalid_argument("surface reconstruction: all points coincide");
+
+  const detail::KdTree tree(points, count);
+  const Input in{points, normals, count, tree, typicalSpacing(tree, points, count)};
+  const double h = options.voxelSize > 0 ? options.voxelSize : VoxelPerSpacing * in.spacing;
   const double reach = std::max(options.holeReach * diagonal, 2 * NarrowBand * h);
   const std::size_t k = std::max<std::size_t>(1, std::min(options.neighbours, count));
   bool open = false;
@@ -771,27 +833,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
   mesh.positions = std::move(remeshed.positions);
   mesh.triangles = std::move(remeshed.triangles);
   mesh.closed = remeshed.closed;
-
-  // Orientation: the way the data's normals face (outward for estimateNormals' and a
-  // scanner's), by a vote of every triangle for the normal of the point nearest to it. (The
-  // tracker compares the template's normals with the data's.)
-  double vote = 0;
-  for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
-  {
-    Vec3 corner[3];
-    for (int e = 0; e < 3; ++e)
-    {
-      const double* p = &mesh.positions[3 * static_cast<std::size_t>(mesh.triangles[t + e])];
-      corner[e] = {p[0], p[1], p[2]};
-    }
-    const Vec3 n = cross(corner[1] - corner[0], corner[2] - corner[0]);
-    const Vec3 centre = (1.0 / 3.0) * (corner[0] + corner[1] + corner[2]);
-    const float* m = in.normals + 3 * in.tree.nearest(centre.data());
-    vote += n[0] * m[0] + n[1] * m[1] + n[2] * m[2];
-  }
-  if (vote < 0)
-    for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
-      std::swap(mesh.triangles[t + 1], mesh.triangles[t + 2]);
+  orientLikeTheData(mesh, in);
   return mesh;
 }
 
