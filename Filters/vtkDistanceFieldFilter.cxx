@@ -152,11 +152,36 @@ void fillArrays(vtkImageData* output, const std::vector<vtkIdType>& ids,
   }
 }
 
+// The image's bounds: the filter's, or with `adjust` the points' padded by `padding` times their
+// diagonal on every side; returns the points' diagonal.
+double imageBounds(const std::vector<double>& xyz, const double filterBounds[6], bool adjust,
+                   double padding, double bounds[6])
+{
+  double box[6];
+  const double diagonal = boundsOf(xyz, box);
+  std::copy(filterBounds, filterBounds + 6, bounds);
+  if (adjust)
+    for (int k = 0; k < 3; ++k)
+    {
+      bounds[2 * k] = box[2 * k] - padding * diagonal;
+      bounds[2 * k + 1] = box[2 * k + 1] + padding * diagonal;
+    }
+  return diagonal;
+}
+
 // The image's grid: the extent's dimensions over `bounds`, where a flat axis (no extent, or
 // bounds of zero width) gets a spacing of a 200th of the points' diagonal.
 dp::ImageGrid gridOver(const int extent[6], const double bounds[6], double diagonal)
 {
-  const dp::ImageGrid grid = gridOver(extent, bounds, diagonal);
+  dp::ImageGrid grid;
+  for (int k = 0; k < 3; ++k)
+  {
+    grid.dimensions[k] = extent[2 * k + 1] + 1;
+    grid.origin[k] = bounds[2 * k];
+    grid.spacing[k] = (bounds[2 * k + 1] - bounds[2 * k]) / extent[2 * k + 1];
+    if (!(grid.spacing[k] > 0))
+      grid.spacing[k] = diagonal / 200.0;
+  }
   return grid;
 }
 
@@ -207,25 +232,10 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
     return 0;
   }
 
-  double box[6];
-  const double diagonal = boundsOf(target.xyz, box);
   double bounds[6];
-  std::copy(this->Bounds, this->Bounds + 6, bounds);
-  if (this->AdjustBounds)
-    for (int k = 0; k < 3; ++k)
-    {
-      bounds[2 * k] = box[2 * k] - this->AdjustDistance * diagonal;
-      bounds[2 * k + 1] = box[2 * k + 1] + this->AdjustDistance * diagonal;
-    }
-  dp::ImageGrid grid;
-  for (int k = 0; k < 3; ++k)
-  {
-    grid.dimensions[k] = extent[2 * k + 1] + 1;
-    grid.origin[k] = bounds[2 * k];
-    grid.spacing[k] = (bounds[2 * k + 1] - bounds[2 * k]) / extent[2 * k + 1];
-    if (!(grid.spacing[k] > 0))
-      grid.spacing[k] = diagonal / 200.0;
-  }
+  const double diagonal =
+      imageBounds(target.xyz, this->Bounds, this->AdjustBounds, this->AdjustDistance, bounds);
+  const dp::ImageGrid grid = gridOver(extent, bounds, diagonal);
   const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
   this->SetProgressText("Point Distance Field");
   this->UpdateProgress(0.05);
