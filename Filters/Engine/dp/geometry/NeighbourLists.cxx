@@ -234,19 +234,13 @@ GridSize chooseSize(const double* points, std::size_t count, std::size_t k, cons
     return {};
   return {radius, cell};
 }
-} // namespace
 
-NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, std::size_t k)
+// The points' bounding box; false when a coordinate is NaN or infinite.
+bool finiteBounds(const double* points, std::size_t count, double lo[3], double hi[3])
 {
-  NeighbourLists lists;
-  k = std::min(k, count);
-  lists.k = k;
-  lists.ids.assign(count * k, 0);
-  lists.degree.assign(count, k);
-  if (count == 0 || k == 0)
-    return lists;
-  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   bool finite = true;
+  for (int a = 0; a < 3; ++a)
+    lo[a] = HUGE_VAL, hi[a] = -HUGE_VAL;
   for (std::size_t i = 0; i < count; ++i)
     for (int a = 0; a < 3; ++a)
     {
@@ -254,34 +248,35 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
       lo[a] = std::min(lo[a], points[3 * i + a]);
       hi[a] = std::max(hi[a], points[3 * i + a]);
     }
-  // Cells are numbered in 32 bits.
-  const std::size_t maxCells = std::min<std::size_t>(8 * count + 64, UINT32_MAX - 1);
-  // (A cloud with NaN or infinite coordinates has no cells to file them in: the kd-tree, as
-  // before the grid.)
-  const GridSize size = finite ? chooseSize(points, count, k, lo, hi, maxCells) : GridSize{};
-  PointGrid grid;
-  const bool gridded =
-      size.radius > 0 && buildGrid(grid, points, count, lo, hi, size.cell, maxCells);
-  std::vector<char> unresolved(count, gridded ? 0 : 1);
-  auto store = [&](std::uint32_t point, const Candidates& found)
-  { std::copy(found.chosen.begin(), found.chosen.end(), lists.ids.begin() + point * k); };
-  if (gridded)
-    // In the grid's order: neighbouring queries read the same cells (cache).
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
-                      [&](const tbb::blocked_range<std::size_t>& range)
+  return finite;
+}
+
+// Every point's k nearest from the grid, in the grid's order (neighbouring queries read the same
+// cells: cache); `unresolved` marks the points whose search did not settle within the radius.
+void searchGridForAll(const PointGrid& grid, std::size_t k, double radius, NeighbourLists& lists,
+                      std::vector<char>& unresolved)
+{
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, grid.ids.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& range)
+                    {
+                      Candidates found;
+                      for (std::size_t e = range.begin(); e != range.end(); ++e)
                       {
-                        Candidates found;
-                        for (std::size_t e = range.begin(); e != range.end(); ++e)
-                        {
-                          const std::uint32_t point = grid.ids[e];
-                          if (searchGrid(grid, &grid.xyz[3 * e], k, size.radius, Attempts, found))
-                            store(point, found);
-                          else
-                            unresolved[point] = 1;
-                        }
-                      });
-  if (std::find(unresolved.begin(), unresolved.end(), 1) == unresolved.end())
-    return lists;
+                        const std::uint32_t point = grid.ids[e];
+                        if (searchGrid(grid, &grid.xyz[3 * e], k, radius, Attempts, found))
+                          std::copy(found.chosen.begin(), found.chosen.end(),
+                                    lists.ids.begin() + point * k);
+                        else
+                          unresolved[point] = 1;
+                      }
+                    });
+}
+
+// The k nearest of the unresolved points from a kd-tree: the k-th distance, then every point at
+// most that far, ties at it going to the lower indices, as on the grid.
+void searchTreeForUnresolved(const double* points, std::size_t count, std::size_t k,
+                             const std::vector<char>& unresolved, NeighbourLists& lists)
+{
   const detail::KdTree tree(points, count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
                     [&](const tbb::blocked_range<std::size_t>& range)
@@ -294,8 +289,6 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
                       {
                         if (!unresolved[i])
                           continue;
-                        // The k-th distance, then every point at most that far: ties at it go
-                        // to the lower indices, as on the grid.
                         const std::size_t reached =
                             tree.nearest(points + 3 * i, k, ids.data(), d2.data());
                         if (reached < k)
@@ -313,9 +306,37 @@ NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, st
                         for (const auto& [id, distance2] : within)
                           found.add(distance2, id);
                         found.choose(k);
-                        store(static_cast<std::uint32_t>(i), found);
+                        std::copy(found.chosen.begin(), found.chosen.end(),
+                                  lists.ids.begin() + static_cast<std::ptrdiff_t>(i * k));
                       }
                     });
+}
+} // namespace
+
+NeighbourLists nearestNeighbourLists(const double* points, std::size_t count, std::size_t k)
+{
+  NeighbourLists lists;
+  k = std::min(k, count);
+  lists.k = k;
+  lists.ids.assign(count * k, 0);
+  lists.degree.assign(count, k);
+  if (count == 0 || k == 0)
+    return lists;
+  double lo[3], hi[3];
+  const bool finite = finiteBounds(points, count, lo, hi);
+  // Cells are numbered in 32 bits.
+  const std::size_t maxCells = std::min<std::size_t>(8 * count + 64, UINT32_MAX - 1);
+  // (A cloud with NaN or infinite coordinates has no cells to file them in: the kd-tree, as
+  // before the grid.)
+  const GridSize size = finite ? chooseSize(points, count, k, lo, hi, maxCells) : GridSize{};
+  PointGrid grid;
+  const bool gridded =
+      size.radius > 0 && buildGrid(grid, points, count, lo, hi, size.cell, maxCells);
+  std::vector<char> unresolved(count, gridded ? 0 : 1);
+  if (gridded)
+    searchGridForAll(grid, k, size.radius, lists, unresolved);
+  if (std::find(unresolved.begin(), unresolved.end(), 1) != unresolved.end())
+    searchTreeForUnresolved(points, count, k, unresolved, lists);
   return lists;
 }
 
