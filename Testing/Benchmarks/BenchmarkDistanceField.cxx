@@ -387,18 +387,15 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
               vtkRandom.rms / voxel);
 }
 
-// The filter as users call it: vtkDistanceFieldFilter and vtkUnsignedDistance (radius 3 voxels)
-// on the same points and the same image (points on a sphere of radius 0.5, the image over
-// [-0.6, 0.6]^3), medians of `repeats` runs each, in one run; then ours against exact
-// nearest-point distances at a sample of the image's voxels, within the band and beyond it.
-void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool withVTK)
+// `count` points spread at random over a sphere of radius 0.5 about the origin.
+vtkSmartPointer<vtkPolyData> pointsOnASphere(std::size_t count)
 {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> gauss;
   vtkNew<vtkPoints> xyz;
   xyz->SetDataTypeToDouble();
-  xyz->SetNumberOfPoints(static_cast<vtkIdType>(pointCount));
-  for (std::size_t i = 0; i < pointCount; ++i)
+  xyz->SetNumberOfPoints(static_cast<vtkIdType>(count));
+  for (std::size_t i = 0; i < count; ++i)
   {
     double p[3] = {gauss(rng), gauss(rng), gauss(rng)};
     const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
@@ -406,22 +403,60 @@ void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool wi
       c *= 0.5 / r;
     xyz->SetPoint(static_cast<vtkIdType>(i), p);
   }
-  vtkNew<vtkPolyData> cloud;
+  auto cloud = vtkSmartPointer<vtkPolyData>::New();
   cloud->SetPoints(xyz);
-  const double voxel = 1.2 / (size - 1), band = 3 * voxel;
+  return cloud;
+}
 
-  auto timeIt = [&](vtkAlgorithm* algorithm)
+// The median wall time of `repeats` updates of an algorithm.
+double medianUpdateSeconds(vtkAlgorithm* algorithm, std::size_t repeats)
+{
+  std::vector<double> t;
+  for (std::size_t r = 0; r < repeats; ++r)
   {
-    std::vector<double> t;
-    for (std::size_t r = 0; r < repeats; ++r)
-    {
-      algorithm->Modified();
-      const double start = now();
-      algorithm->Update();
-      t.push_back(now() - start);
-    }
-    return median(t);
-  };
+    algorithm->Modified();
+    const double start = now();
+    algorithm->Update();
+    t.push_back(now() - start);
+  }
+  return median(t);
+}
+
+// The image's distances against exact nearest-point distances at about 100 000 voxels spread
+// over it (the exact search is the slow part): the errors within the band and beyond it, and how
+// far any value lies below the exact distance (`below`).
+void imageErrors(vtkImageData* image, vtkPolyData* cloud, double band, Errors& inBand,
+                 Errors& beyond, double& below)
+{
+  vtkNew<vtkKdTreePointLocator> locator; // exact, and quick far from the points too
+  locator->SetDataSet(cloud);
+  locator->BuildLocator();
+  vtkDataArray* distance = image->GetPointData()->GetArray("Distance");
+  below = 0;
+  const vtkIdType voxels = image->GetNumberOfPoints();
+  const vtkIdType stride = std::max<vtkIdType>(7, voxels / 100000) | 1;
+  for (vtkIdType id = 0; id < voxels; id += stride)
+  {
+    double x[3], p[3];
+    image->GetPoint(id, x);
+    cloud->GetPoint(locator->FindClosestPoint(x), p);
+    const double exact = std::sqrt(vtkMath::Distance2BetweenPoints(x, p));
+    const double error = distance->GetTuple1(id) - exact;
+    below = std::max(below, -error);
+    accumulate(exact <= band ? inBand : beyond, error);
+  }
+  finish(inBand);
+  finish(beyond);
+}
+
+// The filter as users call it: vtkDistanceFieldFilter and vtkUnsignedDistance (radius 3 voxels)
+// on the same points and the same image (points on a sphere of radius 0.5, the image over
+// [-0.6, 0.6]^3), medians of `repeats` runs each, in one run; then ours against exact
+// nearest-point distances at a sample of the image's voxels, within the band and beyond it.
+void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool withVTK)
+{
+  const vtkSmartPointer<vtkPolyData> cloud = pointsOnASphere(pointCount);
+  const double voxel = 1.2 / (size - 1), band = 3 * voxel;
   vtkNew<vtkDistanceFieldFilter> ours;
   ours->SetInputData(cloud);
   ours->SetDimensions(size, size, size);
@@ -429,10 +464,10 @@ void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool wi
   ours->SetBounds(-0.6, 0.6, -0.6, 0.6, -0.6, 0.6);
   ours->SetBandWidth(band);
   ours->ComputeNormalsOff();
-  const double oursTime = timeIt(ours);
+  const double oursTime = medianUpdateSeconds(ours, repeats);
   // As a user gets it by default: with the NearestNormal array (normals estimated).
   ours->ComputeNormalsOn();
-  const double withNormalsTime = timeIt(ours);
+  const double withNormalsTime = medianUpdateSeconds(ours, repeats);
   double theirsTime = 0;
   if (withVTK)
   {
@@ -444,31 +479,11 @@ void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool wi
     theirs->SetRadius(band);
     theirs->CappingOn();
     theirs->SetOutputScalarTypeToFloat();
-    theirsTime = timeIt(theirs);
+    theirsTime = medianUpdateSeconds(theirs, repeats);
   }
-
-  vtkNew<vtkKdTreePointLocator> locator; // exact, and quick far from the points too
-  locator->SetDataSet(cloud);
-  locator->BuildLocator();
-  vtkImageData* image = ours->GetOutput();
-  vtkDataArray* distance = image->GetPointData()->GetArray("Distance");
   Errors inBand, beyond;
   double below = 0;
-  const vtkIdType voxels = image->GetNumberOfPoints();
-  // About 100 000 voxels checked, spread over the image (the exact search is the slow part).
-  const vtkIdType stride = std::max<vtkIdType>(7, voxels / 100000) | 1;
-  for (vtkIdType id = 0; id < voxels; id += stride)
-  {
-    double x[3], p[3];
-    image->GetPoint(id, x);
-    xyz->GetPoint(locator->FindClosestPoint(x), p);
-    const double exact = std::sqrt(vtkMath::Distance2BetweenPoints(x, p));
-    const double error = distance->GetTuple1(id) - exact;
-    below = std::max(below, -error);
-    accumulate(exact <= band ? inBand : beyond, error);
-  }
-  finish(inBand);
-  finish(beyond);
+  imageErrors(ours->GetOutput(), cloud, band, inBand, beyond, below);
   std::printf("%8zu points %4d^3: vtkDistanceFieldFilter %8.1f ms (%.1f ms with normals)",
               pointCount, size, 1e3 * oursTime, 1e3 * withNormalsTime);
   if (withVTK)
