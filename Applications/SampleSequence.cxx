@@ -44,87 +44,106 @@ Output:
   -h, --help            show this help
 )";
 
-int run(int argc, char** argv)
+// What to sample and how; noise and hole radius are shares of the mesh's diagonal.
+struct Request
 {
-  using namespace dp::cli;
   std::string mesh = "tube", pattern = "*", output;
   std::size_t frames = 30;
   dp::SamplerOptions sampling;
   dp::SequenceWriteOptions writing;
   double noise = 0, holeRadius = 0.05;
+  bool help = false;
+};
+
+// Reads the command line; a UsageError for a bad one.
+Request parseArguments(int argc, char** argv)
+{
+  using namespace dp::cli;
+  Request r;
   for (int i = 1; i < argc; ++i)
   {
     const std::string arg = argv[i];
     if (arg == "-h" || arg == "--help")
     {
-      std::cout << Usage;
-      return 0;
+      r.help = true;
+      return r;
     }
     else if (arg == "--mesh")
-      mesh = optionValue(argc, argv, i);
+      r.mesh = optionValue(argc, argv, i);
     else if (arg == "--pattern")
-      pattern = optionValue(argc, argv, i);
+      r.pattern = optionValue(argc, argv, i);
     else if (arg == "--frames")
-      frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+      r.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
     else if (arg == "--points")
-      sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+      r.sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
     else if (arg == "--seed")
-      sampling.seed = parseCount(arg, optionValue(argc, argv, i), 0, ~0ULL);
+      r.sampling.seed = parseCount(arg, optionValue(argc, argv, i), 0, ~0ULL);
     else if (arg == "--noise")
-      noise = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+      r.noise = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
     else if (arg == "--holes")
-      sampling.holes = parseCount(arg, optionValue(argc, argv, i), 0, 10000);
+      r.sampling.holes = parseCount(arg, optionValue(argc, argv, i), 0, 10000);
     else if (arg == "--hole-radius")
-      holeRadius = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
+      r.holeRadius = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
     else if (arg == "--moving-holes")
-      sampling.holesMove = true;
+      r.sampling.holesMove = true;
     else if (arg == "--no-normals")
-      sampling.normals = false;
+      r.sampling.normals = false;
     else if (arg == "--format")
     {
-      writing.extension = optionValue(argc, argv, i);
-      if (writing.extension != "ply" && writing.extension != "pcd" && writing.extension != "xyz" &&
-          writing.extension != "csv" && writing.extension != "obj")
-        throw UsageError("option --format: '" + writing.extension +
-                         "' is not one of ply pcd xyz csv obj");
+      r.writing.extension = optionValue(argc, argv, i);
+      const std::string& e = r.writing.extension;
+      if (e != "ply" && e != "pcd" && e != "xyz" && e != "csv" && e != "obj")
+        throw UsageError("option --format: '" + e + "' is not one of ply pcd xyz csv obj");
     }
     else if (arg == "--interval")
-      writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);
+      r.writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);
     else if (arg == "--truth")
-      writing.writeGroundTruth = true;
+      r.writing.writeGroundTruth = true;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
-    else if (output.empty())
-      output = arg;
+    else if (r.output.empty())
+      r.output = arg;
     else
-      throw UsageError("more than one output folder given ('" + output + "', '" + arg + "')");
+      throw UsageError("more than one output folder given ('" + r.output + "', '" + arg + "')");
   }
-  if (output.empty())
+  if (r.output.empty())
     throw UsageError("no OUTPUT_FOLDER given");
+  return r;
+}
 
-  std::unique_ptr<dp::AnimatedMesh> animation;
-  if (mesh == "tube")
+// The built-in tube or sheet, or the mesh files of a folder.
+std::unique_ptr<dp::AnimatedMesh> animationOf(const Request& r)
+{
+  if (r.mesh == "tube")
   {
     dp::BendingTube::Options options;
-    options.frames = frames;
-    animation = std::make_unique<dp::BendingTube>(options);
+    options.frames = r.frames;
+    return std::make_unique<dp::BendingTube>(options);
   }
-  else if (mesh == "sheet")
+  if (r.mesh == "sheet")
   {
     dp::WavingSheet::Options options;
-    options.frames = frames;
-    animation = std::make_unique<dp::WavingSheet>(options);
+    options.frames = r.frames;
+    return std::make_unique<dp::WavingSheet>(options);
   }
-  else
+  return std::make_unique<dp::MeshSequenceFiles>(
+      dp::FrameSequence::fromDirectory(r.mesh, r.pattern));
+}
+
+int run(int argc, char** argv)
+{
+  Request r = parseArguments(argc, argv);
+  if (r.help)
   {
-    animation =
-        std::make_unique<dp::MeshSequenceFiles>(dp::FrameSequence::fromDirectory(mesh, pattern));
+    std::cout << Usage;
+    return 0;
   }
+  const std::unique_ptr<dp::AnimatedMesh> animation = animationOf(r);
   const double diagonal = dp::boundingBoxDiagonal(animation->positions(0));
-  sampling.noiseStdDev = noise * diagonal;
-  sampling.holeRadius = holeRadius * diagonal;
-  const std::string series = dp::writeSampledSequence(*animation, sampling, output, writing);
-  std::cout << "wrote " << animation->numberOfFrames() << " frames of " << sampling.pointsPerFrame
+  r.sampling.noiseStdDev = r.noise * diagonal;
+  r.sampling.holeRadius = r.holeRadius * diagonal;
+  const std::string series = dp::writeSampledSequence(*animation, r.sampling, r.output, r.writing);
+  std::cout << "wrote " << animation->numberOfFrames() << " frames of " << r.sampling.pointsPerFrame
             << " samples (" << animation->numberOfVertices() << "-vertex mesh, diagonal "
             << diagonal << ") to " << series << "\n";
   return 0;
