@@ -39,7 +39,7 @@ void validateInput(const double* positions, std::size_t vertices, std::size_t fr
       (options.measure == PcaErrorMeasure::MaxVertexError && options.target >= 1))
     throw std::invalid_argument("error target " + std::to_string(options.target) +
                                 " is out of range (KG: (0, 100) percent; max vertex error: "
-                                "(0, 1) of the diagonal)");
+                                "(0, 1) of the diagonal; RMS deviation: > 0)");
   if (!times.empty() && times.size() != frames)
     throw std::invalid_argument("times: " + std::to_string(times.size()) + " values for " +
                                 std::to_string(frames) + " frames");
@@ -52,6 +52,20 @@ void validateInput(const double* positions, std::size_t vertices, std::size_t fr
   for (std::size_t i = 0; i < n; ++i)
     if (!std::isfinite(positions[i]))
       throw std::invalid_argument("position " + std::to_string(i / 3) + " is not finite");
+}
+
+// The options as the search reads them: an RMS deviation becomes the KG target it equals (at
+// most just under 100 %: a deviation as large as the motion keeps no component).
+PcaOptions asSearched(const PcaOptions& options, const Eigen::Map<const MatrixXd>& A)
+{
+  if (options.measure != PcaErrorMeasure::RmsDeviation)
+    return options;
+  PcaOptions o = options;
+  o.measure = PcaErrorMeasure::KarniGotsman;
+  const double spread = centroidSpread(A);
+  const double samples = static_cast<double>(A.size() / 3);
+  o.target = spread > 0 ? std::min(99.9, 100 * options.target * std::sqrt(samples) / spread) : 99.9;
+  return o;
 }
 
 /** One candidate component count, coded. */
@@ -262,6 +276,7 @@ PcaReport reportOf(const Eigen::Map<const MatrixXd>& A, const Candidate& kept, s
   r.payloadBytes = kept.payload.size();
   const compress::Errors e = compress::errorsOf(A, kept.model.model);
   r.kgError = e.kg;
+  r.rmsError = e.kg / 100 * centroidSpread(A) / std::sqrt(nv * nt);
   r.maxError = e.max;
   r.diagonal = diagonal;
   r.maxErrorRelative = diagonal > 0 ? e.max / diagonal : 0;
@@ -366,7 +381,8 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
   const Eigen::Map<const MatrixXd> A(positions, 3 * vertices, frames);
   const Decomposition d = compress::decompose(A, options.layout);
   report(0.3);
-  const RateSearch search(A, d, options);
+  const PcaOptions searched = asSearched(options, A);
+  const RateSearch search(A, d, searched);
 
   // Candidates are ranked at a quicker zstd level; the winner is coded again as it is stored.
   const std::vector<std::size_t> candidates = search.candidates();

@@ -1,0 +1,71 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file DataFit.h
+ * @brief How well a tracked take fits its data, and compression judged by it.
+ *
+ * measureDataFit(): the RMS distance from each frame's samples (the well-spread subsample the
+ * tracker kept, FrameResult::samples) to that frame's mesh surface, over every frame. Samples
+ * farther than `reach` from the mesh are counted apart (data the mesh does not explain: parts
+ * the template lacks, outliers) and left out of the RMS, so that a few of them do not hide the
+ * fit of the rest. Holes in the data cost nothing: the measure runs from the points to the mesh.
+ *
+ * compressAgainstData(): compression whose error target is the data's, not a share of the
+ * motion's size: the decompressed take's distance to the samples may grow by at most `growth`
+ * (0.1: 10 %) over the tracked take's. A deviation d of the vertices along the surface's normal
+ * adds to a fit f as sqrt(f^2 + d^2), and along the surface it adds nothing, so an RMS deviation
+ * of sqrt(3 ((1 + growth)^2 - 1)) f (spread evenly over the three directions) is asked of the
+ * codec (PcaErrorMeasure::RmsDeviation); the decompressed take is then measured, and where it
+ * grew more than allowed the deviation is asked again smaller (by 0.7, at most 6 rounds).
+ *
+ * Limits: a take without samples (no points in any frame) has no fit to keep; it is compressed
+ * at KG 0.2 %, the codec's default.
+ */
+#pragma once
+
+#include "dp/compress/PcaCompression.h"
+#include "dp/geometry/TriangleMesh.h"
+#include "dp/track/FrameSamples.h"
+
+#include <functional>
+#include <vector>
+
+namespace dp
+{
+
+struct DataFit
+{
+  double rms = 0;              // of the samples within reach (world units)
+  std::size_t samples = 0;     // within reach
+  std::size_t beyondReach = 0; // farther (not in the RMS)
+};
+
+/** The fit of a take: frame t's mesh is `positions` + 3 nv t (frame-major, nv = the mesh's
+ *  vertices), its samples samples[t] (null or empty: a frame without data). Only the samples
+ *  that `within` marks (one flag per frame's sample, in order; empty: all within `reach`)
+ *  count. */
+DataFit measureDataFit(const TriangleMesh& mesh, const double* positions,
+                       const std::vector<const FrameSamples*>& samples, double reach,
+                       std::vector<std::vector<bool>>* within = nullptr);
+
+struct DataFitCompression
+{
+  CompressedSequence sequence;
+  DataFit tracked;            // the take as given
+  DataFit decompressed;       // the decompressed take, on the same samples
+  double growth = 0;          // decompressed.rms / tracked.rms - 1
+  double deviationTarget = 0; // the RMS deviation last asked of the codec (world units)
+  int rounds = 0;             // codings
+};
+
+/** Compresses a take (positions frame-major, `frames` frames of the mesh's vertices) so that its
+ *  fit to the samples grows by at most `growth`; `options` gives the layout (its measure and
+ *  target are set here). Throws std::invalid_argument for a growth <= 0 or non-finite, and what
+ *  compressSequence throws. */
+DataFitCompression compressAgainstData(const TriangleMesh& mesh, const double* positions,
+                                       std::size_t frames,
+                                       const std::vector<const FrameSamples*>& samples,
+                                       double reach, double growth, PcaOptions options,
+                                       const std::vector<double>& times = {},
+                                       const std::function<bool(double)>& progress = {});
+
+} // namespace dp
