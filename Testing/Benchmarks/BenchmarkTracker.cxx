@@ -17,12 +17,15 @@
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
+#include "TakeFigures.h"
 #include "TrackingTruth.h"
 
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/io/PointCloudIO.h"
+#include "dp/track/ColourTerm.h"
+#include "dp/track/TakeRefinement.h"
 #include "dp/track/Tracker.h"
 
 #include <Eigen/Dense>
@@ -64,7 +67,11 @@ struct Settings
   // The first frame tracked: the template (frame 0's shape) registered straight to it, as a
   // chunk of a long sequence tracked on its own would start (issue 17's design measurement).
   std::size_t startFrame = 0;
-  std::string csvFile;                      // per-frame figures
+  std::string csvFile; // per-frame figures
+  bool refine = false; // the take's refinement after the forward pass (both rows printed)
+  bool colour = false; // the samples carry a colour fixed to the material (the tracker gets it)
+  std::vector<double> colourRest; // the sequence's first frame: where the colour pattern lies
+  bool compress = false;          // the compression of the take beside the true motion's
   dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
 };
 Settings S;
@@ -81,6 +88,8 @@ dp::SamplerOptions samplingFor(const Condition& c, std::size_t points)
   o.pointsPerFrame = points;
   o.seed = S.seed;
   o.normals = S.givenNormals;
+  o.colours = S.colour;
+  o.colourRest = &S.colourRest;
   if (c.noisy)
   {
     o.noiseStdDev = S.noise;
@@ -97,7 +106,11 @@ struct Run
   std::size_t retried = 0, flagged = 0;
   // The kept attempts' dependent steps, summed: deterministic, unlike the times.
   std::size_t coarseSteps = 0, fineSteps = 0;
-  double vertexRms = 0, largestVertexError = 0, surfaceRms = 0;
+  double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
+  double refineSeconds = 0; // the take's refinement, in all
+  // --colour: RMS over vertices and frames of the colour a vertex carries (the frame's colour at
+  // it) against its material point's true colour, 0-255; and the same at the true positions.
+  double colourSwim = -1, truthColourSwim = -1;
   double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
   std::size_t worstFrame = 0, frames = 0;
 };
@@ -106,8 +119,8 @@ struct Run
 class RunSums
 {
 public:
-  void add(std::size_t frame, const dp::FrameResult& r, const FrameFigures& figures,
-           const std::vector<double>& truth, double cycleSeconds)
+  void add(std::size_t frame, const dp::FrameResult& r, const std::vector<double>& positions,
+           const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds)
   {
     Seconds += cycleSeconds;
     R.time.data += r.timings.data;
@@ -119,8 +132,9 @@ public:
     R.coarseSteps += static_cast<std::size_t>(r.coarseIterations);
     R.fineSteps += static_cast<std::size_t>(r.iterations);
     R.flagged += r.failed;
-    JitterSums.add(r.positions, truth);
+    JitterSums.add(positions, truth);
     VertexSum += figures.vertexSquaredSum;
+    NormalSum += figures.normalSquaredSum;
     SurfaceSum += figures.surfaceSquaredSum;
     UncoveredSum += figures.uncovered;
     R.largestVertexError = std::max(R.largestVertexError, figures.largestVertexError);
@@ -138,6 +152,7 @@ public:
     const double tracked = static_cast<double>(run.frames);
     const double samples = tracked * static_cast<double>(vertices);
     run.vertexRms = std::sqrt(VertexSum / samples);
+    run.normalRms = std::sqrt(NormalSum / samples);
     run.surfaceRms = std::sqrt(SurfaceSum / samples);
     run.uncoveredMean = UncoveredSum / tracked;
     run.jitter = JitterSums.ratio();
@@ -148,7 +163,7 @@ public:
 private:
   Run R;
   Jitter JitterSums;
-  double VertexSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
+  double VertexSum = 0, NormalSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
 };
 
 // Feeds a tracker its frames as the main job does (vtkDeformableTrackFilter): frame f + 1's data
@@ -182,7 +197,8 @@ private:
   dp::PreparedFrame prepare(const dp::PointCloud& c) const
   {
     return Tracker.prepare(c.points.data(), c.numberOfPoints(),
-                           c.hasNormals() ? c.normals.data() : nullptr);
+                           c.hasNormals() ? c.normals.data() : nullptr,
+                           c.hasColors() ? c.colors.data() : nullptr, c.colorComponents);
   }
 
   dp::Tracker& Tracker;
@@ -225,8 +241,8 @@ double rigidFreeRms(const std::vector<double>& y, const std::vector<double>& tru
 }
 
 // --verbose: one line a frame.
-void printFrame(std::size_t f, const dp::FrameResult& r, const FrameFigures& figures,
-                const std::vector<double>& truth)
+void printFrame(std::size_t f, const dp::FrameResult& r, const std::vector<double>& positions,
+                const FrameFigures& figures, const std::vector<double>& truth)
 {
   const double nv = static_cast<double>(truth.size() / 3);
   std::printf(
@@ -234,7 +250,7 @@ void printFrame(std::size_t f, const dp::FrameResult& r, const FrameFigures& fig
       "%6.1f mm, surface RMS %5.1f mm, "
       "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f, "
       "retries %d (kept: %s)%s\n",
-      f, rigidFreeRms(r.positions, truth), 1e3 * std::sqrt(figures.vertexSquaredSum / nv),
+      f, rigidFreeRms(positions, truth), 1e3 * std::sqrt(figures.vertexSquaredSum / nv),
       rmsAgainst(r.startPositions, truth), rmsAgainst(r.coarsePositions, truth),
       1e3 * figures.largestVertexError, 1e3 * std::sqrt(figures.surfaceSquaredSum / nv),
       100 * figures.uncovered, r.coarseIterations, r.iterations, 1e3 * r.seconds, r.unexplained,
@@ -293,49 +309,170 @@ void dumpFrame(const std::string& folder, std::size_t frame, const std::vector<d
   dp::writePLY(folder + name, points);
 }
 
-Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
-          const Condition& condition, std::size_t frames, std::ostream* csv,
-          const std::string& label)
+// --colour: the colour each vertex carries, frame by frame (the frame's colour at it, a hole
+// keeping the last), against the true colour of its material point (the sampler's pattern at
+// its truth's rest position); at the true positions too, which shows what the colour field's
+// blur leaves.
+class ColourSwim
 {
-  dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, options);
-  const dp::SamplerOptions sampling = samplingFor(condition, S.points);
-  dp::SamplerOptions truthSampling;
-  truthSampling.pointsPerFrame = S.truthSamples;
-  truthSampling.seed = S.seed + 1000003; // other points than the data's
-  truthSampling.normals = false;
-  RunSums sums;
-  FramePipeline pipeline(tracker);
-  const std::size_t first = std::min(S.startFrame, frames - 1);
-  dp::PointCloud cloud =
-      dp::sampleSurface(mesh.positions(first), mesh.triangles(), sampling, first);
-  for (std::size_t f = first; f < frames; ++f)
+public:
+  ColourSwim(const Template& t, const dp::AnimatedMesh& mesh)
   {
-    const std::vector<double> truthMesh = mesh.positions(f);
+    if (!S.colour)
+      return;
+    const std::vector<double> rest = groundTruth(t, S.colourRest, mesh.triangles());
+    const double diagonal = dp::boundingBoxDiagonal(S.colourRest);
+    for (std::size_t v = 0; v < rest.size(); v += 3)
+    {
+      double rgb[3];
+      dp::materialColour(&rest[v], diagonal, rgb);
+      True.insert(True.end(), {rgb[0], rgb[1], rgb[2]});
+    }
+  }
+  void add(const dp::FrameSamples& samples, const std::vector<double>& x,
+           const std::vector<double>& truth)
+  {
+    if (True.empty() || !samples.hasColour())
+      return;
+    const dp::ColourField field(samples);
+    const double sigma = dp::colourKernel(samples);
+    const std::size_t nv = x.size() / 3;
+    Tracked = dp::vertexColours(field, x.data(), nv, sigma, &Tracked);
+    AtTruth = dp::vertexColours(field, truth.data(), nv, sigma, &AtTruth);
+    TrackedSum += squared(Tracked, TrackedCount);
+    TruthSum += squared(AtTruth, TruthCount);
+  }
+  double tracked() const { return TrackedCount ? 255 * std::sqrt(TrackedSum / TrackedCount) : -1; }
+  double truth() const { return TruthCount ? 255 * std::sqrt(TruthSum / TruthCount) : -1; }
+
+private:
+  double squared(const std::vector<float>& colours, double& count) const
+  {
+    double sum = 0;
+    for (std::size_t v = 0; v < colours.size(); v += 3)
+    {
+      if (colours[v] < 0)
+        continue;
+      for (int c = 0; c < 3; ++c)
+        sum += (colours[v + c] - True[v + c]) * (colours[v + c] - True[v + c]);
+      count += 1;
+    }
+    return sum;
+  }
+  std::vector<double> True;
+  std::vector<float> Tracked, AtTruth;
+  double TrackedSum = 0, TruthSum = 0, TrackedCount = 0, TruthCount = 0;
+};
+
+// A take tracked: the forward pass's results (each frame's cycle time beside it) and, after
+// refineTake(), the refined positions.
+struct TrackedTake
+{
+  std::size_t first = 0; // the first frame tracked (--start-frame)
+  std::vector<dp::FrameResult> results;
+  std::vector<double> cycleSeconds;
+  std::vector<std::vector<double>> refined;
+  double refineSeconds = 0;
+
+  const std::vector<double>& positions(std::size_t i) const
+  {
+    return refined.empty() ? results[i].positions : refined[i];
+  }
+  std::vector<const dp::FrameSamples*> samples() const
+  {
+    std::vector<const dp::FrameSamples*> all;
+    for (const dp::FrameResult& r : results)
+      all.push_back(&r.samples);
+    return all;
+  }
+};
+
+// The forward pass over frames first.. (the oracle's restarts included).
+TrackedTake trackForward(dp::Tracker& tracker, const dp::AnimatedMesh& mesh, const Template& t,
+                         const Condition& condition, std::size_t frames)
+{
+  const dp::SamplerOptions sampling = samplingFor(condition, S.points);
+  FramePipeline pipeline(tracker);
+  TrackedTake take;
+  take.first = std::min(S.startFrame, frames - 1);
+  dp::PointCloud cloud =
+      dp::sampleSurface(mesh.positions(take.first), mesh.triangles(), sampling, take.first);
+  for (std::size_t f = take.first; f < frames; ++f)
+  {
     const dp::PointCloud next =
         f + 1 < frames ? dp::sampleSurface(mesh.positions(f + 1), mesh.triangles(), sampling, f + 1)
                        : dp::PointCloud{};
     if (S.oracle == "previous" && f > 0)
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
     else if (S.oracle == "same")
-      tracker.restartFrom(groundTruth(t, truthMesh, mesh.triangles()));
+      tracker.restartFrom(groundTruth(t, mesh.positions(f), mesh.triangles()));
     double seconds = 0;
-    const dp::FrameResult r = pipeline.track(cloud, f + 1 < frames ? &next : nullptr, seconds);
+    take.results.push_back(pipeline.track(cloud, f + 1 < frames ? &next : nullptr, seconds));
+    take.cycleSeconds.push_back(seconds);
+    cloud = next;
+  }
+  return take;
+}
+
+// The take's refinement (dp::TakeRefinement) of the forward pass's positions.
+void refineTake(const dp::Tracker& tracker, TrackedTake& take)
+{
+  const double start = now();
+  take.refined.clear();
+  for (const dp::FrameResult& r : take.results)
+    take.refined.push_back(r.positions);
+  dp::TakeRefinement(tracker, tracker.options().refinement).refine(take.refined, take.samples());
+  take.refineSeconds = now() - start;
+}
+
+// The take's figures against the truth (its refined positions when there are); with `report`,
+// the per-frame lines, CSV rows and dumps too.
+Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const Condition& condition,
+             const TrackedTake& take, bool report, std::ostream* csv, const std::string& label)
+{
+  dp::SamplerOptions truthSampling;
+  truthSampling.pointsPerFrame = S.truthSamples;
+  truthSampling.seed = S.seed + 1000003; // other points than the data's
+  truthSampling.normals = false;
+  RunSums sums;
+  ColourSwim swim(t, mesh);
+  for (std::size_t i = 0; i < take.results.size(); ++i)
+  {
+    const std::size_t f = take.first + i;
+    const dp::FrameResult& r = take.results[i];
+    const std::vector<double>& x = take.positions(i);
+    const std::vector<double> truthMesh = mesh.positions(f);
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
     const dp::PointCloud truthCloud =
         dp::sampleSurface(truthMesh, mesh.triangles(), truthSampling, f);
     const FrameFigures figures =
-        compareFrame(r.positions, t.triangles, truth, truthMesh, mesh.triangles(),
-                     truthCloud.points, S.uncoveredLimit);
-    sums.add(f, r, figures, truth, seconds);
-    if (S.verbose)
-      printFrame(f, r, figures, truth);
-    if (csv)
+        compareFrame(x, t.triangles, truth, groundTruthNormals(t, truthMesh, mesh.triangles()),
+                     truthMesh, mesh.triangles(), truthCloud.points, S.uncoveredLimit);
+    sums.add(f, r, x, figures, truth, take.cycleSeconds[i]);
+    swim.add(r.samples, x, truth);
+    if (report && S.verbose)
+      printFrame(f, r, x, figures, truth);
+    if (report && csv)
       writeCsvRow(*csv, label, f, r, figures, static_cast<double>(t.vertices()));
-    if (!S.dumpFolder.empty())
-      dumpFrame(S.dumpFolder + "/" + label, f, r.positions, truth, t.triangles, cloud);
-    cloud = next;
+    if (report && !S.dumpFolder.empty())
+      dumpFrame(
+          S.dumpFolder + "/" + label, f, x, truth, t.triangles,
+          dp::sampleSurface(truthMesh, mesh.triangles(), samplingFor(condition, S.points), f));
   }
-  return sums.finish(t.vertices());
+  Run run = sums.finish(t.vertices());
+  run.refineSeconds = take.refined.empty() ? 0.0 : take.refineSeconds;
+  run.colourSwim = swim.tracked();
+  run.truthColourSwim = swim.truth();
+  return run;
+}
+
+Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOptions& options,
+          const Condition& condition, std::size_t frames, std::ostream* csv,
+          const std::string& label)
+{
+  dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, options);
+  return evaluate(mesh, t, condition, trackForward(tracker, mesh, t, condition, frames), true, csv,
+                  label);
 }
 
 // The paper's Fig. 4: time per frame against the vertex count, on the procedural bending tube
@@ -440,6 +577,10 @@ const char* Usage =
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
+    "  take:      [--refine (the take's refinement; both rows)] [--refine-passes N]\n"
+    "             [--refine-iterations N] [--refine-temporal W] [--refine-coverage W]\n"
+    "             [--refine-stiffness F] [--refine-colour W] [--compress (beside the true\n"
+    "             motion's)] [--colour (a colour fixed to the material; colour swim printed)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
 // What to run: the sequences, templates and conditions of the table, and the tracker's options.
@@ -611,6 +752,23 @@ bool parseScheduleOption(const std::string& arg, int argc, char** argv, int& i,
     options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
   else if (arg == "--no-recovery")
     options.recovery.enabled = false;
+  else if (arg == "--refine-passes")
+    options.refinement.passes =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 100));
+  else if (arg == "--refine-iterations")
+    options.refinement.iterations =
+        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100));
+  else if (arg == "--refine-temporal")
+    options.refinement.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--refine-coverage")
+    options.refinement.coverageWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--refine-rest")
+    options.refinement.restFromForward =
+        oneOf(arg, optionValue(argc, argv, i), "template", "forward");
+  else if (arg == "--refine-colour")
+    options.refinement.colourWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
+  else if (arg == "--refine-stiffness")
+    options.refinement.stiffness = parseDouble(arg, optionValue(argc, argv, i), 1e-6, 1e12);
   else if (arg == "--no-stiff-retry")
     options.recovery.stiffRetry = false;
   else if (arg == "--fail-margin")
@@ -638,6 +796,12 @@ bool parseOutputOption(const std::string& arg, int argc, char** argv, int& i, Pl
     S.startFrame = parseCount(arg, optionValue(argc, argv, i), 0, 100000);
   else if (arg == "--ablation")
     plan.ablation = true;
+  else if (arg == "--refine")
+    S.refine = true;
+  else if (arg == "--colour")
+    S.colour = true;
+  else if (arg == "--compress")
+    S.compress = true;
   else if (arg == "--scaling")
     plan.scaling = true;
   else if (arg == "--scaling-sizes")
@@ -700,6 +864,16 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
               100 * r.vertexRms / diagonal, 1e3 * r.largestVertexError, 1e3 * r.surfaceRms,
               100 * r.uncoveredMean, 100 * r.uncoveredWorst, r.worstFrame, r.jitter, r.msPerFrame);
   const double perFrame = 1e3 / static_cast<double>(r.frames);
+  std::printf(
+      "%14s %s: vertex error %.1f mm along the true normals, %.1f mm along the surface%s\n", "",
+      r.refineSeconds > 0 ? "refined" : "forward pass", 1e3 * r.normalRms,
+      1e3 * std::sqrt(std::max(0.0, r.vertexRms * r.vertexRms - r.normalRms * r.normalRms)),
+      r.refineSeconds > 0
+          ? (", refinement " + std::to_string(perFrame * r.refineSeconds) + " ms/frame").c_str()
+          : "");
+  if (r.colourSwim >= 0)
+    std::printf("%14s colour swim: %.1f of 255 RMS (at the true positions: %.1f)\n", "",
+                r.colourSwim, r.truthColourSwim);
   std::printf("%14s ms/frame: data %.1f, prediction %.1f, coarse %.1f, fine %.1f, quality "
               "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
               "", perFrame * r.time.data, perFrame * r.time.prediction, perFrame * r.time.coarse,
@@ -707,6 +881,43 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
   std::printf("%14s steps/frame: coarse %.2f, fine %.2f (kept attempts)\n", "",
               static_cast<double>(r.coarseSteps) / static_cast<double>(r.frames),
               static_cast<double>(r.fineSteps) / static_cast<double>(r.frames));
+  std::fflush(stdout);
+}
+
+// The take compressed beside the true motion of the same template: at KG 0.2 % (the codec's
+// default) and against the data (the main job's default), with the distance of each to the
+// frames' samples before and after.
+void printCompressionRows(const dp::Tracker& tracker, const dp::AnimatedMesh& mesh,
+                          const Template& t, const TrackedTake& take)
+{
+  const dp::TriangleMesh& triangles = tracker.mesh();
+  std::vector<std::vector<double>> tracked, truth;
+  double rawBytes = 0;
+  for (std::size_t i = 0; i < take.results.size(); ++i)
+  {
+    tracked.push_back(take.positions(i));
+    truth.push_back(groundTruth(t, mesh.positions(take.first + i), mesh.triangles()));
+    rawBytes += 12.0 * static_cast<double>(take.results[i].pointsGiven);
+  }
+  const std::vector<const dp::FrameSamples*> samples = take.samples();
+  const double reach = tracker.options().recovery.reach * tracker.voxelSize();
+  const std::vector<double> trackedTake = frameMajor(tracked), trueTake = frameMajor(truth);
+  printCompression("tracked, KG 0.2 %", compressAtKG(triangles, trackedTake, samples, reach, 0.2),
+                   rawBytes);
+  printCompression("truth, KG 0.2 %", compressAtKG(triangles, trueTake, samples, reach, 0.2),
+                   rawBytes);
+  printCompression("tracked, data +10 %",
+                   compressForData(triangles, trackedTake, samples, reach, 0.1), rawBytes);
+  printCompression("truth, data +10 %", compressForData(triangles, trueTake, samples, reach, 0.1),
+                   rawBytes);
+  printCompression(
+      "tracked, data +10 %, traj.",
+      compressForData(triangles, trackedTake, samples, reach, 0.1, dp::PcaLayout::Trajectories),
+      rawBytes);
+  printCompression(
+      "truth, data +10 %, traj.",
+      compressForData(triangles, trueTake, samples, reach, 0.1, dp::PcaLayout::Trajectories),
+      rawBytes);
   std::fflush(stdout);
 }
 
@@ -738,6 +949,7 @@ void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
   const std::size_t n =
       plan.frames ? std::min(plan.frames, mesh.numberOfFrames()) : mesh.numberOfFrames();
   const double diagonal = dp::boundingBoxDiagonal(mesh.positions(0));
+  S.colourRest = mesh.positions(0);
   std::printf("\n== %s: %zu of %zu frames, %zu vertices, diagonal %.3f m, solver %s\n",
               name.c_str(), n, mesh.numberOfFrames(), mesh.numberOfVertices(), diagonal,
               solverName(plan.options.solver));
@@ -759,8 +971,18 @@ void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
                       label.c_str(), t.vertices(),
                       100 * dp::TriangleMesh(t.triangles, t.vertices())
                                 .poorlyShapedShare(t.positions.data()));
-        const Run r = track(mesh, t, plan.options, condition, n, csv, label);
-        printRun(r, k, t.vertices(), condition, diagonal);
+        dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, plan.options);
+        TrackedTake take = trackForward(tracker, mesh, t, condition, n);
+        printRun(evaluate(mesh, t, condition, take, !S.refine, S.refine ? nullptr : csv, label), k,
+                 t.vertices(), condition, diagonal);
+        if (S.refine)
+        {
+          refineTake(tracker, take);
+          printRun(evaluate(mesh, t, condition, take, true, csv, label), k, t.vertices(), condition,
+                   diagonal);
+        }
+        if (S.compress)
+          printCompressionRows(tracker, mesh, t, take);
         if (plan.ablation)
           runAblation(mesh, t, plan.options, condition, n, label);
       }

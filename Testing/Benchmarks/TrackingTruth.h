@@ -273,26 +273,67 @@ inline std::vector<double> groundTruth(const Template& t, const std::vector<doub
   return out;
 }
 
+/** The true surface's unit normal at each template vertex's truth in a frame of the full mesh:
+ *  its triangle's (the frame's vertex normals for a full template). */
+inline std::vector<double> groundTruthNormals(const Template& t, const std::vector<double>& frame,
+                                              const std::vector<std::int64_t>& full)
+{
+  const auto normalOf = [&](std::int64_t a, std::int64_t b, std::int64_t c, double n[3])
+  {
+    double u[3], v[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      u[k] = frame[3 * b + k] - frame[3 * a + k];
+      v[k] = frame[3 * c + k] - frame[3 * a + k];
+    }
+    vtkMath::Cross(u, v, n);
+  };
+  std::vector<double> normals(t.positions.size(), 0.0);
+  if (t.onTriangle.empty())
+    for (std::size_t i = 0; i < full.size(); i += 3)
+    {
+      double n[3];
+      normalOf(full[i], full[i + 1], full[i + 2], n);
+      for (int c = 0; c < 3; ++c)
+        for (int k = 0; k < 3; ++k)
+          normals[3 * full[i + c] + k] += n[k];
+    }
+  else
+    for (std::size_t v = 0; v < t.onTriangle.size(); ++v)
+    {
+      const std::int64_t* f = &full[3 * t.onTriangle[v]];
+      normalOf(f[0], f[1], f[2], &normals[3 * v]);
+    }
+  for (std::size_t i = 0; i < normals.size(); i += 3)
+  {
+    const double length = vtkMath::Norm(&normals[i]);
+    for (int k = 0; k < 3 && length > 0; ++k)
+      normals[i + k] /= length;
+  }
+  return normals;
+}
+
 /** The figures of one tracked frame against the truth. */
 struct FrameFigures
 {
   double vertexSquaredSum = 0; // sum over vertices of |tracked - true|^2
+  double normalSquaredSum = 0; // the same, of the error's component along the true normal
   double largestVertexError = 0;
   double surfaceSquaredSum = 0; // sum over tracked vertices of their squared distance to the truth
   double uncovered = 0;         // share of the true surface farther than the limit from the mesh
 };
 
 /**
- * Compares a tracked frame with the truth: vertex errors, the distance of each tracked vertex to
- * the true surface, and the share of `truthSamples` (area-uniform points of the true surface)
- * farther than `uncoveredLimit` from the tracked surface: the parts the mesh has lost.
+ * Compares a tracked frame with the truth: vertex errors (and their part along the true
+ * surface's normal, `truthNormals`, the rest lying along the surface), the distance of each tracked
+ * vertex to the true surface, and the share of `truthSamples` (area-uniform points of the true
+ * surface) farther than `uncoveredLimit` from the tracked surface: the parts the mesh has lost.
  */
-inline FrameFigures compareFrame(const std::vector<double>& tracked,
-                                 const std::vector<std::int64_t>& trackedTriangles,
-                                 const std::vector<double>& truthVertices,
-                                 const std::vector<double>& truthMesh,
-                                 const std::vector<std::int64_t>& truthTriangles,
-                                 const std::vector<double>& truthSamples, double uncoveredLimit)
+inline FrameFigures
+compareFrame(const std::vector<double>& tracked, const std::vector<std::int64_t>& trackedTriangles,
+             const std::vector<double>& truthVertices, const std::vector<double>& truthNormals,
+             const std::vector<double>& truthMesh, const std::vector<std::int64_t>& truthTriangles,
+             const std::vector<double>& truthSamples, double uncoveredLimit)
 {
   FrameFigures f;
   for (std::size_t i = 0; i < tracked.size(); i += 3)
@@ -302,6 +343,10 @@ inline FrameFigures compareFrame(const std::vector<double>& tracked,
       e2 += (tracked[i + k] - truthVertices[i + k]) * (tracked[i + k] - truthVertices[i + k]);
     f.vertexSquaredSum += e2;
     f.largestVertexError = std::max(f.largestVertexError, std::sqrt(e2));
+    double along = 0;
+    for (int k = 0; k < 3; ++k)
+      along += (tracked[i + k] - truthVertices[i + k]) * truthNormals[i + k];
+    f.normalSquaredSum += along * along;
   }
   SurfaceDistance truth(truthMesh, truthTriangles);
   for (std::size_t i = 0; i < tracked.size(); i += 3)

@@ -408,7 +408,7 @@ TEST_P(Terms, GradientAndModelMatchFiniteDifferences)
     term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
     break;
   case 4:
-    term = std::make_unique<dp::CoverageTerm>(*f.data, f.mesh, f.L, c);
+    term = std::make_unique<dp::CoverageTerm>(f.data->spreadSamples(), f.mesh, f.L, c);
     break;
   default:
     term = std::make_unique<dp::TemporalTerm>(target, f.mass, 3.0, f.L, f.voxel);
@@ -474,7 +474,7 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
   for (std::size_t i = 0; i < x.size(); i += 3)
     x[i] += 0.02; // the mesh is 0.02 off in x
   dp::CoverageOptions c;
-  dp::CoverageTerm coverage(*f.data, f.mesh, f.L, c);
+  dp::CoverageTerm coverage(f.data->spreadSamples(), f.mesh, f.L, c);
   coverage.linearise(x.data());
   std::vector<double> g(x.size(), 0.0);
   coverage.evaluate(x.data(), g.data());
@@ -489,7 +489,7 @@ TEST(CoverageTerm, PullsTheMeshOntoDataItLetGoOf)
   // A normal test refuses points whose normals disagree with the mesh's: turned around, none
   // pull.
   f.data->flipNormals();
-  dp::CoverageTerm flipped(*f.data, f.mesh, f.L, c);
+  dp::CoverageTerm flipped(f.data->spreadSamples(), f.mesh, f.L, c);
   flipped.linearise(x.data());
   matched = 0;
   for (const auto& m : flipped.matches())
@@ -511,9 +511,9 @@ TEST(CoverageTerm, FollowedMatchesAreTheSearchedOnes)
       moved[i] += shift;
     dp::CoverageOptions c;
     c.followMatches = true;
-    dp::CoverageTerm followed(*f.data, f.mesh, f.L, c);
+    dp::CoverageTerm followed(f.data->spreadSamples(), f.mesh, f.L, c);
     c.followMatches = false;
-    dp::CoverageTerm searched(*f.data, f.mesh, f.L, c);
+    dp::CoverageTerm searched(f.data->spreadSamples(), f.mesh, f.L, c);
     for (dp::CoverageTerm* term : {&followed, &searched})
     {
       term->linearise(f.shape.positions.data());
@@ -699,7 +699,7 @@ struct CoarseTerms
   dp::CoverageTerm coverage;
   CoarseTerms(const Frame& f, const dp::DistanceTermOptions& options)
       : distance(*f.data, f.mesh, f.mass, f.L, options),
-        coverage(*f.data, f.mesh, f.L, robustCoverage(f))
+        coverage(f.data->spreadSamples(), f.mesh, f.L, robustCoverage(f))
   {
     coverage.setDiagonalModel(true);
   }

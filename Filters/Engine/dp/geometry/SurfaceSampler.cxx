@@ -167,7 +167,47 @@ std::vector<Vec3> drawHoles(const AreaTable& areas, const std::vector<double>& p
   return centres;
 }
 
+double restDiagonal(const std::vector<double>& rest)
+{
+  double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+  for (std::size_t i = 0; i + 2 < rest.size(); i += 3)
+    for (int k = 0; k < 3; ++k)
+    {
+      lo[k] = std::min(lo[k], rest[i + k]);
+      hi[k] = std::max(hi[k], rest[i + k]);
+    }
+  return std::sqrt((hi[0] - lo[0]) * (hi[0] - lo[0]) + (hi[1] - lo[1]) * (hi[1] - lo[1]) +
+                   (hi[2] - lo[2]) * (hi[2] - lo[2]));
+}
+
+std::uint8_t toByte(double v)
+{
+  return static_cast<std::uint8_t>(std::lround(255 * std::clamp(v, 0.0, 1.0)));
+}
+
 } // namespace
+
+void materialColour(const double p[3], double diagonal, double rgb[3])
+{
+  // Per channel: two plane waves, long and short, in fixed directions (unit vectors) and phases.
+  static const double Direction[6][3] = {{0.62, 0.51, 0.59},   {-0.21, 0.93, 0.30},
+                                         {0.44, -0.35, 0.83},  {0.90, 0.17, -0.40},
+                                         {-0.57, -0.66, 0.49}, {0.12, 0.71, -0.69}};
+  static const double Phase[6] = {0.3, 1.9, 4.1, 2.6, 5.2, 0.9};
+  const double TwoPi = 6.283185307179586;
+  const double scale = diagonal > 0 ? 1 / diagonal : 1;
+  for (int c = 0; c < 3; ++c)
+  {
+    double v = 0.5;
+    for (int w = 0; w < 2; ++w)
+    {
+      const double* d = Direction[2 * c + w];
+      const double along = scale * (p[0] * d[0] + p[1] * d[1] + p[2] * d[2]);
+      v += 0.24 * std::sin(TwoPi * along / (w == 0 ? 0.12 : 0.04) + Phase[2 * c + w]);
+    }
+    rgb[c] = v;
+  }
+}
 
 std::vector<double> holeCentres(const std::vector<double>& positions,
                                 const std::vector<std::int64_t>& triangles,
@@ -195,7 +235,16 @@ PointCloud sampleSurface(const std::vector<double>& positions,
 
   const std::vector<double> normals =
       options.normals ? vertexNormals(positions, triangles) : std::vector<double>{};
+  const std::vector<double>* rest = options.colours ? options.colourRest : nullptr;
+  if (options.colours && !rest)
+    throw std::invalid_argument("colours asked for without the mesh's rest positions");
+  if (rest && rest->size() != positions.size())
+    throw std::invalid_argument("the colour's rest positions have " +
+                                std::to_string(rest->size() / 3) + " vertices; the mesh has " +
+                                std::to_string(positions.size() / 3));
+  const double diagonal = rest ? restDiagonal(*rest) : 0;
   PointCloud cloud;
+  cloud.colorComponents = rest ? 3 : 0;
   cloud.points.reserve(3 * options.pointsPerFrame);
   for (std::size_t i = 0; i < options.pointsPerFrame; ++i)
   {
@@ -224,6 +273,14 @@ PointCloud sampleSurface(const std::vector<double>& positions,
       cloud.normals.insert(cloud.normals.end(), {static_cast<float>(n.x), static_cast<float>(n.y),
                                                  static_cast<float>(n.z)});
     }
+    if (rest)
+    {
+      const Vec3 r = evaluate(*rest, triangles, s);
+      const double at[3] = {r.x, r.y, r.z};
+      double rgb[3];
+      materialColour(at, diagonal, rgb);
+      cloud.colors.insert(cloud.colors.end(), {toByte(rgb[0]), toByte(rgb[1]), toByte(rgb[2])});
+    }
   }
   return cloud;
 }
@@ -241,6 +298,8 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
     if (ec)
       throw FileError(outDir + "/truth", "cannot create folder (" + ec.message() + ")");
   }
+  // A colour fixed to the material: the pattern over the first frame's shape.
+  const std::vector<double> rest = sampling.colours ? mesh.positions(0) : std::vector<double>{};
   nlohmann::json series;
   series["file-series-version"] = "1.0";
   series["files"] = nlohmann::json::array();
@@ -250,8 +309,10 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
     std::snprintf(number, sizeof(number), "%04zu", f);
     const std::string name = writing.filePrefix + number + "." + writing.extension;
     const std::vector<double> positions = mesh.positions(f);
+    SamplerOptions options = sampling;
+    options.colourRest = &rest;
     writePointCloud((fs::path(outDir) / name).string(),
-                    sampleSurface(positions, mesh.triangles(), sampling, f));
+                    sampleSurface(positions, mesh.triangles(), options, f));
     if (writing.writeGroundTruth)
     {
       PointCloud truth = mesh.frameMesh(f);

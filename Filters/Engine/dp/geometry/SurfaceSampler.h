@@ -12,6 +12,9 @@
  * Holes are balls around material points of the surface (a triangle and barycentric
  * coordinates), so a hole follows the surface as it moves; every sample inside a ball is
  * removed. With `holesMove` the material points are drawn anew for every frame.
+ *
+ * Colour (`colourRest`): each sample takes the colour of the pattern at its material point's
+ * rest position (materialColour()), as a textured body seen by 3D video would.
  */
 #pragma once
 
@@ -34,7 +37,18 @@ struct SamplerOptions
   double holeRadius = 0.0;  // in the mesh's units
   bool holesMove = false;   // new hole positions in every frame
   bool normals = true;      // write interpolated vertex normals
+  // A colour fixed to the material (materialColour() at each sample's rest position, so the
+  // true colour of every point is known). sampleSurface() needs the rest positions (3 per
+  // vertex; they must outlive the call); writeSampledSequence() takes the mesh's first frame.
+  bool colours = false;
+  const std::vector<double>* colourRest = nullptr;
 };
+
+/** The sampler's material colour pattern at a rest position `p` of a mesh whose rest
+ *  bounding-box diagonal is `diagonal`: red, green and blue in [0, 1], each a sum of two plane
+ *  waves (wavelengths 12 % and 4 % of the diagonal) in fixed directions. Smooth, so a tracker
+ *  can follow it, and without symmetry, so it says where on the surface a point lies. */
+void materialColour(const double p[3], double diagonal, double rgb[3]);
 
 /**
  * Samples one frame. `positions` are x y z per vertex, `triangles` 3 indices each.

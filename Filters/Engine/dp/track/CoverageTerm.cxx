@@ -18,17 +18,17 @@ constexpr double Pi = 3.14159265358979323846;
 constexpr double TrustedFollow = 1.0;
 } // namespace
 
-CoverageTerm::CoverageTerm(const FrameData& frame, const TriangleMesh& mesh, double lengthScale,
+CoverageTerm::CoverageTerm(const SampleView& samples, const TriangleMesh& mesh, double lengthScale,
                            const CoverageOptions& options)
-    : Frame(frame), Mesh(mesh), Options(options)
+    : Samples(samples), Mesh(mesh), Options(options)
 {
-  const std::size_t n = frame.spread().size();
+  const std::size_t n = samples.count;
   Matches.resize(n);
   Hints.assign(n, -1);
   for (std::size_t i = 0; i < n; ++i)
-    Matches[i].point = frame.spread()[i];
+    Matches[i].point = static_cast<std::uint32_t>(i);
   if (n > 0)
-    Scale = options.weight / (static_cast<double>(n) * lengthScale * frame.voxelSize());
+    Scale = options.weight / (static_cast<double>(n) * lengthScale * samples.voxel);
 }
 
 void CoverageTerm::linearise(const double* x)
@@ -40,7 +40,7 @@ void CoverageTerm::linearise(const double* x)
   const std::size_t nv = Mesh.numberOfVertices();
   if (LinearisedAt.size() == 3 * nv)
   {
-    const double still = 0.2 * Frame.voxelSize();
+    const double still = 0.2 * Samples.voxel;
     double largest = 0;
     for (std::size_t i = 0; i < 3 * nv; ++i)
       largest = std::max(largest, std::abs(x[i] - LinearisedAt[i]));
@@ -63,7 +63,7 @@ void CoverageTerm::linearise(const double* x)
   const bool follow = Options.followMatches && !WholeSurface;
   WholeSurface = false;
   const double reach = Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL;
-  const double trusted = TrustedFollow * Frame.voxelSize();
+  const double trusted = TrustedFollow * Samples.voxel;
   forEachIndex(
       Matches.size(),
       [&](std::size_t i)
@@ -71,7 +71,7 @@ void CoverageTerm::linearise(const double* x)
         Match& m = Matches[i];
         m.triangle = -1;
         m.weight = 0;
-        const double* p = Frame.point(m.point);
+        const double* p = Samples.point(m.point);
         SurfaceLocator::Hit hit;
         if (follow && Hints[i] >= 0)
           hit = Locator.follow(p, Hints[i], reach);
@@ -86,7 +86,7 @@ void CoverageTerm::linearise(const double* x)
           for (int k = 0; k < 3; ++k)
             n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
         const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        const float* np = Frame.normal(m.point);
+        const float* np = Samples.normal(m.point);
         if (Options.normalTestDegrees < 180 &&
             !(length > 0 && (n[0] * np[0] + n[1] * np[1] + n[2] * np[2]) >= cosLimit * length))
           return;
@@ -104,8 +104,8 @@ void CoverageTerm::linearise(const double* x)
 double CoverageTerm::pull(const double* x, const Match& m, Pull& p) const
 {
   const auto& tri = Mesh.triangles();
-  const double* point = Frame.point(m.point);
-  const float* normal = Frame.normal(m.point);
+  const double* point = Samples.point(m.point);
+  const float* normal = Samples.normal(m.point);
   for (int k = 0; k < 3; ++k)
   {
     p.n[k] = normal[k];

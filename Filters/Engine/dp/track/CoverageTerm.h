@@ -39,7 +39,7 @@
 
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
-#include "dp/track/FrameData.h"
+#include "dp/track/FrameSamples.h"
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TrackerOptions.h"
 
@@ -52,8 +52,8 @@ namespace dp
 class CoverageTerm : public EnergyTerm
 {
 public:
-  /** The frame and mesh must outlive the term. */
-  CoverageTerm(const FrameData& frame, const TriangleMesh& mesh, double lengthScale,
+  /** The samples' arrays and the mesh must outlive the term. */
+  CoverageTerm(const SampleView& samples, const TriangleMesh& mesh, double lengthScale,
                const CoverageOptions& options);
 
   const char* name() const override { return "coverage"; }
@@ -77,7 +77,7 @@ public:
   /** One subsample point's correspondence. */
   struct Match
   {
-    std::uint32_t point = 0;
+    std::uint32_t point = 0;    // the sample
     std::int64_t triangle = -1; // -1: no pull
     double barycentric[3] = {0, 0, 0};
     double weight = 0;
@@ -94,7 +94,7 @@ private:
   };
   double pull(const double* x, const Match& m, Pull& p) const;
 
-  const FrameData& Frame;
+  SampleView Samples;
   const TriangleMesh& Mesh;
   CoverageOptions Options;
   double Scale = 0; // k_cov / (N L voxel)

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <stdexcept>
+#include <string>
 #include <unordered_map>
 
 namespace dp
@@ -119,9 +121,13 @@ std::vector<std::size_t> thinnedFrame(const double* points, std::size_t count, d
 } // namespace
 
 FrameData::FrameData(const double* points, std::size_t count, const float* normals,
+                     const std::uint8_t* colours, int colourComponents,
                      const FrameDataOptions& options)
-    : Count(count), OriginalCount(count), Voxel(options.voxelSize)
+    : Count(count), OriginalCount(count), Voxel(options.voxelSize), SurfaceArea(options.surfaceArea)
 {
+  if (colours && colourComponents != 3 && colourComponents != 4)
+    throw std::invalid_argument("colours have " + std::to_string(colourComponents) +
+                                " components a point (3 or 4: RGB, RGBA)");
   if (count == 0)
     return;
   requireFinitePoints(points, count); // the field's message, before anything reads them
@@ -150,6 +156,15 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
       if (normals)
         keptNormals[3 * j + k] = normals[3 * kept[j] + k];
     }
+  if (colours)
+  {
+    Colours.resize(3 * kept.size());
+    for (std::size_t j = 0; j < kept.size(); ++j)
+      for (int k = 0; k < 3; ++k)
+        Colours[3 * j + k] =
+            static_cast<float>(colours[static_cast<std::size_t>(colourComponents) * kept[j] + k]) /
+            255.0f;
+  }
   points = keptPoints.data();
   normals = normals ? keptNormals.data() : nullptr;
   count = Count = kept.size();
@@ -203,6 +218,29 @@ void FrameData::chooseSpread(const double* points, std::size_t count,
     cell *=
         std::sqrt(static_cast<double>(Spread.size()) / static_cast<double>(options.spreadCount));
   }
+}
+
+FrameSamples FrameData::copySamples() const
+{
+  FrameSamples samples;
+  samples.voxel = Voxel;
+  samples.points.reserve(3 * Spread.size());
+  samples.normals.reserve(3 * Spread.size());
+  for (std::uint32_t i : Spread)
+  {
+    samples.points.insert(samples.points.end(), point(i), point(i) + 3);
+    samples.normals.insert(samples.normals.end(), normal(i), normal(i) + 3);
+  }
+  if (!Colours.empty())
+  {
+    samples.colourPoints.assign(points(), points() + 3 * Count);
+    samples.colours = Colours;
+    // Points spread over the surface: each has about area / count around it.
+    const double area =
+        SurfaceArea > 0 ? SurfaceArea : std::pow(boundingBoxDiagonal(points(), Count), 2);
+    samples.spacing = std::sqrt(area / static_cast<double>(std::max<std::size_t>(Count, 1)));
+  }
+  return samples;
 }
 
 } // namespace dp

@@ -30,6 +30,7 @@
 
 #include "dp/field/DistanceField.h"
 #include "dp/geometry/NormalEstimation.h"
+#include "dp/track/FrameSamples.h"
 
 #include <cstdint>
 #include <vector>
@@ -51,7 +52,13 @@ class FrameData
 public:
   /** `normals` (nx ny nz per point) may be null: they are then estimated. */
   FrameData(const double* points, std::size_t count, const float* normals,
-            const FrameDataOptions& options);
+            const FrameDataOptions& options)
+      : FrameData(points, count, normals, nullptr, 0, options)
+  {
+  }
+  /** The same with colours: `colourComponents` (3 or 4: RGB, RGBA) bytes per point, or null. */
+  FrameData(const double* points, std::size_t count, const float* normals,
+            const std::uint8_t* colours, int colourComponents, const FrameDataOptions& options);
 
   bool empty() const { return Count == 0; }
   std::size_t size() const { return Count; }
@@ -98,6 +105,17 @@ public:
   std::size_t mendOrientation(const std::vector<std::int8_t>& spreadVotes);
   /** Indices of the well-spread subsample, in increasing order. */
   const std::vector<std::uint32_t>& spread() const { return Spread; }
+  /** The subsample with its normals, seen in place (valid while the frame lives, and its
+   *  normals as they are when read: orient them first). */
+  SampleView spreadSamples() const
+  {
+    return {Field.points(), Normals.data(), Spread.data(), Spread.size(), Voxel};
+  }
+  /** A copy of the subsample with its normals as they are now, and of the colour points. */
+  FrameSamples copySamples() const;
+  bool hasColour() const { return !Colours.empty(); }
+  /** r g b in [0, 1] per point (empty without colour). */
+  const std::vector<float>& colours() const { return Colours; }
 
 private:
   // The normals: given, or estimated and oriented part by part.
@@ -114,6 +132,8 @@ private:
   OrientationTree Tree;             // the estimated normals' orientation spread along it
   std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
+  std::vector<float> Colours;
+  double SurfaceArea = 0;
 };
 
 } // namespace dp

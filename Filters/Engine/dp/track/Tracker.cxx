@@ -446,7 +446,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   DistanceTerm distance(frame, Mesh, Cloth.vertexMass(), L, distanceOptions);
   std::unique_ptr<CoverageTerm> coverage;
   if (Options.coverage.weight > 0 && !frame.spread().empty())
-    coverage = std::make_unique<CoverageTerm>(frame, Mesh, L, Options.coverage);
+    coverage = std::make_unique<CoverageTerm>(frame.spreadSamples(), Mesh, L, Options.coverage);
   InternalEnergyTerm internal(Cloth);
 
   std::vector<double> x;
@@ -715,7 +715,8 @@ PreparedFrame::PreparedFrame(PreparedFrame&&) noexcept = default;
 PreparedFrame& PreparedFrame::operator=(PreparedFrame&&) noexcept = default;
 PreparedFrame::~PreparedFrame() = default;
 
-PreparedFrame Tracker::prepare(const double* points, std::size_t count, const float* normals) const
+PreparedFrame Tracker::prepare(const double* points, std::size_t count, const float* normals,
+                               const std::uint8_t* colours, int colourComponents) const
 {
   const auto start = std::chrono::steady_clock::now();
   FrameDataOptions dataOptions;
@@ -738,7 +739,8 @@ PreparedFrame Tracker::prepare(const double* points, std::size_t count, const fl
   // A frame with too little data is kept like an empty one (the motion continued) and flagged:
   // fitting the mesh to a point or two would crush it.
   if (count == 0 || !tooLittleData(points, count, Voxel))
-    frame.Data = std::make_unique<FrameData>(points, count, normals, dataOptions);
+    frame.Data =
+        std::make_unique<FrameData>(points, count, normals, colours, colourComponents, dataOptions);
   frame.Seconds = elapsed(start);
   return frame;
 }
@@ -785,7 +787,10 @@ FrameResult Tracker::track(PreparedFrame prepared)
     if (frame.empty())
       trackEmptyFrame(result);
     else
+    {
       keep(solveWithRetries(frame, result), result);
+      result.samples = frame.copySamples();
+    }
   }
   remember(result);
   result.seconds = prepared.Seconds + elapsed(start);

@@ -49,6 +49,7 @@
 
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/ClothEnergy.h"
+#include "dp/track/FrameSamples.h"
 #include "dp/track/TrackerOptions.h"
 
 #include <cstdint>
@@ -98,6 +99,9 @@ struct FrameResult
   std::size_t pointsGiven = 0; // the frame's points
   std::size_t pointsUsed = 0;  // the same, or fewer when the frame was thinned (maxFramePoints)
   bool thinned = false;
+  // The frame's well-spread subsample with its oriented normals (empty for an empty frame or
+  // one with too little data): what the take's refinement (TakeRefinement) fits to.
+  FrameSamples samples;
   // For diagnosis (BenchmarkTracker prints their errors): the kept attempt's start and the
   // coarse level's result.
   std::vector<double> startPositions, coarsePositions;
@@ -148,7 +152,14 @@ public:
   /** The first half of track(): the frame's data (throws std::invalid_argument for a frame
    *  the tracker cannot take). Const and thread-safe: it reads only the tracker's settings, so
    *  it may run while another thread is in track(). */
-  PreparedFrame prepare(const double* points, std::size_t count, const float* normals) const;
+  PreparedFrame prepare(const double* points, std::size_t count, const float* normals) const
+  {
+    return prepare(points, count, normals, nullptr, 0);
+  }
+  /** The same for points with colour: `colourComponents` (3 or 4) bytes a point, or null. The
+   *  colours ride along to FrameResult::samples for the take's colour term. */
+  PreparedFrame prepare(const double* points, std::size_t count, const float* normals,
+                        const std::uint8_t* colours, int colourComponents) const;
   /** The second half: fits the mesh to a prepared frame, as track() does. Its `seconds` and
    *  `timings.data` include the preparation's time, wherever it ran. Throws
    *  std::invalid_argument for a frame another tracker (or nobody) prepared. */

@@ -149,6 +149,25 @@ struct CreaseSoftening
   double width = 0.7;
 };
 
+/** The take's refinement (TakeRefinement): after the forward pass, every frame solved again
+ *  against its data, the template's rest state and the frames on both sides of it. Callers that
+ *  see the whole take run it (the main job; the filter when asked to refine the take). */
+struct RefinementOptions
+{
+  bool enabled = true;
+  int passes = 3;     // Gauss-Seidel passes over the take
+  int iterations = 2; // Levenberg-Marquardt steps per frame and pass
+  // k_time: weight of the vertices' accelerations (second differences over time, both ways).
+  double temporalWeight = 5.0;
+  double coverageWeight = 50.0; // k_cov of the refinement's points -> mesh term
+  // k_col of the colour term (ColourTerm), where the points carry colour; 0 switches it off.
+  double colourWeight = 50.0;
+  double stiffness = 1.0; // multiplies the cloth's stiffnesses
+  // The cloth's rest state in frame t: the forward pass's shape of frame t (true), or the
+  // template (false).
+  bool restFromForward = true;
+};
+
 struct TrackerOptions
 {
   ClothParameters cloth;
@@ -187,6 +206,7 @@ struct TrackerOptions
   // extrapolation of its last two positions; 0 switches it off.
   double temporalWeight = 0.0;
   RecoveryOptions recovery;
+  RefinementOptions refinement;
 };
 
 } // namespace dp

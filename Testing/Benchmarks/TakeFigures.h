@@ -1,0 +1,92 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// BenchmarkTracker's take-level figures: what a tracked take costs to compress beside the true
+// motion of the same template, and how far each decompressed take lies from the data.
+#pragma once
+
+#include "dp/compress/PcaCompression.h"
+#include "dp/geometry/TriangleMesh.h"
+#include "dp/track/DataFit.h"
+#include "dp/track/Tracker.h"
+
+#include <cstdio>
+#include <vector>
+
+namespace dp::bench
+{
+
+/** One take compressed: its size and its distance to the data before and after. */
+struct CompressionFigures
+{
+  std::size_t components = 0;
+  double bitsPerVertexFrame = 0;
+  std::size_t bytes = 0;   // the .dpz file
+  double rmsDeviation = 0; // of the decompressed vertices (world units)
+  DataFit before, after;   // the samples' distance to the take and to the decompressed take
+  int rounds = 1;
+};
+
+/** Frame-major positions of a take given frame by frame. */
+inline std::vector<double> frameMajor(const std::vector<std::vector<double>>& frames)
+{
+  std::vector<double> all;
+  for (const std::vector<double>& f : frames)
+    all.insert(all.end(), f.begin(), f.end());
+  return all;
+}
+
+/** The take compressed at a KG target (shapes, as the main job stores it). */
+inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vector<double>& take,
+                                       const std::vector<const FrameSamples*>& samples,
+                                       double reach, double kg)
+{
+  const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
+  PcaOptions options;
+  options.target = kg;
+  const CompressedSequence c = compressSequence(take.data(), nv, frames, options, mesh.triangles());
+  std::vector<double> decoded(take.size());
+  for (std::size_t t = 0; t < frames; ++t)
+    c.pca.model.frame(t, &decoded[3 * nv * t]);
+  CompressionFigures f;
+  f.components = c.report.components;
+  f.bitsPerVertexFrame = c.report.bitsPerVertexFrame;
+  f.bytes = encodeCompressedSequence(c).size();
+  f.rmsDeviation = c.report.rmsError;
+  std::vector<std::vector<bool>> within;
+  f.before = measureDataFit(mesh, take.data(), samples, reach, &within);
+  f.after = measureDataFit(mesh, decoded.data(), samples, reach, &within);
+  return f;
+}
+
+/** The take compressed against its data (dp::compressAgainstData, the main job's default). */
+inline CompressionFigures compressForData(const TriangleMesh& mesh, const std::vector<double>& take,
+                                          const std::vector<const FrameSamples*>& samples,
+                                          double reach, double growth,
+                                          PcaLayout layout = PcaLayout::Shapes)
+{
+  const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
+  PcaOptions options;
+  options.layout = layout;
+  const DataFitCompression c =
+      compressAgainstData(mesh, take.data(), frames, samples, reach, growth, options);
+  CompressionFigures f;
+  f.components = c.sequence.report.components;
+  f.bitsPerVertexFrame = c.sequence.report.bitsPerVertexFrame;
+  f.bytes = encodeCompressedSequence(c.sequence).size();
+  f.rmsDeviation = c.sequence.report.rmsError;
+  f.before = c.tracked;
+  f.after = c.decompressed;
+  f.rounds = c.rounds;
+  return f;
+}
+
+inline void printCompression(const char* what, const CompressionFigures& f, double rawBytes)
+{
+  std::printf("%14s %-22s %4zu comp. %6.2f bpvf, deviation %5.2f mm, data %5.2f -> %5.2f mm "
+              "(%+5.1f %%), raw points / file %6.0fx\n",
+              "", what, f.components, f.bitsPerVertexFrame, 1e3 * f.rmsDeviation,
+              1e3 * f.before.rms, 1e3 * f.after.rms,
+              f.before.rms > 0 ? 100 * (f.after.rms / f.before.rms - 1) : 0.0,
+              rawBytes / static_cast<double>(f.bytes));
+}
+
+} // namespace dp::bench
