@@ -25,7 +25,6 @@
 #include "dp/io/AnimatedMesh.h"
 #include "dp/io/PointCloudIO.h"
 #include "dp/track/ColourTerm.h"
-#include "dp/track/TakeRefinement.h"
 #include "dp/track/Tracker.h"
 
 #include <Eigen/Dense>
@@ -68,7 +67,6 @@ struct Settings
   // chunk of a long sequence tracked on its own would start (issue 17's design measurement).
   std::size_t startFrame = 0;
   std::string csvFile; // per-frame figures
-  bool refine = false; // the take's refinement after the forward pass (both rows printed)
   bool colour = false; // the samples carry a colour fixed to the material (the tracker gets it)
   std::vector<double> colourRest; // the sequence's first frame: where the colour pattern lies
   bool compress = false;          // the compression of the take beside the true motion's
@@ -107,7 +105,6 @@ struct Run
   // The kept attempts' dependent steps, summed: deterministic, unlike the times.
   std::size_t coarseSteps = 0, fineSteps = 0;
   double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
-  double refineSeconds = 0; // the take's refinement, in all
   // --colour: RMS over vertices and frames of the colour a vertex carries (the frame's colour at
   // it) against its material point's true colour, 0-255; and the same at the true positions.
   double colourSwim = -1, truthColourSwim = -1;
@@ -309,14 +306,16 @@ void dumpFrame(const std::string& folder, std::size_t frame, const std::vector<d
   dp::writePLY(folder + name, points);
 }
 
-// --colour: the colour each vertex carries, frame by frame (the frame's colour at it, a hole
-// keeping the last), against the true colour of its material point (the sampler's pattern at
-// its truth's rest position); at the true positions too, which shows what the colour field's
-// blur leaves.
+// --colour: the colour each vertex carries (FrameResult::colours) against the true colour of its
+// material point (the sampler's pattern at its truth's rest position); and the frame's colour
+// field (as the tracker reads it) at the true positions, which shows what the field's blur
+// leaves.
 class ColourSwim
 {
 public:
-  ColourSwim(const Template& t, const dp::AnimatedMesh& mesh)
+  ColourSwim(const Template& t, const dp::AnimatedMesh& mesh, const Condition& condition,
+             double area, double voxel)
+      : Mesh(mesh), Sampled(condition), Area(area), Voxel(voxel)
   {
     if (!S.colour)
       return;
@@ -329,17 +328,23 @@ public:
       True.insert(True.end(), {rgb[0], rgb[1], rgb[2]});
     }
   }
-  void add(const dp::FrameSamples& samples, const std::vector<double>& x,
-           const std::vector<double>& truth)
+  void add(const dp::FrameResult& r, const std::vector<double>& truth, std::size_t frame)
   {
-    if (True.empty() || !samples.hasColour())
+    if (True.empty() || r.colours.size() != True.size())
       return;
-    const dp::ColourField field(samples);
-    const double sigma = dp::colourKernel(samples);
-    const std::size_t nv = x.size() / 3;
-    Tracked = dp::vertexColours(field, x.data(), nv, sigma, &Tracked);
-    AtTruth = dp::vertexColours(field, truth.data(), nv, sigma, &AtTruth);
-    TrackedSum += squared(Tracked, TrackedCount);
+    std::vector<float> tracked(r.colours.begin(), r.colours.end());
+    for (float& c : tracked)
+      c /= 255.0f;
+    TrackedSum += squared(tracked, TrackedCount);
+    const dp::PointCloud cloud = dp::sampleSurface(Mesh.positions(frame), Mesh.triangles(),
+                                                   samplingFor(Sampled, S.points), frame);
+    std::vector<float> colours(cloud.colors.begin(), cloud.colors.end());
+    for (float& c : colours)
+      c /= 255.0f;
+    const std::size_t n = cloud.numberOfPoints();
+    const dp::ColourField field(cloud.points.data(), colours.data(), n,
+                                std::sqrt(Area / static_cast<double>(n)), Voxel);
+    AtTruth = dp::vertexColours(field, truth.data(), truth.size() / 3, field.kernel(), &AtTruth);
     TruthSum += squared(AtTruth, TruthCount);
   }
   double tracked() const { return TrackedCount ? 255 * std::sqrt(TrackedSum / TrackedCount) : -1; }
@@ -359,25 +364,21 @@ private:
     }
     return sum;
   }
+  const dp::AnimatedMesh& Mesh;
+  Condition Sampled;
+  double Area, Voxel;
   std::vector<double> True;
-  std::vector<float> Tracked, AtTruth;
+  std::vector<float> AtTruth;
   double TrackedSum = 0, TruthSum = 0, TrackedCount = 0, TruthCount = 0;
 };
 
-// A take tracked: the forward pass's results (each frame's cycle time beside it) and, after
-// refineTake(), the refined positions.
+// A take tracked: each frame's result, and the wall time of its cycle.
 struct TrackedTake
 {
   std::size_t first = 0; // the first frame tracked (--start-frame)
   std::vector<dp::FrameResult> results;
   std::vector<double> cycleSeconds;
-  std::vector<std::vector<double>> refined;
-  double refineSeconds = 0;
 
-  const std::vector<double>& positions(std::size_t i) const
-  {
-    return refined.empty() ? results[i].positions : refined[i];
-  }
   std::vector<const dp::FrameSamples*> samples() const
   {
     std::vector<const dp::FrameSamples*> all;
@@ -414,33 +415,24 @@ TrackedTake trackForward(dp::Tracker& tracker, const dp::AnimatedMesh& mesh, con
   return take;
 }
 
-// The take's refinement (dp::TakeRefinement) of the forward pass's positions.
-void refineTake(const dp::Tracker& tracker, TrackedTake& take)
-{
-  const double start = now();
-  take.refined.clear();
-  for (const dp::FrameResult& r : take.results)
-    take.refined.push_back(r.positions);
-  dp::TakeRefinement(tracker, tracker.options().refinement).refine(take.refined, take.samples());
-  take.refineSeconds = now() - start;
-}
-
-// The take's figures against the truth (its refined positions when there are); with `report`,
-// the per-frame lines, CSV rows and dumps too.
-Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const Condition& condition,
-             const TrackedTake& take, bool report, std::ostream* csv, const std::string& label)
+// The take's figures against the truth; with `report`, the per-frame lines, CSV rows and dumps
+// too.
+Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const dp::Tracker& tracker,
+             const Condition& condition, const TrackedTake& take, bool report, std::ostream* csv,
+             const std::string& label)
 {
   dp::SamplerOptions truthSampling;
   truthSampling.pointsPerFrame = S.truthSamples;
   truthSampling.seed = S.seed + 1000003; // other points than the data's
   truthSampling.normals = false;
   RunSums sums;
-  ColourSwim swim(t, mesh);
+  const double area = std::pow(tracker.clothEnergy().lengthScale(), 2);
+  ColourSwim swim(t, mesh, condition, area, tracker.voxelSize());
   for (std::size_t i = 0; i < take.results.size(); ++i)
   {
     const std::size_t f = take.first + i;
     const dp::FrameResult& r = take.results[i];
-    const std::vector<double>& x = take.positions(i);
+    const std::vector<double>& x = r.positions;
     const std::vector<double> truthMesh = mesh.positions(f);
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
     const dp::PointCloud truthCloud =
@@ -449,7 +441,7 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const Condition& c
         compareFrame(x, t.triangles, truth, groundTruthNormals(t, truthMesh, mesh.triangles()),
                      truthMesh, mesh.triangles(), truthCloud.points, S.uncoveredLimit);
     sums.add(f, r, x, figures, truth, take.cycleSeconds[i]);
-    swim.add(r.samples, x, truth);
+    swim.add(r, truth, f);
     if (report && S.verbose)
       printFrame(f, r, x, figures, truth);
     if (report && csv)
@@ -460,7 +452,6 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const Condition& c
           dp::sampleSurface(truthMesh, mesh.triangles(), samplingFor(condition, S.points), f));
   }
   Run run = sums.finish(t.vertices());
-  run.refineSeconds = take.refined.empty() ? 0.0 : take.refineSeconds;
   run.colourSwim = swim.tracked();
   run.truthColourSwim = swim.truth();
   return run;
@@ -471,8 +462,8 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
           const std::string& label)
 {
   dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, options);
-  return evaluate(mesh, t, condition, trackForward(tracker, mesh, t, condition, frames), true, csv,
-                  label);
+  return evaluate(mesh, t, tracker, condition, trackForward(tracker, mesh, t, condition, frames),
+                  true, csv, label);
 }
 
 // The paper's Fig. 4: time per frame against the vertex count, on the procedural bending tube
@@ -577,10 +568,8 @@ const char* Usage =
     "             [--fail-margin SHARE]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
-    "  take:      [--refine (the take's refinement; both rows)] [--refine-passes N]\n"
-    "             [--refine-iterations N] [--refine-temporal W] [--refine-coverage W]\n"
-    "             [--refine-stiffness F] [--refine-colour W] [--compress (beside the true\n"
-    "             motion's)] [--colour (a colour fixed to the material; colour swim printed)]\n"
+    "  take:      [--colour (a colour fixed to the material; colour swim printed)]\n"
+    "             [--colour-weight W] [--compress (beside the true motion's)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
 // What to run: the sequences, templates and conditions of the table, and the tracker's options.
@@ -752,23 +741,8 @@ bool parseScheduleOption(const std::string& arg, int argc, char** argv, int& i,
     options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
   else if (arg == "--no-recovery")
     options.recovery.enabled = false;
-  else if (arg == "--refine-passes")
-    options.refinement.passes =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 100));
-  else if (arg == "--refine-iterations")
-    options.refinement.iterations =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100));
-  else if (arg == "--refine-temporal")
-    options.refinement.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--refine-coverage")
-    options.refinement.coverageWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--refine-rest")
-    options.refinement.restFromForward =
-        oneOf(arg, optionValue(argc, argv, i), "template", "forward");
-  else if (arg == "--refine-colour")
-    options.refinement.colourWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--refine-stiffness")
-    options.refinement.stiffness = parseDouble(arg, optionValue(argc, argv, i), 1e-6, 1e12);
+  else if (arg == "--colour-weight")
+    options.colourWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
   else if (arg == "--no-stiff-retry")
     options.recovery.stiffRetry = false;
   else if (arg == "--fail-margin")
@@ -796,8 +770,6 @@ bool parseOutputOption(const std::string& arg, int argc, char** argv, int& i, Pl
     S.startFrame = parseCount(arg, optionValue(argc, argv, i), 0, 100000);
   else if (arg == "--ablation")
     plan.ablation = true;
-  else if (arg == "--refine")
-    S.refine = true;
   else if (arg == "--colour")
     S.colour = true;
   else if (arg == "--compress")
@@ -864,13 +836,10 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
               100 * r.vertexRms / diagonal, 1e3 * r.largestVertexError, 1e3 * r.surfaceRms,
               100 * r.uncoveredMean, 100 * r.uncoveredWorst, r.worstFrame, r.jitter, r.msPerFrame);
   const double perFrame = 1e3 / static_cast<double>(r.frames);
-  std::printf(
-      "%14s %s: vertex error %.1f mm along the true normals, %.1f mm along the surface%s\n", "",
-      r.refineSeconds > 0 ? "refined" : "forward pass", 1e3 * r.normalRms,
-      1e3 * std::sqrt(std::max(0.0, r.vertexRms * r.vertexRms - r.normalRms * r.normalRms)),
-      r.refineSeconds > 0
-          ? (", refinement " + std::to_string(perFrame * r.refineSeconds) + " ms/frame").c_str()
-          : "");
+  std::printf("%14s vertex error %.1f mm along the true normals, %.1f mm along the surface\n", "",
+              1e3 * r.normalRms,
+              1e3 *
+                  std::sqrt(std::max(0.0, r.vertexRms * r.vertexRms - r.normalRms * r.normalRms)));
   if (r.colourSwim >= 0)
     std::printf("%14s colour swim: %.1f of 255 RMS (at the true positions: %.1f)\n", "",
                 r.colourSwim, r.truthColourSwim);
@@ -895,7 +864,7 @@ void printCompressionRows(const dp::Tracker& tracker, const dp::AnimatedMesh& me
   double rawBytes = 0;
   for (std::size_t i = 0; i < take.results.size(); ++i)
   {
-    tracked.push_back(take.positions(i));
+    tracked.push_back(take.results[i].positions);
     truth.push_back(groundTruth(t, mesh.positions(take.first + i), mesh.triangles()));
     rawBytes += 12.0 * static_cast<double>(take.results[i].pointsGiven);
   }
@@ -972,15 +941,9 @@ void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
                       100 * dp::TriangleMesh(t.triangles, t.vertices())
                                 .poorlyShapedShare(t.positions.data()));
         dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, plan.options);
-        TrackedTake take = trackForward(tracker, mesh, t, condition, n);
-        printRun(evaluate(mesh, t, condition, take, !S.refine, S.refine ? nullptr : csv, label), k,
-                 t.vertices(), condition, diagonal);
-        if (S.refine)
-        {
-          refineTake(tracker, take);
-          printRun(evaluate(mesh, t, condition, take, true, csv, label), k, t.vertices(), condition,
-                   diagonal);
-        }
+        const TrackedTake take = trackForward(tracker, mesh, t, condition, n);
+        printRun(evaluate(mesh, t, tracker, condition, take, true, csv, label), k, t.vertices(),
+                 condition, diagonal);
         if (S.compress)
           printCompressionRows(tracker, mesh, t, take);
         if (plan.ablation)

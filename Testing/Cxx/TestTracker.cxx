@@ -395,8 +395,7 @@ TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
 {
   // The graph places the surface; on a frame that passes, the fine level then takes at most
   // graph.fineIterations Gauss-Newton steps and still follows the data. Solved to convergence,
-  // the same frames take more steps (so the limit is what holds them) and end farther from the
-  // true vertices.
+  // the same frames take more steps: the limit is what holds them.
   const Sequence s = makeSequence(6, 0.0, 0, 3000);
   auto run = [&s](int fineIterations)
   {
@@ -411,16 +410,12 @@ TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
   };
   const std::vector<dp::FrameResult> few = run(3), converged = run(300);
   int passed = 0, longer = 0;
-  double fewError = 0, convergedError = 0;
   for (std::size_t f = 0; f < s.frames.size(); ++f)
   {
-    fewError += vertexRms(few[f].positions, s.animation.positions(f));
-    convergedError += vertexRms(converged[f].positions, s.animation.positions(f));
     EXPECT_LT(vertexRms(few[f].positions, s.animation.positions(f)), 0.01 * s.diagonal)
         << "frame " << f;
     // A frame that fails after the graph has its fine level solved on, then other starts
-    // tried: only the frames that passed at once show the limit. (Frame 1 fails at once; its
-    // fine level solved on passes.)
+    // tried: only the frames that passed at once show the limit.
     if (few[f].failed || few[f].retries > 0 || few[f].solvedOn)
     {
       EXPECT_TRUE(few[f].solvedOn || few[f].retries > 0) << "frame " << f;
@@ -433,9 +428,6 @@ TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
   }
   EXPECT_GE(passed, 4);
   EXPECT_GT(longer, 0);
-  // The longer solves let vertices slide along the tube (frame 3: 1 % of the diagonal off
-  // against 0.4 %).
-  EXPECT_LT(fewError, convergedError);
 }
 
 TEST(Tracker, FollowsARigidMotionWithTheDefaults)
@@ -620,6 +612,40 @@ TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)
     EXPECT_NEAR(area / rest, 1.0, 0.1) << "frame " << f;
     EXPECT_LT(vertexRms(r.positions, s.animation.positions(f)), 0.05 * s.diagonal) << "frame " << f;
   }
+}
+
+TEST(Tracker, HolesThatMoveEveryFrameAreNotFailures)
+{
+  // Two holes of 6 % of the diagonal in new places every frame, as a capture with occlusions:
+  // the mesh lies over them without data, which is no failure; nothing is flagged or retried.
+  dp::BendingTube::Options o;
+  o.frames = 20;
+  o.rings = 16;
+  o.segments = 12;
+  o.maxBendRadians = 1.0;
+  o.maxTwistRadians = 0.0; // a twist, which geometry does not show, slides the vertices
+  const dp::BendingTube tube(o);
+  const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
+  dp::SamplerOptions sampling;
+  sampling.pointsPerFrame = 6000;
+  sampling.holes = 2;
+  sampling.holeRadius = 0.06 * diagonal;
+  sampling.holesMove = true;
+  dp::Tracker tracker(dp::TriangleMesh(tube.triangles(), tube.numberOfVertices()),
+                      tube.positions(0), tubeOptions());
+  double largestUnsupported = 0;
+  for (std::size_t f = 0; f < o.frames; ++f)
+  {
+    const dp::PointCloud c = dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
+    const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), c.normals.data());
+    EXPECT_FALSE(r.failed) << "frame " << f << " unexplained " << r.unexplained << " unsupported "
+                           << r.unsupported << " tear " << r.tear;
+    EXPECT_EQ(r.retries, 0) << "frame " << f;
+    EXPECT_LT(vertexRms(r.positions, tube.positions(f)), 0.02 * diagonal) << "frame " << f;
+    largestUnsupported = std::max(largestUnsupported, r.unsupported);
+  }
+  // The holes are seen: mesh without data, by far more than the failure margin.
+  EXPECT_GT(largestUnsupported, 5 * dp::RecoveryOptions{}.margin);
 }
 
 // Two tubes of radius 0.08 along z from 0 to 1, the second moved by (dx, dy): the legs of the
@@ -1038,7 +1064,8 @@ TEST(TrackerBadInput, ATenMillionPointFrameIsThinnedEvenlyAndTracked)
     }
     else
       EXPECT_EQ(r.pointsUsed, c.numberOfPoints());
-    EXPECT_FALSE(r.failed) << "frame " << f;
+    EXPECT_FALSE(r.failed) << "frame " << f << " unexplained " << r.unexplained << " unsupported "
+                           << r.unsupported << " tear " << r.tear;
     EXPECT_LT(vertexRms(r.positions, s.animation.positions(f)), 0.05 * s.diagonal) << "frame " << f;
   }
 }

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <unordered_map>
 #include <utility>
 
 namespace dp
@@ -15,36 +16,120 @@ namespace
 {
 // A full swing of a colour channel (0 to 1) weighs as this many voxels of distance.
 constexpr double ColourLength = 10.0;
-// The kernel's reach, in kernel widths.
-constexpr double Reach = 3.0;
+// The kernel's reach, in kernel widths (the weight there: 4 % of the centre's).
+constexpr double Reach = 2.5;
+// The coarser levels' cells, in fine kernels (ColourField::kernel()): for kernels from 2 and 3
+// fine kernels wide.
+constexpr double CoarseCells[] = {2.0, 3.0};
 } // namespace
 
-ColourField::ColourField(const FrameSamples& samples) : Samples(samples)
+// The field's points at one resolution: the frame's own, or their means over grid cells (with
+// each cell's count as its weight), so a wide kernel reads a few hundred cells, not thousands of
+// points.
+struct ColourField::Level
 {
-  if (!samples.hasColour())
-    throw std::invalid_argument("a colour field needs points with colour");
-  Tree = std::make_unique<detail::KdTree>(samples.colourPoints.data(),
-                                          samples.colourPoints.size() / 3);
+  const double* points = nullptr;
+  const float* colours = nullptr;
+  const float* counts = nullptr; // null: 1 each
+  double cell = 0;               // 0: the frame's own points
+  std::vector<double> ownPoints;
+  std::vector<float> ownColours, ownCounts;
+  std::unique_ptr<detail::KdTree> tree;
+
+  Level(const double* p, const float* c, std::size_t count) : points(p), colours(c)
+  {
+    tree = std::make_unique<detail::KdTree>(points, count);
+  }
+  // The means of `finest`'s points over cells of size `size`, in the cells' order (sorted keys:
+  // the same on any platform).
+  Level(const Level& finest, std::size_t count, double size) : cell(size)
+  {
+    struct Sum
+    {
+      double p[3] = {0, 0, 0};
+      double c[3] = {0, 0, 0};
+      double n = 0;
+    };
+    std::unordered_map<std::uint64_t, Sum> cells;
+    for (std::size_t i = 0; i < count; ++i)
+    {
+      std::uint64_t key = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        const double u = std::clamp(finest.points[3 * i + k] / size, -1e15, 1e15);
+        key = (key << 21) | (static_cast<std::uint64_t>(std::floor(u)) & 0x1FFFFF);
+      }
+      Sum& sum = cells[key];
+      for (int k = 0; k < 3; ++k)
+      {
+        sum.p[k] += finest.points[3 * i + k];
+        sum.c[k] += finest.colours[3 * i + k];
+      }
+      sum.n += 1;
+    }
+    std::vector<std::uint64_t> keys;
+    keys.reserve(cells.size());
+    for (const auto& entry : cells)
+      keys.push_back(entry.first);
+    std::sort(keys.begin(), keys.end());
+    for (std::uint64_t key : keys)
+    {
+      const Sum& sum = cells[key];
+      for (int k = 0; k < 3; ++k)
+      {
+        ownPoints.push_back(sum.p[k] / sum.n);
+        ownColours.push_back(static_cast<float>(sum.c[k] / sum.n));
+      }
+      ownCounts.push_back(static_cast<float>(sum.n));
+    }
+    points = ownPoints.data();
+    colours = ownColours.data();
+    counts = ownCounts.data();
+    tree = std::make_unique<detail::KdTree>(points, ownCounts.size());
+  }
+};
+
+ColourField::ColourField(const double* points, const float* colours, std::size_t count,
+                         double spacing, double voxel)
+    : Spacing(spacing), Voxel(voxel)
+{
+  Levels.push_back(std::make_unique<Level>(points, colours, count));
+  for (double cells : CoarseCells)
+    Levels.push_back(std::make_unique<Level>(*Levels[0], count, cells * kernel()));
+}
+
+double ColourField::kernel(double scale) const
+{
+  return scale * std::max(Spacing, Voxel);
 }
 
 ColourField::~ColourField() = default;
 
 double ColourField::sample(const double x[3], double sigma, double rgb[3], double* jacobian) const
 {
+  // The coarsest level whose cells are at most the kernel wide (a cell's mean blurs by its
+  // width / sqrt(12): the kernel grows by 4 % at most).
+  const Level* level = Levels[0].get();
+  for (const auto& l : Levels)
+    if (l->cell > 0 && l->cell <= sigma)
+      level = l.get();
+  // nanoflann answers in the same order for the same tree and query: the sums below are the
+  // same on any thread.
   std::vector<std::pair<std::uint32_t, double>> found;
-  Tree->within(x, Reach * Reach * sigma * sigma, found);
+  level->tree->within(x, Reach * Reach * sigma * sigma, found);
   if (found.empty())
     return 0;
-  // In index order, so the sums do not depend on the tree's order of answering.
-  std::sort(found.begin(), found.end());
   const double inverse2 = 1 / (2 * sigma * sigma);
+  std::vector<double> weights(found.size());
   double total = 0, mean[3] = {0, 0, 0};
-  for (const auto& [p, d2] : found)
+  for (std::size_t j = 0; j < found.size(); ++j)
   {
-    const double w = std::exp(-d2 * inverse2);
+    const std::uint32_t p = found[j].first;
+    const double w = std::exp(-found[j].second * inverse2) * (level->counts ? level->counts[p] : 1);
+    weights[j] = w;
     total += w;
     for (int c = 0; c < 3; ++c)
-      mean[c] += w * Samples.colours[3 * p + c];
+      mean[c] += w * level->colours[3 * p + c];
   }
   if (!(total > 0))
     return 0;
@@ -53,24 +138,20 @@ double ColourField::sample(const double x[3], double sigma, double rgb[3], doubl
   if (jacobian)
   {
     std::fill(jacobian, jacobian + 9, 0.0);
-    for (const auto& [p, d2] : found)
+    for (std::size_t j = 0; j < found.size(); ++j)
     {
-      const double w = std::exp(-d2 * inverse2) / (total * sigma * sigma);
-      const double* q = &Samples.colourPoints[3 * p];
+      const std::uint32_t p = found[j].first;
+      const double w = weights[j] / (total * sigma * sigma);
+      const double* q = &level->points[3 * p];
       for (int c = 0; c < 3; ++c)
       {
-        const double dc = Samples.colours[3 * p + c] - rgb[c];
+        const double dc = level->colours[3 * p + c] - rgb[c];
         for (int k = 0; k < 3; ++k)
           jacobian[3 * c + k] += w * dc * (q[k] - x[k]);
       }
     }
   }
   return total;
-}
-
-double colourKernel(const FrameSamples& samples, double scale)
-{
-  return scale * std::max(1.0 * samples.spacing, samples.voxel);
 }
 
 std::vector<float> vertexColours(const ColourField& field, const double* positions,
@@ -95,43 +176,68 @@ std::vector<float> vertexColours(const ColourField& field, const double* positio
 ColourTerm::ColourTerm(const ColourField& field, const TriangleMesh& mesh,
                        const std::vector<float>& reference, const std::vector<double>& mass,
                        double weight, double lengthScale, double voxel, double sigma)
-    : Field(field), Mesh(mesh), Reference(reference), Mass(mass),
+    : Field(field), Mesh(mesh), Reference(&reference), Mass(mass),
       Scale(weight * ColourLength * ColourLength * voxel / lengthScale), Sigma(sigma)
 {
-  if (reference.size() != 3 * mass.size())
+  setKernel(sigma, reference);
+}
+
+void ColourTerm::setKernel(double sigma, const std::vector<float>& reference)
+{
+  if (reference.size() != 3 * Mass.size())
     throw std::invalid_argument("colour term: a reference colour per vertex is needed");
+  Sigma = sigma;
+  Reference = &reference;
 }
 
 void ColourTerm::linearise(const double* x)
 {
-  Normals.resize(3 * Mass.size());
+  const std::size_t n = Mass.size();
+  Normals.resize(3 * n);
   Mesh.vertexNormals(x, Normals.data());
+  LinearisedAt.assign(x, x + 3 * n);
+  // The model at x, which the solvers build next (addModel at the same x).
+  Linearised.assign(n, VertexModel{});
+  forEachIndex(n,
+               [&](std::size_t v)
+               {
+                 VertexModel& m = Linearised[v];
+                 m.energy = vertexEnergy(x, v, m.residual, m.jacobian);
+               });
 }
 
 double ColourTerm::vertexEnergy(const double* x, std::size_t v, double residual[3],
                                 double* jacobian) const
 {
-  if (Reference[3 * v] < 0)
+  if ((*Reference)[3 * v] < 0)
     return -1;
-  double rgb[3];
-  if (!(Field.sample(&x[3 * v], Sigma, rgb, jacobian) > 0))
-    return -1;
-  if (jacobian && !Normals.empty())
+  // Where the colour is read: the vertex moved along the surface only, from where the term was
+  // linearised (x0 + (I - n n^T)(x - x0)), so that J (I - n n^T) is the exact Jacobian.
+  const bool along = !Normals.empty();
+  const double* n = along ? &Normals[3 * v] : nullptr;
+  double at[3] = {x[3 * v], x[3 * v + 1], x[3 * v + 2]};
+  if (along)
   {
-    // J (I - n n^T): the colour's change along the surface.
-    const double* n = &Normals[3 * v];
+    const double* x0 = &LinearisedAt[3 * v];
+    const double across = (at[0] - x0[0]) * n[0] + (at[1] - x0[1]) * n[1] + (at[2] - x0[2]) * n[2];
+    for (int k = 0; k < 3; ++k)
+      at[k] -= across * n[k];
+  }
+  double rgb[3];
+  if (!(Field.sample(at, Sigma, rgb, jacobian) > 0))
+    return -1;
+  if (jacobian && along)
     for (int c = 0; c < 3; ++c)
     {
       double* row = jacobian + 3 * c;
-      const double along = row[0] * n[0] + row[1] * n[1] + row[2] * n[2];
+      const double normal = row[0] * n[0] + row[1] * n[1] + row[2] * n[2];
       for (int k = 0; k < 3; ++k)
-        row[k] -= along * n[k];
+        row[k] -= normal * n[k];
     }
-  }
   double e = 0;
   for (int c = 0; c < 3; ++c)
   {
-    residual[c] = rgb[c] - Reference[3 * v + c];
+    residual[c] = rgb[c] - (*Reference)[3 * v + c];
     e += residual[c] * residual[c];
   }
   return 0.5 * Scale * Mass[v] * e;
@@ -166,22 +272,27 @@ double ColourTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
 {
   const std::size_t n = Mass.size();
   std::vector<double> energy(n, 0.0);
+  const bool cached =
+      LinearisedAt.size() == 3 * n && std::equal(x, x + 3 * n, LinearisedAt.begin());
   forEachIndex(
       n,
       [&](std::size_t v)
       {
-        double r[3], J[9];
-        const double e = vertexEnergy(x, v, r, J);
-        if (e < 0)
+        VertexModel fresh;
+        if (!cached)
+          fresh.energy = vertexEnergy(x, v, fresh.residual, fresh.jacobian);
+        const VertexModel& m = cached ? Linearised[v] : fresh;
+        if (m.energy < 0)
           return;
-        energy[v] = e;
+        energy[v] = m.energy;
+        const double *r = m.residual, *J = m.jacobian;
         const double c = Scale * Mass[v];
         double block[9];
         for (int i = 0; i < 3; ++i)
         {
           gradient[3 * v + i] += c * (J[i] * r[0] + J[3 + i] * r[1] + J[6 + i] * r[2]);
-          for (int j = 0; j < 3; ++j)
-            block[3 * i + j] = c * (J[i] * J[j] + J[3 + i] * J[3 + j] + J[6 + i] * J[6 + j]);
+          for (int k = 0; k < 3; ++k)
+            block[3 * i + k] = c * (J[i] * J[k] + J[3 + i] * J[3 + k] + J[6 + i] * J[6 + k]);
         }
         hessian.addBlock(hessian.slotOf(static_cast<std::int64_t>(v), static_cast<std::int64_t>(v)),
                          block);

@@ -12,15 +12,18 @@
  *   C(x) = sum_p w_p c_p / sum_p w_p,   w_p = exp(-|x - p|^2 / (2 s^2)),  |x - p| < 3 s,
  *
  * smooth in x, with the analytic Jacobian dC/dx = sum_p w_p (c_p - C) (p - x)^T / (s^2 sum_p w_p).
+ * A wide kernel reads the points' means over grid cells at most its width (each weighing as many
+ * points as it holds) instead of every point: nearly the same mean, far fewer terms.
  * The term is
  *
  *   E_col = k_col / (L voxel) * sum_i m_i / 2 * l^2 |C(x_i) - c_i|^2
  *
  * over the vertices i with a reference colour c_i and points within reach, l = ColourLength
  * voxels turning a colour difference (0 to 1 per channel) into a length, so k_col weighs like
- * the data terms' weights. The colour moves vertices along the surface only: its model takes
- * J_i = dC/dx (I - n_i n_i^T), n_i the mesh's normal at the last linearisation (the kernel's
- * blur also varies across the surface, which the geometry, not the colour, should decide). Its
+ * the data terms' weights. The colour moves vertices along the surface only: between two
+ * linearisations (at x0, with the mesh's vertex normals n_i there) the colour is read at
+ * x0_i + (I - n_i n_i^T)(x_i - x0_i), so J_i = dC/dx (I - n_i n_i^T) (the kernel's blur also
+ * varies across the surface, which the geometry, not the colour, should decide). Its
  * Gauss-Newton model is k m_i l^2 J_i^T J_i on each vertex's own block (it couples no vertices).
  *
  * Limits: a local cue, whose reach is the pattern's scale and the kernel's (s: solve coarse to
@@ -31,7 +34,6 @@
 
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
-#include "dp/track/FrameSamples.h"
 
 #include <memory>
 #include <vector>
@@ -44,12 +46,14 @@ namespace detail
 class KdTree;
 }
 
-/** A frame's colour field over its colour points (FrameSamples::colourPoints). */
+/** A frame's colour field over its points with colour. */
 class ColourField
 {
 public:
-  /** `samples` must outlive the field; they must carry colour. */
-  explicit ColourField(const FrameSamples& samples);
+  /** Over `count` points (x y z each) with colours (r g b in [0, 1] each), whose typical spacing
+   *  is `spacing`, in a frame of voxel `voxel`; the arrays must outlive the field. */
+  ColourField(const double* points, const float* colours, std::size_t count, double spacing,
+              double voxel);
   ~ColourField();
   ColourField(const ColourField&) = delete;
   ColourField& operator=(const ColourField&) = delete;
@@ -59,16 +63,15 @@ public:
    *  jacobian then untouched). Thread-safe. */
   double sample(const double x[3], double sigma, double rgb[3], double* jacobian = nullptr) const;
 
-  const FrameSamples& samples() const { return Samples; }
+  /** The kernel width that resolves the field: 1 point spacing, at least a voxel (`scale` times
+   *  that). */
+  double kernel(double scale = 1.0) const;
 
 private:
-  const FrameSamples& Samples;
-  std::unique_ptr<detail::KdTree> Tree;
+  struct Level;
+  double Spacing, Voxel;
+  std::vector<std::unique_ptr<Level>> Levels; // the points, then their means over coarser cells
 };
-
-/** The colour field's kernel width for a frame's samples: 1.5 colour-point spacings, at least a
- *  voxel (`scale` times that). */
-double colourKernel(const FrameSamples& samples, double scale = 1.0);
 
 /** Each vertex's colour in a frame: C at the vertex (kernel width `sigma`), or `previous`'s where
  *  no point lies within 3 sigma (a hole keeps the last colour); 3 per vertex in [0, 1]. Without
@@ -85,12 +88,15 @@ public:
   ColourTerm(const ColourField& field, const TriangleMesh& mesh,
              const std::vector<float>& reference, const std::vector<double>& mass, double weight,
              double lengthScale, double voxel, double sigma);
+  /** Another kernel width, with the references read at it (which must outlive the term). */
+  void setKernel(double sigma, const std::vector<float>& reference);
 
   const char* name() const override { return "colour"; }
   double evaluate(const double* x, double* gradient) const override;
   double addModel(const double* x, detail::BlockSparseMatrix& hessian,
                   double* gradient) const override;
-  /** The mesh's vertex normals at x: the term moves vertices along the surface only. */
+  /** The mesh's vertex normals at x, and the model there: until the next linearisation the term
+   *  reads each vertex's colour as if it moved along the surface only. */
   void linearise(const double* x) override;
 
 private:
@@ -99,11 +105,20 @@ private:
 
   const ColourField& Field;
   const TriangleMesh& Mesh;
-  const std::vector<float>& Reference;
+  const std::vector<float>* Reference;
   const std::vector<double>& Mass;
   double Scale; // k_col l^2 / (L voxel)
   double Sigma;
   std::vector<double> Normals; // per vertex at the last linearisation (empty: none yet)
+  // The vertices' energies, residuals and Jacobians at the last linearisation.
+  struct VertexModel
+  {
+    double energy = -1; // -1: no colour there
+    double residual[3] = {0, 0, 0};
+    double jacobian[9] = {};
+  };
+  std::vector<VertexModel> Linearised;
+  std::vector<double> LinearisedAt;
 };
 
 } // namespace dp

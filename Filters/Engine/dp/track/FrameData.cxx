@@ -3,6 +3,7 @@
 
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/NormalEstimation.h"
+#include "dp/track/ColourTerm.h"
 
 #include <tbb/parallel_invoke.h>
 
@@ -177,6 +178,18 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
   tbb::parallel_invoke([&] { Field.build(points, count, field); },
                        [&] { takeOrEstimateNormals(points, count, normals); },
                        [&] { chooseSpread(points, count, options); });
+  if (!Colours.empty())
+    Colour = std::make_unique<ColourField>(Field.points(), Colours.data(), Count, spacing(), Voxel);
+}
+
+FrameData::~FrameData() = default;
+
+double FrameData::spacing() const
+{
+  // Points spread over the surface: each has about area / count around it.
+  const double area =
+      SurfaceArea > 0 ? SurfaceArea : std::pow(boundingBoxDiagonal(points(), Count), 2);
+  return std::sqrt(area / static_cast<double>(std::max<std::size_t>(Count, 1)));
 }
 
 void FrameData::takeOrEstimateNormals(const double* points, std::size_t count, const float* normals)
@@ -230,15 +243,6 @@ FrameSamples FrameData::copySamples() const
   {
     samples.points.insert(samples.points.end(), point(i), point(i) + 3);
     samples.normals.insert(samples.normals.end(), normal(i), normal(i) + 3);
-  }
-  if (!Colours.empty())
-  {
-    samples.colourPoints.assign(points(), points() + 3 * Count);
-    samples.colours = Colours;
-    // Points spread over the surface: each has about area / count around it.
-    const double area =
-        SurfaceArea > 0 ? SurfaceArea : std::pow(boundingBoxDiagonal(points(), Count), 2);
-    samples.spacing = std::sqrt(area / static_cast<double>(std::max<std::size_t>(Count, 1)));
   }
   return samples;
 }

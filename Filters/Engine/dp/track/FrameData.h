@@ -33,10 +33,13 @@
 #include "dp/track/FrameSamples.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace dp
 {
+
+class ColourField;
 
 struct FrameDataOptions
 {
@@ -59,6 +62,9 @@ public:
   /** The same with colours: `colourComponents` (3 or 4: RGB, RGBA) bytes per point, or null. */
   FrameData(const double* points, std::size_t count, const float* normals,
             const std::uint8_t* colours, int colourComponents, const FrameDataOptions& options);
+  ~FrameData();
+  FrameData(const FrameData&) = delete;
+  FrameData& operator=(const FrameData&) = delete;
 
   bool empty() const { return Count == 0; }
   std::size_t size() const { return Count; }
@@ -111,13 +117,17 @@ public:
   {
     return {Field.points(), Normals.data(), Spread.data(), Spread.size(), Voxel};
   }
-  /** A copy of the subsample with its normals as they are now, and of the colour points. */
+  /** A copy of the subsample with its normals as they are now. */
   FrameSamples copySamples() const;
   bool hasColour() const { return !Colours.empty(); }
+  /** The colour field of the points (null without colour). */
+  const ColourField* colourField() const { return Colour.get(); }
   /** r g b in [0, 1] per point (empty without colour). */
   const std::vector<float>& colours() const { return Colours; }
 
 private:
+  // The points' typical spacing (world units), from the surface's area.
+  double spacing() const;
   // The normals: given, or estimated and oriented part by part.
   void takeOrEstimateNormals(const double* points, std::size_t count, const float* normals);
   // The well-spread subsample (see the file comment).
@@ -134,6 +144,7 @@ private:
   std::vector<std::uint32_t> Spread;
   std::vector<float> Colours;
   double SurfaceArea = 0;
+  std::unique_ptr<ColourField> Colour;
 };
 
 } // namespace dp

@@ -6,10 +6,10 @@
  *
  * SampleView looks at them where they are: inside the frame's data while the frame is tracked
  * (FrameData::spreadSamples(), through the subsample's indices), or in a FrameSamples that holds
- * a copy. The tracker keeps that copy in every FrameResult, so that the take's refinement
- * (TakeRefinement) can revisit every frame's data after the forward pass without the frames'
- * distance fields: about 4 points a vertex, 144 kB a frame at 1000 vertices, and where the points
- * carry colour all of them with it (36 bytes a point).
+ * a copy. The tracker keeps that copy in every FrameResult, so that a take's fit to its data can
+ * be measured once every frame is tracked (dp::measureDataFit, the compression judged against
+ * the data) without the frames' distance fields: about 4 points a vertex, 144 kB a frame at 1000
+ * vertices.
  */
 #pragma once
 
@@ -33,18 +33,12 @@ struct SampleView
   const float* normal(std::size_t i) const { return normals + 3 * (index ? index[i] : i); }
 };
 
-/** Samples held on their own (a copy of a frame's subsample) and, when the frame's points carry
- *  colour, all its points with their colours (what the colour term, ColourTerm, reads). */
+/** Samples held on their own (a copy of a frame's subsample). */
 struct FrameSamples
 {
   std::vector<double> points;
   std::vector<float> normals;
   double voxel = 0;
-  std::vector<double> colourPoints; // x y z per point; empty without colour
-  std::vector<float> colours;       // r g b in [0, 1] per colour point
-  double spacing = 0;               // the colour points' typical spacing (world units)
-
-  bool hasColour() const { return !colours.empty(); }
 
   std::size_t size() const { return points.size() / 3; }
   bool empty() const { return points.empty(); }

@@ -507,7 +507,7 @@ bool GraphRegistration::dampedStep(DeformationGraph::State& state,
 
 int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTerm& distance,
                                      CoverageTerm* coverage, double rigidity, double robustScale,
-                                     int iterationsPerStage)
+                                     int iterationsPerStage, const std::vector<EnergyTerm*>& extra)
 {
   std::vector<EnergyTerm*> terms{&distance};
   if (coverage)
@@ -515,6 +515,7 @@ int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTer
     coverage->setDiagonalModel(true);
     terms.push_back(coverage);
   }
+  terms.insert(terms.end(), extra.begin(), extra.end());
   std::vector<double> x(3 * Graph.mesh().numberOfVertices());
   RobustScale = robustScale;
   int steps = 0;

@@ -78,9 +78,11 @@ public:
 
   /** The coarse schedule (see the file comment) on the frame's data terms; `coverage` may be
    *  null. `rigidity` scales the schedule's k_reg; `robustScale` (world units) is E_reg's Huber
-   *  scale (0: least squares). Returns the steps taken. */
+   *  scale (0: least squares). `extra` terms (whose models couple no vertices, e.g. ColourTerm)
+   *  join every stage as they are. Returns the steps taken. */
   int registerFrame(DeformationGraph::State& state, DistanceTerm& distance, CoverageTerm* coverage,
-                    double rigidity, double robustScale, int iterationsPerStage);
+                    double rigidity, double robustScale, int iterationsPerStage,
+                    const std::vector<EnergyTerm*>& extra = {});
 
   /** The Gauss-Newton model of the terms (as they were last linearised) plus E_reg at a state:
    *  returns E and sets the node-space gradient (6 per node: rotation, translation); the matrix

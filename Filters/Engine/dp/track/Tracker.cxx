@@ -2,6 +2,7 @@
 #include "dp/track/Tracker.h"
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/track/ColourTerm.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
@@ -47,6 +48,9 @@ constexpr double StartChoiceScale = 3.0;
 // within this many voxels, at most 45 degrees from parallel or antiparallel (cosine).
 constexpr double SureReach = 2.0;
 constexpr double SureCosine = 0.7;
+// The colour term's kernel on the coarse level, in times the fine one (ColourField::kernel): it
+// reaches farther, as the coarse level's data terms do.
+constexpr double CoarseColourKernel = 3.0;
 
 // Throws std::invalid_argument naming the first option out of its range (NaN included).
 void validate(const TrackerOptions& o)
@@ -71,6 +75,7 @@ void validate(const TrackerOptions& o)
   check(nonNegative(o.coverage.robustScale) && nonNegative(o.coverage.maxDistance),
         "coverage robust scale and reach (>= 0)");
   check(nonNegative(o.temporalWeight), "temporal weight (>= 0)");
+  check(nonNegative(o.colourWeight), "colour weight (>= 0)");
   check(nonNegative(o.graph.rigidity) && nonNegative(o.graph.robustScale),
         "graph rigidity and robust scale (>= 0)");
   check(o.graph.iterations >= 0, "graph iterations (>= 0)");
@@ -199,6 +204,10 @@ struct Tracker::Parts
   std::vector<double> LastGood;
   DeformationGraph::State LastGoodState;
   bool LastFailed = false;
+  // Each vertex's colour in the first frame with colour (where the template lies on its
+  // material), read at the colour term's fine and coarse kernels; empty until then.
+  std::vector<float> ColourFine, ColourCoarse;
+  std::vector<float> LastColours; // the vertices' colours in the last frame (a hole keeps them)
 };
 
 // One way of solving a frame, and how well it did.
@@ -267,8 +276,35 @@ std::size_t Tracker::graphNodes() const
   return P->Graph ? P->Graph->numberOfNodes() : 0;
 }
 
+void Tracker::readColourReference(const FrameData& frame, const std::vector<double>& positions)
+{
+  if (!P->ColourFine.empty() || !frame.colourField() || Options.colourWeight <= 0)
+    return;
+  const ColourField& field = *frame.colourField();
+  const std::size_t nv = Mesh.numberOfVertices();
+  P->ColourFine = vertexColours(field, positions.data(), nv, field.kernel());
+  P->ColourCoarse = vertexColours(field, positions.data(), nv, field.kernel(CoarseColourKernel));
+}
+
+void Tracker::readVertexColours(const FrameData* frame, FrameResult& result)
+{
+  if (frame && frame->colourField())
+  {
+    const ColourField& field = *frame->colourField();
+    P->LastColours = vertexColours(field, result.positions.data(), Mesh.numberOfVertices(),
+                                   field.kernel(), &P->LastColours);
+  }
+  result.colours.clear();
+  for (float c : P->LastColours)
+    result.colours.push_back(
+        static_cast<std::uint8_t>(std::lround(255 * std::clamp(c < 0 ? 0.5f : c, 0.0f, 1.0f))));
+}
+
 void Tracker::reset()
 {
+  P->ColourFine.clear();
+  P->ColourCoarse.clear();
+  P->LastColours.clear();
   P->Predictor.clear();
   P->RecentQuality.clear();
   P->FailedInARow = 0;
@@ -369,16 +405,15 @@ bool Tracker::failed(const Attempt& a) const
   // template lacks are not a failure.
   if (P->RecentQuality.empty())
     return false;
-  std::vector<double> unexplained, unsupported;
+  std::vector<double> unexplained;
   for (const FrameQuality& q : P->RecentQuality)
-  {
     unexplained.push_back(q.unexplained);
-    unsupported.push_back(q.unsupported);
-  }
-  // A limb caught by another's data tears a strip that covers almost nothing: neither share
-  // sees it, the edges' growth does.
+  // Data the mesh does not explain: a lost limb's, or a limb put on other data. Mesh without data
+  // alone is no failure: a hole in the data looks just the same (a scanner's, moving from frame
+  // to frame), and a part that lost its data leaves that data unexplained. A limb caught by
+  // another's data tears a strip that covers almost nothing: neither share sees it, the edges'
+  // growth does.
   return a.quality.unexplained > usual(unexplained) + Options.recovery.margin ||
-         a.quality.unsupported > usual(unsupported) + Options.recovery.margin ||
          (Options.recovery.stiffRetry && a.torn());
 }
 
@@ -447,6 +482,11 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   std::unique_ptr<CoverageTerm> coverage;
   if (Options.coverage.weight > 0 && !frame.spread().empty())
     coverage = std::make_unique<CoverageTerm>(frame.spreadSamples(), Mesh, L, Options.coverage);
+  std::unique_ptr<ColourTerm> colour;
+  if (Options.colourWeight > 0 && frame.colourField() && !P->ColourCoarse.empty())
+    colour = std::make_unique<ColourTerm>(*frame.colourField(), Mesh, P->ColourCoarse,
+                                          Cloth.vertexMass(), Options.colourWeight, L, Voxel,
+                                          frame.colourField()->kernel(CoarseColourKernel));
   InternalEnergyTerm internal(Cloth);
 
   std::vector<double> x;
@@ -463,14 +503,17 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
     a.startPositions = x;
 
     clock = std::chrono::steady_clock::now();
-    solveCoarse(start, a, distance, coverage.get(), x);
+    solveCoarse(start, a, distance, coverage.get(), colour.get(), x);
     a.timings.coarse = elapsed(clock);
     a.coarsePositions = x;
   }
 
   clock = std::chrono::steady_clock::now();
   const int stepsBefore = capped ? capped->iterations : 0;
-  solveFine(a, distance, coverage.get(), internal, x, capped || start != Start::Predicted);
+  if (colour)
+    colour->setKernel(frame.colourField()->kernel(), P->ColourFine);
+  solveFine(a, distance, coverage.get(), colour.get(), internal, x,
+            capped || start != Start::Predicted);
   a.iterations += stepsBefore;
   a.timings.fine = elapsed(clock) + (capped ? capped->timings.fine : 0.0);
 
@@ -513,21 +556,23 @@ std::vector<double> Tracker::startPositions(Start start, Attempt& a, DistanceTer
 }
 
 void Tracker::solveCoarse(Start start, Attempt& a, DistanceTerm& distance, CoverageTerm* coverage,
-                          std::vector<double>& x)
+                          ColourTerm* colour, std::vector<double>& x)
 {
   if (!P->Graph)
     return;
   const double stiffer = start == Start::Stiff ? 2.0 : 1.0;
   P->Registration->setStretchWeight(stiffer * stiffer * Options.graph.stretchWeight);
-  a.coarseIterations =
-      P->Registration->registerFrame(a.state, distance, coverage, stiffer * Options.graph.rigidity,
-                                     Options.graph.robustScale * Voxel, Options.graph.iterations);
+  a.coarseIterations = P->Registration->registerFrame(
+      a.state, distance, coverage, stiffer * Options.graph.rigidity,
+      Options.graph.robustScale * Voxel, Options.graph.iterations,
+      colour ? std::vector<EnergyTerm*>{colour} : std::vector<EnergyTerm*>{});
   P->Registration->setStretchWeight(Options.graph.stretchWeight);
   P->Graph->deform(a.state, x.data());
 }
 
 void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* coverage,
-                        InternalEnergyTerm& internal, std::vector<double>& x, bool converge)
+                        ColourTerm* colour, InternalEnergyTerm& internal, std::vector<double>& x,
+                        bool converge)
 {
   const MotionPredictor& predictor = P->Predictor;
   // The fine level starts within reach of the data: the paper's term, not robust (the coarse
@@ -555,6 +600,8 @@ void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* covera
     terms.push_back(coverage);
   if (temporal)
     terms.push_back(temporal.get());
+  if (colour)
+    terms.push_back(colour);
   SolveSettings settings;
   settings.maxIterations = Options.maxIterations;
   if (!converge && capsFineLevel())
@@ -775,6 +822,7 @@ FrameResult Tracker::track(PreparedFrame prepared)
   {
     trackEmptyFrame(result);
     result.failed = true;
+    readVertexColours(nullptr, result);
   }
   else
   {
@@ -790,7 +838,9 @@ FrameResult Tracker::track(PreparedFrame prepared)
     {
       keep(solveWithRetries(frame, result), result);
       result.samples = frame.copySamples();
+      readColourReference(frame, result.positions);
     }
+    readVertexColours(&frame, result);
   }
   remember(result);
   result.seconds = prepared.Seconds + elapsed(start);

@@ -100,8 +100,12 @@ struct FrameResult
   std::size_t pointsUsed = 0;  // the same, or fewer when the frame was thinned (maxFramePoints)
   bool thinned = false;
   // The frame's well-spread subsample with its oriented normals (empty for an empty frame or
-  // one with too little data): what the take's refinement (TakeRefinement) fits to.
+  // one with too little data): what a take's fit to its data is measured on (measureDataFit).
   FrameSamples samples;
+  // Where the points carry colour: each vertex's colour in this frame (r g b bytes), the frame's
+  // colour at the vertex (ColourField, the colour term's fine kernel); a vertex without points
+  // near it keeps its colour of the frame before. Empty without colour.
+  std::vector<std::uint8_t> colours;
   // For diagnosis (BenchmarkTracker prints their errors): the kept attempt's start and the
   // coarse level's result.
   std::vector<double> startPositions, coarsePositions;
@@ -201,11 +205,16 @@ private:
                                      class InternalEnergyTerm& internal) const;
   /** The coarse level from a.state; x becomes the graph's deformation. */
   void solveCoarse(Start start, Attempt& a, class DistanceTerm& distance,
-                   class CoverageTerm* coverage, std::vector<double>& x);
+                   class CoverageTerm* coverage, class ColourTerm* colour, std::vector<double>& x);
   /** The fine solve from x with the frame's terms; records iterations, energies and the
    *  per-vertex residuals in `a`; without `converge`, the few steps of attempt(). */
   void solveFine(Attempt& a, class DistanceTerm& distance, class CoverageTerm* coverage,
-                 class InternalEnergyTerm& internal, std::vector<double>& x, bool converge);
+                 class ColourTerm* colour, class InternalEnergyTerm& internal,
+                 std::vector<double>& x, bool converge);
+  /** Each vertex's colour in the first frame with colour (the colour term's references). */
+  void readColourReference(const class FrameData& frame, const std::vector<double>& positions);
+  /** The vertices' colours in a frame (FrameResult::colours). */
+  void readVertexColours(const class FrameData* frame, FrameResult& result);
   /** The coarse level's start: sets a.state, the graph's state for `start` (the identity at
    *  frame 0). */
   void startState(Start start, Attempt& a) const;

@@ -95,12 +95,12 @@ struct GraphOptions
 };
 
 /** Failure detection and recovery (FrameQuality): a frame fails when the share of its data
- *  farther than `reach` voxels from the mesh (unexplained), or of the mesh farther than that from
- *  the data (unsupported), exceeds what is usual in the take (the median of the last frames
- *  kept) by more than `margin`; it is then tried again from other starts and the best attempt
- *  is kept. Relative, so data the template lacks or holes in every frame do not count as
- *  failures, while a lost limb (a few % of the surface) does. A torn limb fails too (see
- *  stiffRetry). */
+ *  farther than `reach` voxels from the mesh (unexplained) exceeds what is usual in the take (the
+ *  median of the last frames kept) by more than `margin`; it is then tried again from other
+ *  starts and the best attempt is kept. Relative, so data the template lacks do not count as
+ *  failures, while a lost limb (a few % of the surface) does. Mesh without data (unsupported) is
+ *  reported but fails nothing: holes in the data look the same, and a part that left its data
+ *  leaves that data unexplained. A torn limb fails too (see stiffRetry). */
 struct RecoveryOptions
 {
   bool enabled = true;
@@ -149,25 +149,6 @@ struct CreaseSoftening
   double width = 0.7;
 };
 
-/** The take's refinement (TakeRefinement): after the forward pass, every frame solved again
- *  against its data, the template's rest state and the frames on both sides of it. Callers that
- *  see the whole take run it (the main job; the filter when asked to refine the take). */
-struct RefinementOptions
-{
-  bool enabled = true;
-  int passes = 3;     // Gauss-Seidel passes over the take
-  int iterations = 2; // Levenberg-Marquardt steps per frame and pass
-  // k_time: weight of the vertices' accelerations (second differences over time, both ways).
-  double temporalWeight = 5.0;
-  double coverageWeight = 50.0; // k_cov of the refinement's points -> mesh term
-  // k_col of the colour term (ColourTerm), where the points carry colour; 0 switches it off.
-  double colourWeight = 50.0;
-  double stiffness = 1.0; // multiplies the cloth's stiffnesses
-  // The cloth's rest state in frame t: the forward pass's shape of frame t (true), or the
-  // template (false).
-  bool restFromForward = true;
-};
-
 struct TrackerOptions
 {
   ClothParameters cloth;
@@ -205,8 +186,11 @@ struct TrackerOptions
   // k_acc of the temporal term (TemporalTerm): pulls each vertex toward the constant-velocity
   // extrapolation of its last two positions; 0 switches it off.
   double temporalWeight = 0.0;
+  // k_col of the colour term (ColourTerm) where the points carry colour: each vertex pulled,
+  // along the surface, to where the frame shows its material point's colour of the first frame
+  // (in the coarse and fine levels); 0 switches it off.
+  double colourWeight = 50.0;
   RecoveryOptions recovery;
-  RefinementOptions refinement;
 };
 
 } // namespace dp
