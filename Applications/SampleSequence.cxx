@@ -36,6 +36,9 @@ Sampling:
   --hole-radius R       hole radius as a fraction of the diagonal (default 0.05)
   --moving-holes        draw new hole positions in every frame (default: fixed on the surface)
   --no-normals          do not write normals
+  --colour              colour every point by a pattern fixed to the material (the same
+                        colour for the same material point in every frame: red, green and
+                        blue waves over the first frame's shape)
 
 Output:
   --format EXT          ply (binary, default), pcd, xyz, csv or obj
@@ -86,6 +89,8 @@ Request parseArguments(int argc, char** argv)
       r.holeRadius = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
     else if (arg == "--moving-holes")
       r.sampling.holesMove = true;
+    else if (arg == "--colour")
+      r.sampling.colours = true;
     else if (arg == "--no-normals")
       r.sampling.normals = false;
     else if (arg == "--format")

@@ -97,6 +97,7 @@ struct vtkDeformableTrackFilter::Internals
     f.FineIterations = o.graph.fineIterations;
     f.Plasticity = o.graph.yieldRate;
     f.TemporalWeight = o.temporalWeight;
+    f.ColourWeight = o.colourWeight;
     f.Recovery = o.recovery.enabled;
     f.FailureMargin = o.recovery.margin;
   }
@@ -131,6 +132,7 @@ struct vtkDeformableTrackFilter::Internals
     o.graph.fineIterations = f.FineIterations;
     o.graph.yieldRate = f.Plasticity;
     o.temporalWeight = f.TemporalWeight;
+    o.colourWeight = f.ColourWeight;
     o.recovery.enabled = f.Recovery;
     o.recovery.margin = f.FailureMargin;
     return o;
@@ -151,6 +153,17 @@ vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
 int vtkDeformableTrackFilter::GetNumberOfCachedFrames()
 {
   return static_cast<int>(this->Internal->Cache.size());
+}
+
+const dp::FrameResult* vtkDeformableTrackFilter::GetCachedFrame(int frame) const
+{
+  const std::vector<dp::FrameResult>& cache = this->Internal->Cache;
+  return frame >= 0 && static_cast<std::size_t>(frame) < cache.size() ? &cache[frame] : nullptr;
+}
+
+const dp::Tracker* vtkDeformableTrackFilter::GetTracker() const
+{
+  return this->Internal->Tracker.get();
 }
 
 int vtkDeformableTrackFilter::FillInputPortInformation(int port, vtkInformation* info)
@@ -227,7 +240,20 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   }
   vtkPointData* pd = output->GetPointData();
   pd->SetVectors(displacement);
-  pd->SetScalars(residual);
+  if (r.colours.size() == 3 * static_cast<std::size_t>(n))
+  {
+    // The points' colour carried onto the mesh: the active scalars (bytes of 3 components,
+    // which ParaView shows as colours).
+    vtkNew<vtkUnsignedCharArray> colours;
+    colours->SetName("Colors");
+    colours->SetNumberOfComponents(3);
+    colours->SetNumberOfTuples(n);
+    std::copy(r.colours.begin(), r.colours.end(), colours->GetPointer(0));
+    pd->SetScalars(colours);
+    pd->AddArray(residual);
+  }
+  else
+    pd->SetScalars(residual);
   pd->AddArray(frozen);
   pd->AddArray(rejected);
 
@@ -354,7 +380,8 @@ vtkDeformableTrackFilter::PendingFrame vtkDeformableTrackFilter::PrepareFrame(st
   auto prepare = [&tracker, points = std::move(points)]
   {
     return tracker.prepare(points.xyz.data(), points.ids.size(),
-                           points.normals.empty() ? nullptr : points.normals.data());
+                           points.normals.empty() ? nullptr : points.normals.data(),
+                           points.colours.empty() ? nullptr : points.colours.data(), 3);
   };
   // Beside the solve only when there is a second thread for it (a batch process given one
   // thread keeps to one); its errors come out when the frame is tracked.
@@ -567,6 +594,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "FineIterations: " << this->FineIterations << "\n";
   os << indent << "Plasticity: " << this->Plasticity << "\n";
   os << indent << "TemporalWeight: " << this->TemporalWeight << "\n";
+  os << indent << "ColourWeight: " << this->ColourWeight << "\n";
   os << indent << "Recovery: " << this->Recovery << "\n";
   os << indent << "FailureMargin: " << this->FailureMargin << "\n";
   os << indent << "CachedFrames: " << this->Internal->Cache.size() << "\n";

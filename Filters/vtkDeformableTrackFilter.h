@@ -17,20 +17,21 @@
  * present, else estimated). The output has the template's connectivity; its points follow the
  * requested time. Beyond the paper (see dp::Tracker): a points -> mesh term (CoverageWeight), a
  * coarse level (an embedded deformation graph, CoarseLevel) and failure detection with retries
- * (Recovery). Point arrays: "Displacement" (from the template), "Residual" (distance to the frame's
- * points, -1 without data), "Frozen" (provisional determination), "Rejected" (normal test or
- * outlier cut-off). Field data: "FrameIndex", "Points" (the frame's), "Iterations",
- * "CoarseIterations", "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall time) and
- * where its work went ("DataSeconds": field, normals, subsample, of which "OverlappedSeconds" ran
- * beside the frame before; "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds",
- * "QualitySeconds" of the kept attempt; "RetrySeconds": the other attempts; the stages add up to
- * Seconds + OverlappedSeconds but for a little bookkeeping, an empty frame's time is in Seconds
- * only), "EmptyFrame", and the frame's quality:
- * "Unexplained" (share of the points farther than 3 voxels from the mesh), "Unsupported" (share
- * of the mesh farther than that from the points), "LargestStretch" (the most a stiff edge grew
- * beyond its template length, in mean edge lengths: above 2 a limb was caught by other data and
- * torn), "Retries", "Failed" (1: the frame still failed after the retries; do not trust it; a
- * warning says so).
+ * (Recovery), and where the points carry colour a colour term (ColourWeight). Point arrays:
+ * "Displacement" (from the template), "Residual" (distance to the frame's points, -1 without
+ * data), "Frozen" (provisional determination), "Rejected" (normal test or outlier cut-off), and
+ * "Colors" (the frame's colour at each vertex, the active scalars) where the points carry colour.
+ * Field data: "FrameIndex", "Points" (the frame's), "Iterations", "CoarseIterations",
+ * "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall time) and where its work went
+ * ("DataSeconds": field, normals, subsample, of which "OverlappedSeconds" ran beside the frame
+ * before; "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds", "QualitySeconds" of the
+ * kept attempt; "RetrySeconds": the other attempts; the stages add up to Seconds +
+ * OverlappedSeconds but for a little bookkeeping, an empty frame's time is in Seconds only),
+ * "EmptyFrame", and the frame's quality: "Unexplained" (share of the points farther than 3 voxels
+ * from the mesh), "Unsupported" (share of the mesh farther than that from the points: holes in the
+ * data, no failure by itself), "LargestStretch" (the most a stiff edge grew beyond its template
+ * length, in mean edge lengths: above 2 a limb was caught by other data and torn), "Retries",
+ * "Failed" (1: the frame still failed after the retries; do not trust it; a warning says so).
  *
  * Time: the output publishes the input's time steps. Asking for time t computes the frames up
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),
@@ -52,6 +53,12 @@
 
 #include <cstdint> // for std::int64_t
 #include <vector>  // for std::vector
+
+namespace dp
+{
+struct FrameResult;
+class Tracker;
+} // namespace dp
 
 class DYNAMICPOINTSFILTERS_EXPORT vtkDeformableTrackFilter : public vtkDPTemporalFilter
 {
@@ -223,11 +230,22 @@ public:
   ///@}
 
   ///@{
+  /** Weight of the colour term where the points carry colour ("RGB", "RGBA" or "Colors" bytes,
+   *  or active scalars of 3 or 4 bytes): each vertex is pulled, along the surface, to where the
+   *  frame shows the colour its material point had in the first frame (default 50; 0 = off).
+   *  Geometry says where the surface is, not where on it a vertex lies: colour keeps each vertex
+   *  on its material point. The tracked mesh then carries "Colors" (the frame's colour at each
+   *  vertex; where the frame has no points near a vertex, its last colour). */
+  vtkSetClampMacro(ColourWeight, double, 0.0, VTK_DOUBLE_MAX);
+  vtkGetMacro(ColourWeight, double);
+  ///@}
+
+  ///@{
   /** Failure detection and recovery (default on): a frame whose share of data unexplained by
-   *  the mesh, or of mesh without data (both beyond 3 voxels), exceeds the take's usual share by
-   *  more than FailureMargin (default 0.003) is tried again from the last frame and from the
+   *  the mesh (beyond 3 voxels) exceeds the take's usual share by more than FailureMargin
+   *  (default 0.003), or whose mesh tore, is tried again from the last frame and from the
    *  template re-registered; the best attempt is kept, and flagged in "Failed" if it still
-   *  fails. */
+   *  fails. Mesh without data (holes in the data) fails nothing. */
   vtkSetMacro(Recovery, vtkTypeBool);
   vtkGetMacro(Recovery, vtkTypeBool);
   vtkBooleanMacro(Recovery, vtkTypeBool);
@@ -252,6 +270,14 @@ public:
 
   /** Number of frames computed and cached so far. */
   int GetNumberOfCachedFrames();
+
+#ifndef __VTK_WRAP__
+  /** C++ only: the engine's result for a cached frame (null beyond the cache), with what the
+   *  output does not show (the frame's subsample, for dp::measureDataFit). */
+  const dp::FrameResult* GetCachedFrame(int frame) const;
+  /** C++ only: the engine's tracker (null before the first frame): its mesh, template, voxel. */
+  const dp::Tracker* GetTracker() const;
+#endif
 
 protected:
   vtkDeformableTrackFilter();
@@ -290,6 +316,7 @@ protected:
   int FineIterations;
   double Plasticity;
   double TemporalWeight;
+  double ColourWeight;
   vtkTypeBool Recovery;
   double FailureMargin;
 

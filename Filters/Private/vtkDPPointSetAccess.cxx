@@ -15,12 +15,29 @@
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace vtkDP
 {
+
+vtkUnsignedCharArray* pointColours(vtkPointSet* input)
+{
+  if (!input)
+    return nullptr;
+  vtkPointData* pd = input->GetPointData();
+  for (vtkDataArray* candidate :
+       {pd->GetArray("RGB"), pd->GetArray("RGBA"), pd->GetArray("Colors"), pd->GetScalars()})
+  {
+    auto* bytes = vtkUnsignedCharArray::FastDownCast(candidate);
+    if (bytes && (bytes->GetNumberOfComponents() == 3 || bytes->GetNumberOfComponents() == 4) &&
+        bytes->GetNumberOfTuples() == input->GetNumberOfPoints())
+      return bytes;
+  }
+  return nullptr;
+}
 
 TargetPoints finitePoints(vtkPointSet* input)
 {
@@ -33,6 +50,7 @@ TargetPoints finitePoints(vtkPointSet* input)
     normals = input->GetPointData()->GetArray("Normals");
   if (normals && normals->GetNumberOfComponents() != 3)
     normals = nullptr;
+  vtkUnsignedCharArray* colours = pointColours(input);
   // Straight from the array when it holds doubles (a million points: a virtual call each
   // otherwise).
   vtkDoubleArray* doubles = vtkDoubleArray::FastDownCast(input->GetPoints()->GetData());
@@ -60,6 +78,9 @@ TargetPoints finitePoints(vtkPointSet* input)
       t.normals.insert(t.normals.end(), {static_cast<float>(nrm[0]), static_cast<float>(nrm[1]),
                                          static_cast<float>(nrm[2])});
     }
+    if (colours)
+      for (int c = 0; c < 3; ++c)
+        t.colours.push_back(colours->GetTypedComponent(i, c));
   }
   t.xyz.resize(3 * kept);
   return t;

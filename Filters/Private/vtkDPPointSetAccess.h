@@ -12,6 +12,7 @@ class vtkDataObject;
 class vtkInformation;
 class vtkPointSet;
 class vtkPolyData;
+class vtkUnsignedCharArray;
 
 namespace vtkDP
 {
@@ -22,8 +23,14 @@ struct TargetPoints
   std::vector<double> xyz;
   std::vector<vtkIdType> ids;
   std::vector<float> normals;
+  // r g b per point, from the points' colours ("RGB", "RGBA", "Colors", or active scalars of
+  // 3 or 4 bytes a point); empty without them.
+  std::vector<std::uint8_t> colours;
   vtkIdType dropped = 0; // points with NaN/Inf coordinates left out
 };
+/** A point set's colours: an unsigned char array of 3 or 4 components named "RGB", "RGBA" or
+ *  "Colors", or the active scalars if they are such an array; null without one. */
+vtkUnsignedCharArray* pointColours(vtkPointSet* input);
 TargetPoints finitePoints(vtkPointSet* input);
 
 /** A surface mesh as triangles (polygons split into fans) and positions. Returns false (with
