@@ -13,8 +13,6 @@
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
-#include "dp/track/DataFit.h"
-#include "dp/track/Tracker.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
@@ -491,7 +489,15 @@ private:
     std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
     const fs::path file = folder / name;
     const std::string partial = file.string() + ".partial";
-    writer->SetInputData(mesh);
+    // The frame's data samples are for the compressor (DISTANCE_TO_DATA), not the file.
+    vtkNew<vtkPolyData> written;
+    written->ShallowCopy(mesh);
+    vtkNew<vtkFieldData> fields;
+    fields->DeepCopy(mesh->GetFieldData());
+    fields->RemoveArray("DataSamples");
+    fields->RemoveArray("DataReach");
+    written->SetFieldData(fields);
+    writer->SetInputData(written);
     writer->SetFileName(partial.c_str());
     if (!writer->Write())
     {
@@ -565,111 +571,19 @@ private:
     }
   }
 
+  // The codec's target: by default the data's (--fit-growth: the decompressed mesh's distance to
+  // the points may grow by that percent, DISTANCE_TO_DATA), else KG (--error-target); through
+  // vtkPCACompressFilter as any VTK pipeline would.
   void compress()
   {
-    if (S.errorTarget > 0)
-      compressToTheMotion();
-    else
-      compressAgainstTheData();
-  }
-
-  // The default: the codec's target is the data's (dp::compressAgainstData): the decompressed
-  // mesh's RMS distance to each frame's points may grow by at most S.fitGrowth percent.
-  void compressAgainstTheData()
-  {
-    const dp::Tracker* tracker = Tracker->GetTracker();
-    if (!tracker || Written.empty())
-      return;
-    std::vector<double> positions;
-    std::vector<const dp::FrameSamples*> samples;
-    std::vector<double> times;
-    double rawBytes = 0;
-    for (std::size_t f = 0; f < Written.size(); ++f)
-    {
-      const dp::FrameResult* r = Tracker->GetCachedFrame(static_cast<int>(f));
-      positions.insert(positions.end(), r->positions.begin(), r->positions.end());
-      samples.push_back(&r->samples);
-      times.push_back(Source->GetFrameTime(static_cast<int>(f)));
-      rawBytes += 12.0 * static_cast<double>(r->pointsGiven);
-    }
-    const double reach = tracker->options().recovery.reach * tracker->voxelSize();
-    dp::DataFitCompression c;
-    try
-    {
-      c = dp::compressAgainstData(tracker->mesh(), positions.data(), Written.size(), samples, reach,
-                                  S.fitGrowth / 100, dp::PcaOptions{}, times,
-                                  [this](double share)
-                                  {
-                                    if (Interrupted)
-                                      return false;
-                                    Bar.show("compressing", share);
-                                    return true;
-                                  });
-    }
-    catch (const std::exception& e)
-    {
-      Bar.clear();
-      if (Interrupted)
-        std::cerr << "interrupted while compressing: the tracked frames are in " << Pvd.string()
-                  << "\n";
-      else
-      {
-        std::cerr << "error: compression failed (" << e.what() << "); the tracked frames are in "
-                  << Pvd.string() << "\n";
-        Failed = true;
-      }
-      return;
-    }
-    Bar.clear();
-    if (!writeCompressed(c.sequence))
-      return;
-    recordCompression(c.sequence.report, rawBytes);
-    Compression["Target"] =
-        "distance to the points grows by at most " + std::to_string(S.fitGrowth) + " %";
-    Compression["FitGrowthAllowedPercent"] = S.fitGrowth;
-    Compression["DistanceToPointsTracked"] = c.tracked.rms;
-    Compression["DistanceToPointsDecompressed"] = c.decompressed.rms;
-    Compression["FitGrowthPercent"] = 100 * c.growth;
-    Compression["RmsDeviationTarget"] = c.deviationTarget;
-    Compression["Codings"] = c.rounds;
-    std::printf("Compressed: %s, %zu components, %.3g bits per vertex per frame, %.0fx smaller "
-                "than the input points (float32); the decompressed mesh lies %.3g from the "
-                "points (RMS), the tracked one %.3g (%+.1f %%, %.0f %% allowed)\n",
-                Dpz.string().c_str(), c.sequence.report.components,
-                c.sequence.report.bitsPerVertexFrame, rawBytes / Compression["Bytes"].get<double>(),
-                c.decompressed.rms, c.tracked.rms, 100 * c.growth, S.fitGrowth);
-    std::printf("glTF: %s\n", Glb.string().c_str());
-  }
-
-  // The codec's figures in report.json's "compression".
-  void recordCompression(const dp::PcaReport& r, double rawBytes)
-  {
-    const double frames = static_cast<double>(Written.size());
-    Compression["Components"] = r.components;
-    Compression["KGError"] = r.kgError;
-    Compression["RmsError"] = r.rmsError;
-    Compression["MaxError"] = r.maxError;
-    Compression["MaxErrorRelative"] = r.maxErrorRelative;
-    Compression["BitsPerVertexFrame"] = r.bitsPerVertexFrame;
-    Compression["QuantizedPlainBitsPerVertexFrame"] = r.quantisedPlainBits;
-    Compression["PaperD0"] = r.paperD0;
-    Compression["PaperD1"] = r.paperD1;
-    Compression["PaperRatio"] = r.paperRatio;
-    Compression["ComponentsPerFrame"] = static_cast<double>(r.components) / frames;
-    Compression["Bytes"] = fs::file_size(Dpz);
-    Compression["InputPointBytes"] = rawBytes;
-    Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
-  }
-
-  // --error-target KG: the codec's target is a share of the motion's size (KG), through
-  // vtkPCACompressFilter as a VTK pipeline would.
-  void compressToTheMotion()
-  {
+    const bool againstData = !(S.errorTarget > 0);
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
     compressor->SetInputConnection(Tracker->GetOutputPort());
     compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
-    compressor->SetErrorTarget(S.errorTarget);
+    compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
+                                            : vtkPCACompressFilter::KARNI_GOTSMAN);
+    compressor->SetErrorTarget(againstData ? S.fitGrowth : S.errorTarget);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";
@@ -692,12 +606,52 @@ private:
     }
     if (!writeCompressed(*sequence))
       return;
+    recordCompression(compressor->GetOutput());
+    if (againstData)
+      sayDataFit(compressor->GetOutput());
+    else
+      sayMotionFit(*sequence);
+    std::printf("glTF: %s\n", Glb.string().c_str());
+  }
+
+  // The codec's figures in report.json's "compression".
+  void recordCompression(vtkPolyData* result)
+  {
+    for (const char* name : {"Components", "KGError", "RmsError", "MaxError", "MaxErrorRelative",
+                             "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
+                             "PaperD1", "PaperRatio", "ComponentsPerFrame"})
+      Compression[name] = fieldValue(result, name);
     double rawBytes = 0;
     for (const FrameRecord& r : Records)
       rawBytes += 12.0 * static_cast<double>(r.points);
-    recordCompression(sequence->report, rawBytes);
-    const double componentsPerFrame = Compression["ComponentsPerFrame"].get<double>();
-    const bool weak = Written.size() >= 8 && componentsPerFrame > 0.5;
+    Compression["Bytes"] = fs::file_size(Dpz);
+    Compression["InputPointBytes"] = rawBytes;
+    Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
+  }
+
+  void sayDataFit(vtkPolyData* result)
+  {
+    const double before = fieldValue(result, "DistanceToDataInput");
+    const double after = fieldValue(result, "DistanceToDataDecompressed");
+    const double growth = fieldValue(result, "DistanceToDataGrowth");
+    Compression["Target"] =
+        "the distance to the points grows by at most " + std::to_string(S.fitGrowth) + " %";
+    Compression["FitGrowthAllowedPercent"] = S.fitGrowth;
+    Compression["DistanceToPointsTracked"] = before;
+    Compression["DistanceToPointsDecompressed"] = after;
+    Compression["FitGrowthPercent"] = growth;
+    std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame, %.0fx smaller "
+                "than the input points (float32); the decompressed mesh lies %.3g from the "
+                "points (RMS), the tracked one %.3g (%+.1f %%, at most %g %%)\n",
+                Dpz.string().c_str(), Compression["Components"].get<double>(),
+                Compression["BitsPerVertexFrame"].get<double>(),
+                Compression["InputPointsOverFile"].get<double>(), after, before, growth,
+                S.fitGrowth);
+  }
+
+  void sayMotionFit(const dp::CompressedSequence& sequence)
+  {
+    const bool weak = Written.size() >= 8 && Compression["ComponentsPerFrame"].get<double>() > 0.5;
     Compression["weak"] = weak;
     if (weak)
       Compression["note"] = "most of the frames' worth of components were kept: the motion is "
@@ -707,15 +661,14 @@ private:
     Compression["ErrorTargetKG"] = S.errorTarget;
     std::printf("Compressed: %s, %zu components, %.3g bits per vertex per frame (%.1fx "
                 "smaller than float32), KG error %.3g%%\n",
-                Dpz.string().c_str(), sequence->report.components,
-                sequence->report.bitsPerVertexFrame, 96.0 / sequence->report.bitsPerVertexFrame,
-                sequence->report.kgError);
+                Dpz.string().c_str(), sequence.report.components,
+                sequence.report.bitsPerVertexFrame, 96.0 / sequence.report.bitsPerVertexFrame,
+                sequence.report.kgError);
     if (weak)
       std::printf("Compression is weak: %zu components for %zu frames (the motion is not "
                   "low-rank, the tracking shakes, or KG %.3g %% asks for more than the data's "
                   "noise: without --error-target the target is the data's)\n",
-                  sequence->report.components, Written.size(), S.errorTarget);
-    std::printf("glTF: %s\n", Glb.string().c_str());
+                  sequence.report.components, Written.size(), S.errorTarget);
   }
 
   /** Writes tracked.dpz and tracked.glb (each beside its name, renamed when complete); says

@@ -44,7 +44,7 @@ public:
    *  the target). */
   vtkSetClampMacro(Layout, int, 0, 1);
   vtkGetMacro(Layout, int);
-  vtkSetClampMacro(ErrorMeasure, int, 0, 1);
+  vtkSetClampMacro(ErrorMeasure, int, 0, 2);
   vtkGetMacro(ErrorMeasure, int);
   vtkSetMacro(ErrorTarget, double);
   vtkGetMacro(ErrorTarget, double);

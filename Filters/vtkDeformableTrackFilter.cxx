@@ -155,17 +155,6 @@ int vtkDeformableTrackFilter::GetNumberOfCachedFrames()
   return static_cast<int>(this->Internal->Cache.size());
 }
 
-const dp::FrameResult* vtkDeformableTrackFilter::GetCachedFrame(int frame) const
-{
-  const std::vector<dp::FrameResult>& cache = this->Internal->Cache;
-  return frame >= 0 && static_cast<std::size_t>(frame) < cache.size() ? &cache[frame] : nullptr;
-}
-
-const dp::Tracker* vtkDeformableTrackFilter::GetTracker() const
-{
-  return this->Internal->Tracker.get();
-}
-
 int vtkDeformableTrackFilter::FillInputPortInformation(int port, vtkInformation* info)
 {
   if (port == 0)
@@ -205,7 +194,7 @@ long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 namespace
 {
 void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult& r,
-                const std::vector<double>& rest, std::size_t frame)
+                const std::vector<double>& rest, std::size_t frame, double reach)
 {
   const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
   vtkNew<vtkDoubleArray> coordinates;
@@ -284,6 +273,15 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   addValue("LargestStretch", r.tear);
   addValue("Retries", r.retries);
   addValue("Failed", r.failed ? 1 : 0);
+  // The frame's well-spread subsample, and how far from the mesh a point still counts: what a
+  // compressor downstream judges its error by (vtkPCACompressFilter, DISTANCE_TO_DATA).
+  vtkNew<vtkFloatArray> samples;
+  samples->SetName("DataSamples");
+  samples->SetNumberOfComponents(3);
+  samples->SetNumberOfTuples(static_cast<vtkIdType>(r.samples.size()));
+  std::copy(r.samples.points.begin(), r.samples.points.end(), samples->GetPointer(0));
+  output->GetFieldData()->AddArray(samples);
+  addValue("DataReach", reach);
 }
 } // namespace
 
@@ -514,7 +512,8 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
       output->Initialize();
       if (!in.Cache.empty())
         fillOutput(output, in.Polys, in.Cache.back(), in.Tracker->templatePositions(),
-                   in.Cache.size() - 1);
+                   in.Cache.size() - 1,
+                   in.Tracker->options().recovery.reach * in.Tracker->voxelSize());
       return 1;
     }
     this->ShowProgressOf(frame, true);
@@ -530,7 +529,8 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
 
   const std::size_t shown = std::min(target, in.Cache.size() - 1);
   output->Initialize();
-  fillOutput(output, in.Polys, in.Cache[shown], in.Tracker->templatePositions(), shown);
+  fillOutput(output, in.Polys, in.Cache[shown], in.Tracker->templatePositions(), shown,
+             in.Tracker->options().recovery.reach * in.Tracker->voxelSize());
   // Stopped short of the request (aborted): the output says which frame it is. The executive
   // does not run a request for the same time twice; a request for another time goes on from
   // the frames kept (a change of properties starts the take over).

@@ -31,7 +31,10 @@
  * from the mesh), "Unsupported" (share of the mesh farther than that from the points: holes in the
  * data, no failure by itself), "LargestStretch" (the most a stiff edge grew beyond its template
  * length, in mean edge lengths: above 2 a limb was caught by other data and torn), "Retries",
- * "Failed" (1: the frame still failed after the retries; do not trust it; a warning says so).
+ * "Failed" (1: the frame still failed after the retries; do not trust it; a warning says so);
+ * "DataSamples" (the frame's well-spread subsample of points, about 4 a vertex) and "DataReach"
+ * (how far from the mesh a point still counts as explained): what vtkPCACompressFilter's
+ * DISTANCE_TO_DATA judges a compression by.
  *
  * Time: the output publishes the input's time steps. Asking for time t computes the frames up
  * to t in order (each needs the one before; the pipeline re-executes with CONTINUE_EXECUTING),
@@ -53,12 +56,6 @@
 
 #include <cstdint> // for std::int64_t
 #include <vector>  // for std::vector
-
-namespace dp
-{
-struct FrameResult;
-class Tracker;
-} // namespace dp
 
 class DYNAMICPOINTSFILTERS_EXPORT vtkDeformableTrackFilter : public vtkDPTemporalFilter
 {
@@ -270,14 +267,6 @@ public:
 
   /** Number of frames computed and cached so far. */
   int GetNumberOfCachedFrames();
-
-#ifndef __VTK_WRAP__
-  /** C++ only: the engine's result for a cached frame (null beyond the cache), with what the
-   *  output does not show (the frame's subsample, for dp::measureDataFit). */
-  const dp::FrameResult* GetCachedFrame(int frame) const;
-  /** C++ only: the engine's tracker (null before the first frame): its mesh, template, voxel. */
-  const dp::Tracker* GetTracker() const;
-#endif
 
 protected:
   vtkDeformableTrackFilter();

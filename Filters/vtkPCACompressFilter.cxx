@@ -2,6 +2,7 @@
 #include "vtkPCACompressFilter.h"
 
 #include "dp/compress/PcaCompression.h"
+#include "dp/track/DataFit.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"
@@ -33,6 +34,11 @@ struct vtkPCACompressFilter::Internals
   std::vector<std::int64_t> Triangles; // frame 0's, for the file
   std::unique_ptr<dp::CompressedSequence> Result;
   std::string Failure; // of the last update
+  // DISTANCE_TO_DATA: each frame's data samples and reach (the input's field data), and the fit
+  // before and after.
+  std::vector<dp::FrameSamples> Samples;
+  double Reach = 0;
+  dp::DataFit Before, After;
 
   std::size_t collected() const
   {
@@ -45,6 +51,9 @@ struct vtkPCACompressFilter::Internals
     Polys = nullptr;
     Triangles.clear();
     Result.reset();
+    Samples.clear();
+    Reach = 0;
+    Before = After = dp::DataFit{};
   }
 
   // The properties' defaults are the engine's (one source: the plugin's XML is checked against
@@ -59,6 +68,7 @@ struct vtkPCACompressFilter::Internals
     f.Quantize = o.quantise;
   }
 
+  // (DISTANCE_TO_DATA sets its own measure and target: dp::compressAgainstData.)
   static dp::PcaOptions optionsOf(const vtkPCACompressFilter& f)
   {
     dp::PcaOptions o;
@@ -141,6 +151,27 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
       return "frame " + std::to_string(frame) + ": point " + std::to_string(i) + " is not finite";
     in.Positions.insert(in.Positions.end(), p, p + 3);
   }
+  return this->ErrorMeasure == DISTANCE_TO_DATA ? this->CollectData(input, frame) : std::string();
+}
+
+std::string vtkPCACompressFilter::CollectData(vtkPolyData* input, std::size_t frame)
+{
+  Internals& in = *this->Internal;
+  vtkDataArray* samples = input->GetFieldData()->GetArray("DataSamples");
+  vtkDataArray* reach = input->GetFieldData()->GetArray("DataReach");
+  if (!samples || samples->GetNumberOfComponents() != 3 || !reach || reach->GetNumberOfTuples() < 1)
+    return "frame " + std::to_string(frame) +
+           " has no DataSamples and DataReach: the distance to the data needs the points the "
+           "mesh was tracked to (Deformable Track's output carries them)";
+  dp::FrameSamples s;
+  for (vtkIdType i = 0; i < samples->GetNumberOfTuples(); ++i)
+  {
+    double p[3];
+    samples->GetTuple(i, p);
+    s.points.insert(s.points.end(), p, p + 3);
+  }
+  in.Samples.push_back(std::move(s));
+  in.Reach = reach->GetTuple1(0);
   return {};
 }
 
@@ -152,16 +183,30 @@ std::string vtkPCACompressFilter::Compress()
   for (std::size_t t = 0; t < frames; ++t)
     times[t] = this->GetInputFrameTime(t);
   this->SetProgressText("PCA Compress: compressing");
+  const auto progress = [this](double f)
+  {
+    this->UpdateProgress(0.5 + 0.5 * f);
+    return !this->GetAbortExecute();
+  };
+  const auto vertices = static_cast<std::size_t>(in.Vertices);
   try
   {
+    if (this->ErrorMeasure == DISTANCE_TO_DATA)
+    {
+      std::vector<const dp::FrameSamples*> samples;
+      for (const dp::FrameSamples& s : in.Samples)
+        samples.push_back(&s);
+      dp::DataFitCompression c = dp::compressAgainstData(
+          dp::TriangleMesh(in.Triangles, vertices), in.Positions.data(), frames, samples, in.Reach,
+          this->ErrorTarget / 100, Internals::optionsOf(*this), times, progress);
+      in.Before = c.tracked;
+      in.After = c.decompressed;
+      in.Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
+      return {};
+    }
     in.Result = std::make_unique<dp::CompressedSequence>(
-        dp::compressSequence(in.Positions.data(), static_cast<std::size_t>(in.Vertices), frames,
-                             Internals::optionsOf(*this), in.Triangles, times,
-                             [this](double f)
-                             {
-                               this->UpdateProgress(0.5 + 0.5 * f);
-                               return !this->GetAbortExecute();
-                             }));
+        dp::compressSequence(in.Positions.data(), vertices, frames, Internals::optionsOf(*this),
+                             in.Triangles, times, progress));
   }
   catch (const std::exception& e)
   {
@@ -206,6 +251,13 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   vtkDP::addFieldValue(output, "KGError", r.kgError);
   vtkDP::addFieldValue(output, "MaxError", r.maxError);
   vtkDP::addFieldValue(output, "MaxErrorRelative", r.maxErrorRelative);
+  vtkDP::addFieldValue(output, "RmsError", r.rmsError);
+  if (in.Before.samples > 0)
+  {
+    vtkDP::addFieldValue(output, "DistanceToDataInput", in.Before.rms);
+    vtkDP::addFieldValue(output, "DistanceToDataDecompressed", in.After.rms);
+    vtkDP::addFieldValue(output, "DistanceToDataGrowth", 100 * (in.After.rms / in.Before.rms - 1));
+  }
   vtkDP::addFieldValue(output, "ComponentsPerFrame",
                        static_cast<double>(r.components) /
                            static_cast<double>(this->GetNumberOfInputFrames()));

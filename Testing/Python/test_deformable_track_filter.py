@@ -44,6 +44,10 @@ class TestDeformableTrackFilter(TempDirTestCase):
         reader.Update()
         return np.asarray(dsa.WrapDataObject(reader.GetOutput()).Points)
 
+    def template_triangles(self):
+        self.template.Update()
+        return self.template.GetOutput().GetNumberOfPolys()
+
     def tracker(self):
         f = dynamicpoints.vtkDeformableTrackFilter()
         f.SetInputConnection(self.source.GetOutputPort())
@@ -57,7 +61,7 @@ class TestDeformableTrackFilter(TempDirTestCase):
         for frame in range(FRAMES):
             f.UpdateTimeStep(frame)
             out = dsa.WrapDataObject(f.GetOutput())
-            self.assertEqual(out.GetNumberOfPolys(), f.GetOutput().GetNumberOfPolys())
+            self.assertEqual(out.GetNumberOfPolys(), self.template_triangles())
             self.assertEqual(out.FieldData["FrameIndex"][0], frame)
             self.assertAlmostEqual(out.GetInformation().Get(out.DATA_TIME_STEP()), frame)
             rms = np.sqrt(((np.asarray(out.Points) - self.truth(frame)) ** 2).sum(axis=1).mean())
@@ -66,6 +70,35 @@ class TestDeformableTrackFilter(TempDirTestCase):
                                        np.asarray(out.Points) - truth0, atol=1e-5)
             self.assertGreaterEqual(out.PointData["Residual"].min(), 0)
         self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
+
+    def test_colour_on_the_points_reaches_the_mesh_and_stays_on_its_material(self):
+        # Points coloured by a pattern fixed to the material: each vertex carries the colour of
+        # the points around it (Colors, the active scalars), the same from frame to frame.
+        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", FRAMES, "--points", 8000,
+                 "--colour", self.path("coloured"))
+        source = dynamicpoints.vtkPointSequenceSource()
+        source.SetFileName(self.path("coloured", "points.series"))
+        f = dynamicpoints.vtkDeformableTrackFilter()
+        f.SetInputConnection(source.GetOutputPort())
+        f.SetTemplateConnection(self.template.GetOutputPort())
+        first = None
+        for frame in range(FRAMES):
+            f.UpdateTimeStep(frame)
+            out = f.GetOutput()
+            colours = out.GetPointData().GetScalars()
+            self.assertEqual((colours.GetName(), colours.GetNumberOfComponents()), ("Colors", 3))
+            self.assertEqual(colours.GetDataTypeAsString(), "unsigned char")
+            self.assertIsNotNone(out.GetPointData().GetArray("Residual"))
+            rgb = np.asarray(dsa.WrapDataObject(out).PointData["Colors"], dtype=float)
+            self.assertGreater(rgb.std(), 20)  # a pattern, not one colour
+            if first is None:
+                first = rgb
+            self.assertLess(np.abs(rgb - first).mean(), 12, f"frame {frame}")
+        # Without colour on the points there is none on the mesh.
+        plain = self.tracker()
+        plain.UpdateTimeStep(0)
+        self.assertIsNone(plain.GetOutput().GetPointData().GetArray("Colors"))
+        self.assertEqual(plain.GetOutput().GetPointData().GetScalars().GetName(), "Residual")
 
     def test_an_outlier_cut_off_keeps_an_open_sheet_whole_over_a_large_hole(self):
         # Sparse points and a hole a fifth of the sheet wide over its edge: the paper's term pulls

@@ -328,6 +328,47 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertIn(f"kept {int(fd['Components'][0])} of {FRAMES} components", text)
         self.assertIn("the compression is weak", text)
 
+    def test_against_the_data_the_distance_to_the_points_grows_at_most_as_asked(self):
+        # Deformable Track's output carries each frame's points; DISTANCE_TO_DATA's target is
+        # the share by which the decompressed mesh's distance to them may grow.
+        run_tool("dynamicpoints-sample", "--mesh", "tube", "--frames", FRAMES, "--points", 4000,
+                 "--noise", 0.002, self.path("noisy"))
+        points = dynamicpoints.vtkPointSequenceSource()
+        points.SetFileName(self.path("noisy", "points.series"))
+        template = dynamicpoints.vtkPointSequenceSource()
+        template.SetFileName(self.files[0])
+        tracker = dynamicpoints.vtkDeformableTrackFilter()
+        tracker.SetInputConnection(points.GetOutputPort())
+        tracker.SetTemplateConnection(template.GetOutputPort())
+        figures = {}
+        for target in (5, 20):
+            f = dynamicpoints.vtkPCACompressFilter()
+            f.SetInputConnection(tracker.GetOutputPort())
+            f.SetErrorMeasure(f.DISTANCE_TO_DATA)
+            f.SetErrorTarget(target)
+            rec = MessageRecorder(f)
+            f.Update()
+            self.assertEqual(rec.errors + rec.warnings, [])
+            fd = dsa.WrapDataObject(f.GetOutput()).FieldData
+            growth = fd["DistanceToDataGrowth"][0]
+            self.assertLessEqual(growth, target)
+            self.assertGreater(growth, 0.2 * target)  # what is allowed is used
+            self.assertAlmostEqual(growth, 100 * (fd["DistanceToDataDecompressed"][0] /
+                                                  fd["DistanceToDataInput"][0] - 1), places=6)
+            figures[target] = fd["BitsPerVertexFrame"][0]
+        self.assertLess(figures[20], figures[5])  # a looser target costs fewer bits
+        # The writer takes the same target.
+        writer = self.write(self.path("data.dpz"), source=tracker, ErrorMeasure=2, ErrorTarget=10)
+        self.assertEqual(writer.GetErrorMeasure(), 2)
+
+    def test_against_the_data_without_the_tracked_points_it_says_what_is_missing(self):
+        f = self.compressor(ErrorMeasure=2, ErrorTarget=10)  # the true meshes carry no points
+        rec = MessageRecorder(f)
+        f.Update()
+        self.assertIn("frame 0 has no DataSamples", rec.error_text)
+        self.assertIn("Deformable Track", rec.error_text)
+        self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
+
 
 if __name__ == "__main__":
     unittest.main()
