@@ -25,6 +25,7 @@
 #include "vtkPointData.h"
 #include "vtkPointSequenceSource.h"
 #include "vtkPolyData.h"
+#include "vtkStringArray.h"
 #include "vtkXMLPolyDataWriter.h"
 
 #include <nlohmann/json.hpp>
@@ -75,9 +76,13 @@ Written to OUTPUT:
 
 Options:
   --pattern GLOB      files of an INPUT folder to read (default: *)
-  --template FILE     mesh to deform (.ply .obj .vtp .vtk ...); default: a mesh
-                      reconstructed from the first frame's points
-  --vertices N        vertex count of the reconstructed template (default: 1000)
+  --template FILE     mesh to deform (.ply .obj .vtp .vtk ...), repaired if it must be
+                      (what was done is said), never remeshed; default: made from the
+                      first frame (--template-from)
+  --template-from S   auto (default): the first frame's mesh when its file has polygons
+                      (a capture's per-frame mesh: repaired and remeshed to --vertices),
+                      else a surface reconstructed from its points; mesh; points
+  --vertices N        vertex count of a template made from the first frame (default: 1000)
   --frames N          track only the first N frames (default: all; they are listed
                       with their times in OUTPUT/first-frames.series)
   --fit-growth P      compression judged against the data (default): the decompressed
@@ -248,6 +253,7 @@ struct Settings
   std::vector<std::string> inputs; // as given; a batch when more than one
   std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
   int vertices = 1000;
+  int templateFrom = vtkDeformableTrackFilter::TEMPLATE_AUTO;
   long long frames = 0;   // 0: all
   double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)
   double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
@@ -270,6 +276,15 @@ Settings parse(int argc, char** argv, bool& help)
       s.output = optionValue(argc, argv, i);
     else if (arg == "--template")
       s.templateFile = optionValue(argc, argv, i);
+    else if (arg == "--template-from")
+    {
+      const std::string from = optionValue(argc, argv, i);
+      if (from != "auto" && from != "mesh" && from != "points")
+        throw UsageError("--template-from wants auto, mesh or points, not '" + from + "'");
+      s.templateFrom = from == "mesh"     ? vtkDeformableTrackFilter::TEMPLATE_FROM_MESH
+                       : from == "points" ? vtkDeformableTrackFilter::TEMPLATE_FROM_POINTS
+                                          : vtkDeformableTrackFilter::TEMPLATE_AUTO;
+    }
     else if (arg == "--vertices")
       s.vertices = static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 20, 10000000));
     else if (arg == "--frames")
@@ -375,6 +390,7 @@ private:
     watch(Tracker);
     Tracker->SetInputConnection(Source->GetOutputPort());
     Tracker->SetTemplateVertices(S.vertices);
+    Tracker->SetTemplateSource(S.templateFrom);
     if (!S.templateFile.empty())
     {
       watch(TemplateReader);
@@ -415,7 +431,8 @@ private:
   {
     const fs::path folder = clearedFrameFolder();
     vtkNew<vtkXMLPolyDataWriter> writer;
-    // Inline data: appended data trips ParaView 5.11's XML readers here (README, platform notes).
+    // Inline data: appended data trips ParaView 5.11's XML readers here
+    // (Documentation/Development.md, platform notes).
     writer->SetDataModeToBinary();
     writer->SetCompressorTypeToZLib();
     watch(writer);
@@ -478,6 +495,13 @@ private:
                          (b[5] - b[4]) * (b[5] - b[4]));
     MeshVertices = mesh->GetNumberOfPoints();
     MeshTriangles = mesh->GetNumberOfPolys();
+    auto* made = vtkStringArray::SafeDownCast(mesh->GetFieldData()->GetAbstractArray("Template"));
+    TemplateMade = made && made->GetNumberOfValues() > 0 ? made->GetValue(0) : std::string();
+    if (!TemplateMade.empty() && !S.quiet)
+    {
+      Bar.clear();
+      std::printf("Template: %s\n", TemplateMade.c_str());
+    }
   }
 
   // Writes frame f (beside its name, renamed when complete) and lists it in the .pvd; false,
@@ -699,10 +723,10 @@ private:
     report["frames"] = Frames;
     report["framesTracked"] = Written.size();
     report["interrupted"] = Interrupted != 0;
-    report["template"] = {
-        {"source", S.templateFile.empty() ? "reconstructed from frame 0" : S.templateFile},
-        {"vertices", MeshVertices},
-        {"triangles", MeshTriangles}};
+    report["template"] = {{"source", S.templateFile.empty() ? "frame 0" : S.templateFile},
+                          {"made", TemplateMade},
+                          {"vertices", MeshVertices},
+                          {"triangles", MeshTriangles}};
     report["boundingBoxDiagonal"] = Diagonal;
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
     std::vector<double> ms;
@@ -824,6 +848,7 @@ private:
   std::vector<FrameRecord> Records;
   double Diagonal = 0;
   long long MeshVertices = 0, MeshTriangles = 0;
+  std::string TemplateMade; // what the template was made from, and how
   nlohmann::json Compression;
 };
 

@@ -1,8 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkDeformableTrackFilter.h"
 
-#include "dp/field/SurfaceReconstruction.h"
-#include "dp/geometry/NormalEstimation.h"
+#include "dp/field/TemplateMesh.h"
 #include "dp/track/Tracker.h"
 #include "vtkDPPointSetAccess.h"
 
@@ -21,6 +20,7 @@
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <tbb/global_control.h>
@@ -37,6 +37,19 @@ vtkStandardNewMacro(vtkDeformableTrackFilter);
 
 // A frame's data under preparation (dp::Tracker::prepare, on another thread beside the frame
 // before).
+namespace
+{
+// What every frame's output shows beside the frame's own result.
+struct TakeContext
+{
+  vtkCellArray* polys;             // the template's triangles
+  const std::vector<double>* rest; // the template's positions
+  double reach;                    // how far from the mesh a point still counts (DataReach)
+  const std::string* templateMade; // how the template was made (field data "Template")
+};
+
+} // namespace
+
 struct vtkDeformableTrackFilter::PendingFrame
 {
   std::future<dp::PreparedFrame> data;
@@ -47,12 +60,19 @@ struct vtkDeformableTrackFilter::Internals
   std::unique_ptr<dp::Tracker> Tracker; // made at the first frame
   vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
   std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
+  std::string TemplateSummary;          // how the template was made (field data "Template")
   std::size_t ProgressFrames = 0;       // what the request under way counts its frames out of
   // The pipeline: frame Cache.size()'s data, when its input has been read (with more than one
   // thread, prepared while the frame before was tracked); and the input frame the request under
   // way reads (-1: none).
   PendingFrame Next;
   long long Reading = -1;
+
+  TakeContext context() const
+  {
+    return {Polys, &Tracker->templatePositions(),
+            Tracker->options().recovery.reach * Tracker->voxelSize(), &TemplateSummary};
+  }
 
   void clear()
   {
@@ -89,7 +109,8 @@ struct vtkDeformableTrackFilter::Internals
     f.ProvisionalDetermination = o.provisionalDetermination;
     f.MaximumIterations = o.maxIterations;
     f.Tolerance = o.tolerance;
-    f.TemplateVertices = static_cast<int>(dp::ReconstructionOptions().targetVertices);
+    f.TemplateVertices = static_cast<int>(dp::TemplateOptions().targetVertices);
+    f.TemplateSource = TEMPLATE_AUTO;
     f.CoverageWeight = o.coverage.weight;
     f.CoarseLevel = o.graph.enabled;
     f.GraphNodes = static_cast<int>(o.graph.nodes);
@@ -193,9 +214,11 @@ long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 
 namespace
 {
-void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult& r,
-                const std::vector<double>& rest, std::size_t frame, double reach)
+void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
+                std::size_t frame)
 {
+  vtkCellArray* polys = take.polys;
+  const std::vector<double>& rest = *take.rest;
   const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
   vtkNew<vtkDoubleArray> coordinates;
   coordinates->SetNumberOfComponents(3);
@@ -281,7 +304,11 @@ void fillOutput(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult&
   samples->SetNumberOfTuples(static_cast<vtkIdType>(r.samples.size()));
   std::copy(r.samples.points.begin(), r.samples.points.end(), samples->GetPointer(0));
   output->GetFieldData()->AddArray(samples);
-  addValue("DataReach", reach);
+  addValue("DataReach", take.reach);
+  vtkNew<vtkStringArray> made;
+  made->SetName("Template");
+  made->InsertNextValue(*take.templateMade);
+  output->GetFieldData()->AddArray(made);
 }
 } // namespace
 
@@ -289,40 +316,47 @@ bool vtkDeformableTrackFilter::TemplateOf(vtkInformationVector** inputVector, vt
                                           std::vector<std::int64_t>& triangles,
                                           std::vector<double>& positions)
 {
-  // Input 1; else frame 0's own polygons; else a surface reconstructed from frame 0's points.
-  vtkPolyData* mesh = vtkPolyData::GetData(inputVector[1], 0);
-  const bool fromInput = mesh != nullptr;
-  if (!mesh)
-    mesh = vtkPolyData::SafeDownCast(frame0);
-  if (fromInput || (mesh && mesh->GetNumberOfPolys() > 0))
+  // Input 1 (repaired, never remeshed); else frame 0: its polygons (repaired and remeshed to
+  // TemplateVertices) or its points (a surface reconstructed from them), as TemplateSource says.
+  vtkPolyData* given = vtkPolyData::GetData(inputVector[1], 0);
+  vtkPointSet* source = given ? given : frame0;
+  const std::string what = given ? "the template mesh (input 1)" : "frame 0's mesh";
+  std::vector<std::int64_t> polygons;
+  std::vector<double> corners;
+  vtkPolyData* mesh = vtkPolyData::SafeDownCast(source);
+  const char* why = "";
+  if (mesh && mesh->GetNumberOfPolys() > 0 && !vtkDP::triangleMesh(mesh, polygons, corners, why))
   {
-    const char* why = "";
-    if (vtkDP::triangleMesh(mesh, triangles, positions, why))
-      return true;
-    vtkErrorMacro(<< (fromInput ? "the template (input 1) cannot be used: "
-                                : "frame 0's polygons cannot be used as the template: ")
-                  << why);
+    vtkErrorMacro(<< what << " cannot be used: " << why);
     return false;
   }
-  const vtkDP::TargetPoints first = vtkDP::finitePoints(frame0);
+  dp::TemplateOptions options;
+  options.targetVertices = static_cast<std::size_t>(this->TemplateVertices);
+  options.remesh = !given;
+  options.source = given                                          ? dp::TemplateSource::Mesh
+                   : this->TemplateSource == TEMPLATE_FROM_POINTS ? dp::TemplateSource::Points
+                   : this->TemplateSource == TEMPLATE_FROM_MESH   ? dp::TemplateSource::Mesh
+                                                                  : dp::TemplateSource::Auto;
+  const vtkDP::TargetPoints points = vtkDP::finitePoints(source);
+  const bool fromMesh = options.source == dp::TemplateSource::Mesh ||
+                        (options.source == dp::TemplateSource::Auto && !polygons.empty());
   try
   {
-    const std::vector<float> normals = first.normals.empty()
-                                           ? dp::estimateNormals(first.xyz.data(), first.ids.size())
-                                           : first.normals;
-    dp::ReconstructionOptions reconstruction;
-    reconstruction.targetVertices = static_cast<std::size_t>(this->TemplateVertices);
-    dp::ReconstructedMesh surface =
-        dp::reconstructSurface(first.xyz.data(), normals.data(), first.ids.size(), reconstruction);
-    triangles = std::move(surface.triangles);
-    positions = std::move(surface.positions);
+    dp::TemplateMesh t =
+        fromMesh
+            ? dp::makeTemplate(corners.data(), corners.size() / 3, nullptr, polygons, options, what)
+            : dp::makeTemplate(points.xyz.data(), points.ids.size(),
+                               points.normals.empty() ? nullptr : points.normals.data(), {},
+                               options, "frame 0's points");
+    triangles = std::move(t.triangles);
+    positions = std::move(t.positions);
+    this->Internal->TemplateSummary = t.report.summary();
     return true;
   }
   catch (const std::exception& e)
   {
-    vtkErrorMacro(<< "no template: connect a template mesh to input 1, or give frame 0 "
-                     "polygons; a surface could not be reconstructed from frame 0's "
-                  << first.ids.size() << " points: " << e.what());
+    vtkErrorMacro(<< "no template: " << e.what()
+                  << (given ? "" : "; connect a template mesh to input 1, or set TemplateSource"));
     return false;
   }
 }
@@ -511,9 +545,7 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
       ContinueExecuting(request, !this->GetAbortExecute());
       output->Initialize();
       if (!in.Cache.empty())
-        fillOutput(output, in.Polys, in.Cache.back(), in.Tracker->templatePositions(),
-                   in.Cache.size() - 1,
-                   in.Tracker->options().recovery.reach * in.Tracker->voxelSize());
+        fillOutput(output, in.context(), in.Cache.back(), in.Cache.size() - 1);
       return 1;
     }
     this->ShowProgressOf(frame, true);
@@ -529,8 +561,7 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
 
   const std::size_t shown = std::min(target, in.Cache.size() - 1);
   output->Initialize();
-  fillOutput(output, in.Polys, in.Cache[shown], in.Tracker->templatePositions(), shown,
-             in.Tracker->options().recovery.reach * in.Tracker->voxelSize());
+  fillOutput(output, in.context(), in.Cache[shown], shown);
   // Stopped short of the request (aborted): the output says which frame it is. The executive
   // does not run a request for the same time twice; a request for another time goes on from
   // the frames kept (a change of properties starts the take over).
@@ -587,6 +618,7 @@ void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
   os << indent << "Tolerance: " << this->Tolerance << "\n";
   os << indent << "TemplateVertices: " << this->TemplateVertices << "\n";
+  os << indent << "TemplateSource: " << this->TemplateSource << "\n";
   os << indent << "CoverageWeight: " << this->CoverageWeight << "\n";
   os << indent << "CoarseLevel: " << this->CoarseLevel << "\n";
   os << indent << "GraphNodes: " << this->GraphNodes << "\n";

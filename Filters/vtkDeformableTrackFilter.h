@@ -10,19 +10,22 @@
  * Shiraishi, "Unification of Dynamic Point Data" (see dp::Tracker for the equations and the
  * solvers). No skeleton, no correspondences.
  *
- * The template is input 1 when connected (a vtkPolyData with polygons), else frame 0's own
- * polygons, else a surface reconstructed from frame 0's points (dp::reconstructSurface: signed
- * distance to the points' tangent planes on a fine OpenVDB grid, holes in the data bridged,
- * remeshed isotropically to TemplateVertices vertices; frame 0's "Normals" are used when
- * present, else estimated). The output has the template's connectivity; its points follow the
- * requested time. Beyond the paper (see dp::Tracker): a points -> mesh term (CoverageWeight), a
- * coarse level (an embedded deformation graph, CoarseLevel) and failure detection with retries
- * (Recovery), and where the points carry colour a colour term (ColourWeight). Point arrays:
- * "Displacement" (from the template), "Residual" (distance to the frame's points, -1 without
- * data), "Frozen" (provisional determination), "Rejected" (normal test or outlier cut-off), and
- * "Colors" (the frame's colour at each vertex, the active scalars) where the points carry colour.
- * Field data: "FrameIndex", "Points" (the frame's), "Iterations", "CoarseIterations",
- * "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall time) and where its work went
+ * The template (dp::makeTemplate) is input 1 when connected (a vtkPolyData with polygons,
+ * repaired, never remeshed), else frame 0's own mesh (repaired and remeshed to TemplateVertices
+ * vertices: a capture's per-frame mesh), else a surface reconstructed from frame 0's points
+ * (dp::reconstructSurface: signed distance to the points' tangent planes on a fine OpenVDB grid,
+ * holes in the data bridged, remeshed isotropically to TemplateVertices vertices; frame 0's
+ * "Normals" are used when present, else estimated); TemplateSource chooses between frame 0's mesh
+ * and its points. What was done is in the output's field data "Template". The output has the
+ * template's connectivity; its points follow the requested time. Beyond the paper (see
+ * dp::Tracker): a points -> mesh term (CoverageWeight), a coarse level (an embedded deformation
+ * graph, CoarseLevel) and failure detection with retries (Recovery), and where the points carry
+ * colour a colour term (ColourWeight). Point arrays: "Displacement" (from the template), "Residual"
+ * (distance to the frame's points, -1 without data), "Frozen" (provisional determination),
+ * "Rejected" (normal test or outlier cut-off), and "Colors" (the frame's colour at each vertex, the
+ * active scalars) where the points carry colour. Field data: "FrameIndex", "Points" (the frame's),
+ * "Iterations", "CoarseIterations", "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall
+ * time) and where its work went
  * ("DataSeconds": field, normals, subsample, of which "OverlappedSeconds" ran beside the frame
  * before; "PredictionSeconds": the start; "CoarseSeconds", "FineSeconds", "QualitySeconds" of the
  * kept attempt; "RetrySeconds": the other attempts; the stages add up to Seconds +
@@ -124,7 +127,7 @@ public:
   /** Factor on the stretch stiffness of the template's thick parts (a trunk, away from its
    *  limbs; dp::ThicknessSoftening): default 0.3, so that a body's skin stretches and slides
    *  over the torso as it bends; 1 is one stiffness everywhere, better for slow non-rigid
-   *  motion far from isometric (a collapse; README, Tracking). */
+   *  motion far from isometric (a collapse; Documentation/Tracking.md). */
   vtkSetClampMacro(ThickPartStretch, double, 0.0, 1.0);
   vtkGetMacro(ThickPartStretch, double);
   ///@}
@@ -250,9 +253,21 @@ public:
   vtkGetMacro(FailureMargin, double);
   ///@}
 
+  enum TemplateSourceType
+  {
+    TEMPLATE_AUTO = 0,       // frame 0's polygons when it has some, else its points
+    TEMPLATE_FROM_MESH = 1,  // frame 0's polygons (an error without them)
+    TEMPLATE_FROM_POINTS = 2 // a surface reconstructed from frame 0's points
+  };
   ///@{
-  /** Vertex count wanted for a template reconstructed from frame 0's points (used only without
-   *  input 1 and when frame 0 has no polygons; approximate; default 1000). */
+  /** What the template is made from without input 1 (default TEMPLATE_AUTO): frame 0's mesh
+   *  (a capture's per-frame mesh), repaired (duplicate vertices merged, triangles without area,
+   *  repeated triangles and small stray parts removed) and remeshed to about TemplateVertices
+   *  vertices when it has more; or a surface reconstructed from frame 0's points with about
+   *  TemplateVertices vertices (default 1000). A mesh on input 1 is repaired, never remeshed.
+   *  What was done is in the output's field data "Template". */
+  vtkSetClampMacro(TemplateSource, int, TEMPLATE_AUTO, TEMPLATE_FROM_POINTS);
+  vtkGetMacro(TemplateSource, int);
   vtkSetClampMacro(TemplateVertices, int, 20, 10000000);
   vtkGetMacro(TemplateVertices, int);
   ///@}
@@ -298,6 +313,7 @@ protected:
   int MaximumIterations;
   double Tolerance;
   int TemplateVertices;
+  int TemplateSource;
   double CoverageWeight;
   vtkTypeBool CoarseLevel;
   int GraphNodes;

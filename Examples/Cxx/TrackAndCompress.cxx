@@ -60,7 +60,8 @@ int main(int argc, char** argv)
 
   vtkNew<vtkXMLPolyDataWriter> writer;
   writer->SetInputConnection(compressor->GetOutputPort());
-  writer->SetDataModeToBinary(); // inline data reads everywhere (see the README's platform notes)
+  writer->SetDataModeToBinary(); // inline data reads everywhere (see Documentation/Development.md,
+                                 // platform notes)
   std::ofstream pvd(output / "sequence.pvd");
   pvd << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
   std::printf("%6s %10s %14s %16s\n", "frame", "vertices", "rms distance", "max compr. error");

@@ -17,8 +17,8 @@
  *
  * Shear is off by default (k_sh = 0): a triangulated surface whose edge lengths are held keeps
  * its in-plane shape, and the angle terms measurably pull tracked shapes away from the truth
- * (BenchmarkTracker, README). A template with slivers (nearly flat triangles) needs them: with
- * edges alone a sliver's apex slides across its base at almost no cost.
+ * (BenchmarkTracker, Documentation/Tracking.md). A template with slivers (nearly flat triangles)
+ * needs them: with edges alone a sliver's apex slides across its base at almost no cost.
  *
  * Limits: the template must have no (nearly) degenerate triangle (area under 1e-12 of the mean:
  * refused with its index); degenerate triangles in the *current* shape give zero shear/bend

@@ -279,7 +279,8 @@ void GraphRegistration::reweightEdges(const DeformationGraph::State& state, doub
   // regulariser prefers a few edges bending much (joints) to many bending a little: the graph
   // moves as near-rigid pieces. A redescending weight (Geman-McClure) frees the joints entirely
   // and lets symmetric parts (a limb about its axis) drift; least squares spreads bending
-  // everywhere and pulls tracked shapes away from the truth (BenchmarkTracker, README).
+  // everywhere and pulls tracked shapes away from the truth (BenchmarkTracker,
+  // Documentation/Tracking.md).
   const auto& edges = Graph.edges();
   EdgeWeight.assign(2 * edges.size(), 1.0);
   if (!(robustScale > 0))
