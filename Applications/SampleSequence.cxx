@@ -2,6 +2,7 @@
 // dynamicpoints-sample: make a synthetic point sequence from an animated mesh, the way the
 // paper made its CG experiments (random surface samples per frame, noise, holes).
 #include "CommandLine.h"
+#include "PerFrameMesh.h"
 
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/SurfaceSampler.h"
@@ -40,6 +41,13 @@ Sampling:
                         colour for the same material point in every frame: red, green and
                         blue waves over the first frame's shape)
 
+Per-frame meshes (as volumetric-video studios publish them):
+  --per-frame-mesh N    write each frame as a mesh of about N vertices reconstructed from
+                        its samples: its own connectivity every frame, the samples' colours
+                        carried to the nearest vertex
+  --mesh-defects        give frame 0's mesh what marching cubes and exporters leave:
+                        duplicate vertices, triangles without area, a small stray part
+
 Output:
   --format EXT          ply (binary, default), pcd, xyz, csv or obj
   --interval T          time between frames in points.series (default 1)
@@ -55,6 +63,8 @@ struct Request
   dp::SamplerOptions sampling;
   dp::SequenceWriteOptions writing;
   double noise = 0, holeRadius = 0.05;
+  std::size_t meshVertices = 0; // --per-frame-mesh; 0: points
+  bool defects = false;
   bool help = false;
 };
 
@@ -91,6 +101,10 @@ Request parseArguments(int argc, char** argv)
       r.sampling.holesMove = true;
     else if (arg == "--colour")
       r.sampling.colours = true;
+    else if (arg == "--per-frame-mesh")
+      r.meshVertices = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
+    else if (arg == "--mesh-defects")
+      r.defects = true;
     else if (arg == "--no-normals")
       r.sampling.normals = false;
     else if (arg == "--format")
@@ -147,6 +161,11 @@ int run(int argc, char** argv)
   const double diagonal = dp::boundingBoxDiagonal(animation->positions(0));
   r.sampling.noiseStdDev = r.noise * diagonal;
   r.sampling.holeRadius = r.holeRadius * diagonal;
+  if (r.defects && r.meshVertices == 0)
+    throw dp::cli::UsageError("--mesh-defects needs --per-frame-mesh");
+  if (r.meshVertices > 0)
+    r.writing.transform = [&r](dp::PointCloud samples, std::size_t frame)
+    { return dp::cli::perFrameMesh(samples, r.meshVertices, r.defects && frame == 0); };
   const std::string series = dp::writeSampledSequence(*animation, r.sampling, r.output, r.writing);
   std::cout << "wrote " << animation->numberOfFrames() << " frames of " << r.sampling.pointsPerFrame
             << " samples (" << animation->numberOfVertices() << "-vertex mesh, diagonal "

@@ -361,6 +361,39 @@ class TestMotionTarget(TempDirTestCase):
         self.assertIn("weak", report)
 
 
+class TestPerFrameMeshes(TempDirTestCase):
+    """A capture as studios publish it: a mesh per frame, each of its own connectivity, frame
+    0's with the defects marching cubes and exporters leave; tracked with no option."""
+
+    def test_frame_zeros_mesh_is_repaired_remeshed_and_said(self):
+        frames = self.path("frames")
+        run_tool("dynamicpoints-sample", "--frames", 6, "--per-frame-mesh", 3000,
+                 "--mesh-defects", "--colour", frames)
+        out = self.path("out")
+        result = run_tool("dynamicpoints", "--output", out, "--quiet", frames)
+        self.assertEqual(result.returncode, 0, result.stdout + result.stderr)
+        said = [line for line in result.stdout.splitlines() if line.startswith("Template: ")]
+        self.assertEqual(len(said), 0)  # --quiet: the report has it
+        report = json.loads(open(os.path.join(out, "report.json")).read())
+        made = report["template"]["made"]
+        for repair in ("5 duplicate vertices merged", "3 triangles without area removed",
+                       "4 triangles of small stray parts removed", "remeshed from "):
+            self.assertIn(repair, made)
+        self.assertEqual(report["framesTracked"], 6)
+        self.assertLess(abs(report["template"]["vertices"] - 1000), 100)
+        # Said on the terminal without --quiet.
+        loud = run_tool("dynamicpoints", "--output", self.path("loud"), "--frames", 2, frames)
+        self.assertIn("Template: frame 0's mesh: 5 duplicate vertices merged", loud.stdout)
+        # The points' colour reaches the tracked mesh.
+        first = read_vtp(pvd_files(os.path.join(out, "tracked.pvd"))[0][1])
+        colours = first.GetPointData().GetScalars()
+        self.assertEqual(colours.GetName(), "Colors")
+        # --template-from points: a surface from frame 0's points instead.
+        points = run_tool("dynamicpoints", "--output", self.path("points"), "--frames", 2,
+                          "--template-from", "points", frames)
+        self.assertIn("Template: frame 0's points: a surface of", points.stdout)
+
+
 class TestBadInput(TempDirTestCase):
     def run_main(self, *args):
         result = run_tool("dynamicpoints", "--output", self.path("out"), "--quiet", *args,
@@ -439,6 +472,7 @@ class TestBadInput(TempDirTestCase):
                               (["--frames", "x"], "is not a whole number"),
                               (["--error-target", "-1"], "is outside"),
                               (["--fit-growth", "0"], "is outside"),
+                              (["--template-from", "cloud"], "wants auto, mesh or points"),
                               (["--fit-growth", "nan"], "is not a number"),
                               (["--error-target", "nan"], "is not a number")):
             result = run_tool("dynamicpoints", *args, check=False)

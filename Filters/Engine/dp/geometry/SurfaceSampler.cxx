@@ -311,8 +311,10 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
     const std::vector<double> positions = mesh.positions(f);
     SamplerOptions options = sampling;
     options.colourRest = &rest;
-    writePointCloud((fs::path(outDir) / name).string(),
-                    sampleSurface(positions, mesh.triangles(), options, f));
+    PointCloud samples = sampleSurface(positions, mesh.triangles(), options, f);
+    if (writing.transform)
+      samples = writing.transform(std::move(samples), f);
+    writePointCloud((fs::path(outDir) / name).string(), samples);
     if (writing.writeGroundTruth)
     {
       PointCloud truth = mesh.frameMesh(f);

@@ -22,6 +22,7 @@
 #include "dp/io/PointCloud.h"
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -69,6 +70,9 @@ struct SequenceWriteOptions
   std::string extension = "ply"; // any format the product writes: ply pcd xyz csv obj
   double frameInterval = 1.0;    // times written into the .series file
   bool writeGroundTruth = false; // also truth/<prefix>NNNN.ply: the mesh of each frame
+  // Applied to each frame's samples before they are written (frame index given), e.g. to turn
+  // them into a mesh; empty: the samples as they are.
+  std::function<PointCloud(PointCloud, std::size_t)> transform;
 };
 
 /**
