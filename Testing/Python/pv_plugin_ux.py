@@ -82,7 +82,7 @@ def check_panel(ns):
     assert "TemplateVertices" in shown and "Recovery" in shown, shown
     # The optional template is chosen in the panel (a list of the pipeline's sources and
     # "(none)"), not only through Edit > Change Input.
-    assert groups["Template"] == ["Template", "TemplateVertices"], groups
+    assert groups["Template"] == ["Template", "TemplateVertices", "TemplateSource"], groups
     assert track.GetProperty("Template").SMProperty.GetPanelWidget() == "input_selector"
     for name in ("ProvisionalDetermination", "Tolerance", "VoxelSize", "FailureMargin"):
         assert name not in shown, name

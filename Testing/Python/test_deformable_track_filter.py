@@ -311,13 +311,13 @@ class TestDeformableTrackFilter(TempDirTestCase):
         rec = MessageRecorder(f)
         f.Update()
         self.assertIn("no template", rec.error_text)
-        self.assertIn("could not be reconstructed from frame 0's 5 points", rec.error_text)
+        self.assertIn("could not be reconstructed from frame 0's points (5)", rec.error_text)
         g = self.tracker()
         g.SetTemplateConnection(None)
         g.SetInputData(1, vtkPolyData())
         rec = MessageRecorder(g)
         g.UpdateTimeStep(0)
-        self.assertIn("template (input 1) cannot be used: it has no polygons", rec.error_text)
+        self.assertIn("the template mesh (input 1) has no triangles", rec.error_text)
 
 
 if __name__ == "__main__":

@@ -203,15 +203,28 @@ TemplateMesh fromMesh(const double* points, std::size_t count,
   return m;
 }
 
-TemplateMesh fromPoints(const double* points, std::size_t count, const float* normals,
-                        const TemplateOptions& options)
+ReconstructedMesh reconstruct(const double* points, std::size_t count, const float* normals,
+                              const TemplateOptions& options, const std::string& what)
 {
   ReconstructionOptions reconstruction = options.reconstruction;
   reconstruction.targetVertices = options.targetVertices;
-  const std::vector<float> estimated =
-      normals ? std::vector<float>{} : estimateNormals(points, count);
-  ReconstructedMesh surface =
-      reconstructSurface(points, normals ? normals : estimated.data(), count, reconstruction);
+  try
+  {
+    const std::vector<float> estimated =
+        normals ? std::vector<float>{} : estimateNormals(points, count);
+    return reconstructSurface(points, normals ? normals : estimated.data(), count, reconstruction);
+  }
+  catch (const std::exception& e)
+  {
+    throw std::invalid_argument("a surface could not be reconstructed from " + what + " (" +
+                                std::to_string(count) + "): " + e.what());
+  }
+}
+
+TemplateMesh fromPoints(const double* points, std::size_t count, const float* normals,
+                        const TemplateOptions& options, const std::string& what)
+{
+  ReconstructedMesh surface = reconstruct(points, count, normals, options, what);
   TemplateMesh m;
   m.positions = std::move(surface.positions);
   m.triangles = std::move(surface.triangles);
@@ -264,7 +277,7 @@ TemplateMesh makeTemplate(const double* points, std::size_t count, const float* 
   if (mesh && triangles.empty())
     throw std::invalid_argument(what + " has no triangles (track from the points instead)");
   TemplateMesh m = mesh ? fromMesh(points, count, triangles, options, what)
-                        : fromPoints(points, count, normals, options);
+                        : fromPoints(points, count, normals, options, what);
   m.report.vertices = m.positions.size() / 3;
   m.report.triangles = m.triangles.size() / 3;
   return m;
