@@ -245,7 +245,8 @@ public:
    *  the mesh (beyond 3 voxels) exceeds the take's usual share by more than FailureMargin
    *  (default 0.003), or whose mesh tore, is tried again from the last frame and from the
    *  template re-registered; the best attempt is kept, and flagged in "Failed" if it still
-   *  fails. Mesh without data (holes in the data) fails nothing. */
+   *  fails. Mesh the solve took off its data fails too; mesh without data over a hole in the
+   *  data fails nothing. */
   vtkSetMacro(Recovery, vtkTypeBool);
   vtkGetMacro(Recovery, vtkTypeBool);
   vtkBooleanMacro(Recovery, vtkTypeBool);

@@ -568,6 +568,57 @@ TEST(FrameQuality, ATearIsTheLargestStiffEdgeGrowthInMeanEdgeLengths)
               1e-12);
 }
 
+TEST(FrameQuality, MeshTakenOffItsDataDepartsMeshOverAHoleDoesNot)
+{
+  const Shape shape = tube(20, 12);
+  const std::size_t nv = shape.positions.size() / 3;
+  const dp::TriangleMesh mesh(shape.triangles, nv);
+  const std::vector<double> mass(nv, 1.0 / static_cast<double>(nv));
+  dp::SamplerOptions o;
+  o.pointsPerFrame = 6000;
+  const dp::PointCloud c = dp::sampleSurface(shape.positions, shape.triangles, o, 0);
+  dp::FrameDataOptions fo;
+  fo.voxelSize = dp::boundingBoxDiagonal(shape.positions) / 60;
+  const double reach = 3 * fo.voxelSize;
+  // The top of the tube (its highest tenth) is where a hole is, or what is pulled off.
+  double top = -1e300, bottom = 1e300;
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    top = std::max(top, shape.positions[3 * v + 2]);
+    bottom = std::min(bottom, shape.positions[3 * v + 2]);
+  }
+  const double cut = top - 0.1 * (top - bottom);
+  double topMass = 0;
+  std::vector<double> pulled = shape.positions;
+  for (std::size_t v = 0; v < nv; ++v)
+    if (shape.positions[3 * v + 2] > cut)
+    {
+      pulled[3 * v] += 10 * reach;
+      topMass += mass[v];
+    }
+  ASSERT_GT(topMass, 0.05);
+  const dp::FrameData all(c.points.data(), c.numberOfPoints(), c.normals.data(), fo);
+  dp::FrameQuality q =
+      dp::assessFrame(all, mesh, pulled.data(), mass, reach, shape.positions.data());
+  EXPECT_NEAR(q.departed, topMass, 1e-12);
+  EXPECT_NEAR(q.unsupported, topMass, 1e-12);
+  // Without a start nothing departs.
+  EXPECT_EQ(dp::assessFrame(all, mesh, pulled.data(), mass, reach).departed, 0.0);
+  // A hole in the data over the top: the mesh there lacks data where it started too.
+  std::vector<double> kept;
+  std::vector<float> keptNormals;
+  for (std::size_t i = 0; i < c.numberOfPoints(); ++i)
+    if (c.points[3 * i + 2] < cut - 2 * reach)
+    {
+      kept.insert(kept.end(), &c.points[3 * i], &c.points[3 * i] + 3);
+      keptNormals.insert(keptNormals.end(), &c.normals[3 * i], &c.normals[3 * i] + 3);
+    }
+  const dp::FrameData holed(kept.data(), kept.size() / 3, keptNormals.data(), fo);
+  q = dp::assessFrame(holed, mesh, shape.positions.data(), mass, reach, shape.positions.data());
+  EXPECT_GT(q.unsupported, 0.5 * topMass);
+  EXPECT_EQ(q.departed, 0.0);
+}
+
 TEST(DeformationGraph, MovesRigidlyFitsRigidMotionsAndContinuesThem)
 {
   const Shape s = tube(16, 12);

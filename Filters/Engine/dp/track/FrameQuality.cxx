@@ -11,7 +11,7 @@ namespace dp
 {
 
 FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
-                         const std::vector<double>& mass, double reach)
+                         const std::vector<double>& mass, double reach, const double* start)
 {
   FrameQuality q;
   if (frame.empty())
@@ -27,16 +27,30 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
   q.unexplained =
       spread.empty() ? 0.0 : static_cast<double>(count) / static_cast<double>(spread.size());
   const std::size_t nv = mesh.numberOfVertices();
-  std::vector<double> lonely(nv, 0.0);
+  std::vector<double> lonely(nv, 0.0), left(nv, 0.0);
+  const auto distance2 = [&](const double* p)
+  {
+    double d2 = 0;
+    frame.nearest(p, &d2);
+    return d2;
+  };
   forEachIndex(nv,
                [&](std::size_t v)
                {
-                 double d2 = 0;
-                 frame.nearest(x + 3 * v, &d2);
-                 lonely[v] = d2 > reach * reach ? mass[v] : 0.0;
+                 const double d2 = distance2(x + 3 * v);
+                 if (!(d2 > reach * reach))
+                   return;
+                 lonely[v] = mass[v];
+                 // Departed: on its data where the solve started (within half the reach: a
+                 // vertex over a hole's rim, near reach either way, does not count).
+                 if (start && distance2(start + 3 * v) <= 0.25 * reach * reach)
+                   left[v] = mass[v];
                });
-  for (double m : lonely)
-    q.unsupported += m;
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    q.unsupported += lonely[v];
+    q.departed += left[v];
+  }
   return q;
 }
 

@@ -10,6 +10,9 @@
  *                mesh -> points energy stays low);
  *   unsupported  the share of the mesh (by vertex area) farther than `reach` from any point:
  *                mesh where there are no data (holes in the data, or a part in the wrong place);
+ *   departed     the part of it the solve took off its data: within half `reach` of a point
+ *                where the solve started. A hole is no departure: there the start lies over the
+ *                same missing data;
  *   tear         the most a stiff edge grew beyond its template length, in mean template edge
  *                lengths (largestEdgeGrowth): a limb caught by another limb's data as it passes
  *                is stretched between them in a strip that covers almost nothing, which neither
@@ -32,13 +35,16 @@ struct FrameQuality
 {
   double unexplained = 0;
   double unsupported = 0;
+  double departed = 0;
   double tear = 0;
 };
 
-/** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1.
- *  The tear needs the rest shape and the stiffnesses: left 0 here (largestEdgeGrowth). */
+/** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1;
+ *  `start` (3 per vertex; null: nothing departs) where the solve started. The tear needs the
+ *  rest shape and the stiffnesses: left 0 here (largestEdgeGrowth). */
 FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
-                         const std::vector<double>& mass, double reach);
+                         const std::vector<double>& mass, double reach,
+                         const double* start = nullptr);
 
 /** The most any edge of `x` grew beyond its length in `rest`, in mean `rest` edge lengths, each
  *  edge's growth weighed by its stretch stiffness's scale (`scales` per edge, at most 1; empty:

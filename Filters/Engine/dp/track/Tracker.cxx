@@ -390,31 +390,50 @@ void Tracker::orientData(FrameData& frame) const
   frame.mendOrientation(sure);
 }
 
+namespace
+{
+// Against the take's usual quality: the median of the last frames kept.
+double usual(const std::vector<FrameQuality>& recent, double FrameQuality::*share)
+{
+  std::vector<double> shares;
+  for (const FrameQuality& q : recent)
+    shares.push_back(q.*share);
+  if (shares.empty())
+    return 0.0;
+  std::nth_element(shares.begin(), shares.begin() + static_cast<std::ptrdiff_t>(shares.size() / 2),
+                   shares.end());
+  return shares[shares.size() / 2];
+}
+} // namespace
+
+bool Tracker::beyondUsual(const Attempt& a, double FrameQuality::*share) const
+{
+  return a.quality.*share > usual(P->RecentQuality, share) + Options.recovery.margin;
+}
+
 bool Tracker::failed(const Attempt& a) const
 {
-  // Against the take's usual quality: the median of the last frames kept.
-  auto usual = [](std::vector<double> shares)
-  {
-    if (shares.empty())
-      return 0.0;
-    std::nth_element(shares.begin(),
-                     shares.begin() + static_cast<std::ptrdiff_t>(shares.size() / 2), shares.end());
-    return shares[shares.size() / 2];
-  };
   // The first frame sets what is usual: with nothing to compare it to, sparse data or parts the
   // template lacks are not a failure.
   if (P->RecentQuality.empty())
     return false;
-  std::vector<double> unexplained;
-  for (const FrameQuality& q : P->RecentQuality)
-    unexplained.push_back(q.unexplained);
-  // Data the mesh does not explain: a lost limb's, or a limb put on other data. Mesh without data
-  // alone is no failure: a hole in the data looks just the same (a scanner's, moving from frame
-  // to frame), and a part that lost its data leaves that data unexplained. A limb caught by
-  // another's data tears a strip that covers almost nothing: neither share sees it, the edges'
-  // growth does.
-  return a.quality.unexplained > usual(unexplained) + Options.recovery.margin ||
+  // Data the mesh does not explain (a lost limb's, or a limb put on other data), or mesh the solve
+  // took away from its data (a leg pulled off its data while another leg's mesh covers it). Mesh
+  // without data is no failure by itself: a hole in the data looks just the same (a scanner's,
+  // moving from frame to frame), but there the solve started over the same missing data. A limb
+  // caught by another's data tears a strip that covers almost nothing: none of these sees it, the
+  // edges' growth does.
+  return beyondUsual(a, &FrameQuality::unexplained) || beyondUsual(a, &FrameQuality::departed) ||
          (Options.recovery.stiffRetry && a.torn());
+}
+
+bool Tracker::doubtful(const Attempt& a) const
+{
+  // More mesh without data than usual, part of which the solve took off its data (a limb left
+  // behind, its data then explained by a neighbour's mesh): worth other starts, though not a
+  // failure when none does better. Over a hole alone nothing departs: the start lay over it too.
+  return failed(a) || (!P->RecentQuality.empty() && beyondUsual(a, &FrameQuality::unsupported) &&
+                       a.quality.departed > 0.1 * Options.recovery.margin);
 }
 
 void Tracker::startState(Start start, Attempt& a) const
@@ -518,8 +537,8 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   a.timings.fine = elapsed(clock) + (capped ? capped->timings.fine : 0.0);
 
   clock = std::chrono::steady_clock::now();
-  a.quality =
-      assessFrame(frame, Mesh, x.data(), Cloth.vertexMass(), Options.recovery.reach * Voxel);
+  a.quality = assessFrame(frame, Mesh, x.data(), Cloth.vertexMass(), Options.recovery.reach * Voxel,
+                          a.startPositions.empty() ? nullptr : a.startPositions.data());
   a.quality.tear = largestEdgeGrowth(Mesh, Template, x, Cloth.stretchScales());
   a.timings.quality = elapsed(clock);
   a.positions = std::move(x);
@@ -662,14 +681,14 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   // fails: there the graph may have missed, and the fine level solved on to convergence mends
   // what it can before other starts are tried.
   Attempt best = attempt(frame, Start::Predicted);
-  if (Options.recovery.enabled && failed(best) && capsFineLevel())
+  if (Options.recovery.enabled && doubtful(best) && capsFineLevel())
   {
     Attempt converged = attempt(frame, Start::Predicted, &best);
     if (converged.score() < best.score())
       best = std::move(converged);
   }
   int kept = 0;
-  if (Options.recovery.enabled && failed(best) && !P->Predictor.empty())
+  if (Options.recovery.enabled && doubtful(best) && !P->Predictor.empty())
   {
     // Held stiffer only where a limb tore: elsewhere (a collapse, a body whose skin stretches)
     // a stiffer coarse level fits the data worse.
@@ -694,7 +713,7 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
         best = std::move(other);
         kept = retry == Start::Stiff ? 2 : 1;
       }
-      if (!failed(best))
+      if (!doubtful(best))
         break;
     }
   }

@@ -112,6 +112,7 @@ struct FrameResult
 };
 
 class FrameData;
+struct FrameQuality;
 
 /** A frame's data made ready for Tracker::track(): its distance field, normals and subsample
  *  (FrameData), or the finding that it has too little data to say where a surface is. Made from
@@ -222,7 +223,13 @@ private:
    *  are closer to it (MotionPredictor, Extrapolation). */
   void preferStraightIfCloser(class DistanceTerm& distance, Attempt& a,
                               std::vector<double>& x) const;
+  /** Whether a.quality's `share` exceeds the last kept frames' median by the margin. */
+  bool beyondUsual(const Attempt& a, double FrameQuality::*share) const;
+  /** Flagged: data left unexplained, mesh taken off its data, or a tear (FrameQuality). */
   bool failed(const Attempt& a) const;
+  /** Worth other starts: failed, or more mesh without data than usual with some of it taken
+   *  off its data by the solve (a limb left behind; a hole alone is not). */
+  bool doubtful(const Attempt& a) const;
   /** Whether a first try's fine level stops after GraphOptions::fineIterations steps (the graph
    *  is on, the solver Gauss-Newton, and the limit below maxIterations). */
   bool capsFineLevel() const;

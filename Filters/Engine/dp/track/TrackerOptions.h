@@ -98,9 +98,10 @@ struct GraphOptions
  *  farther than `reach` voxels from the mesh (unexplained) exceeds what is usual in the take (the
  *  median of the last frames kept) by more than `margin`; it is then tried again from other
  *  starts and the best attempt is kept. Relative, so data the template lacks do not count as
- *  failures, while a lost limb (a few % of the surface) does. Mesh without data (unsupported) is
- *  reported but fails nothing: holes in the data look the same, and a part that left its data
- *  leaves that data unexplained. A torn limb fails too (see stiffRetry). */
+ *  failures, while a lost limb (a few % of the surface) does. So does mesh the solve took off its
+ *  data (departed) by more than usual. Mesh without data (unsupported) fails nothing, as holes
+ *  in the data look the same, but when the margin is exceeded and some of it departed, the
+ *  other starts are tried (a limb left behind). A torn limb fails too (see stiffRetry). */
 struct RecoveryOptions
 {
   bool enabled = true;
