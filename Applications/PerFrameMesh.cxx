@@ -158,8 +158,8 @@ PointCloud perFrameMesh(const PointCloud& samples, std::size_t vertices, bool de
   if (samples.hasColors())
   {
     mesh.colorComponents = samples.colorComponents;
-    const NearestSample nearest(samples.points,
-                                diagonal / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1))));
+    const NearestSample nearest(
+        samples.points, diagonal / std::sqrt(static_cast<double>(std::max<std::size_t>(n, 1))));
     const auto c = static_cast<std::size_t>(samples.colorComponents);
     for (std::size_t v = 0; v < nv; ++v)
     {
