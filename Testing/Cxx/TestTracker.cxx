@@ -617,7 +617,8 @@ TEST(Tracker, EmptyFramesAndHolesKeepAPlausibleShape)
 TEST(Tracker, HolesThatMoveEveryFrameAreNotFailures)
 {
   // Two holes of 6 % of the diagonal in new places every frame, as a capture with occlusions:
-  // the mesh lies over them without data, which is no failure; nothing is flagged or retried.
+  // the mesh lies over them without data, which is no failure: other starts may be tried (a limb
+  // left behind looks the same), but no frame is flagged, and every frame stays on the truth.
   dp::BendingTube::Options o;
   o.frames = 20;
   o.rings = 16;
@@ -640,7 +641,6 @@ TEST(Tracker, HolesThatMoveEveryFrameAreNotFailures)
     const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), c.normals.data());
     EXPECT_FALSE(r.failed) << "frame " << f << " unexplained " << r.unexplained << " unsupported "
                            << r.unsupported << " tear " << r.tear;
-    EXPECT_EQ(r.retries, 0) << "frame " << f;
     EXPECT_LT(vertexRms(r.positions, tube.positions(f)), 0.02 * diagonal) << "frame " << f;
     largestUnsupported = std::max(largestUnsupported, r.unsupported);
   }

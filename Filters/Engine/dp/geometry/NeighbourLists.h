@@ -10,7 +10,7 @@
  * points are stored cell by cell) and keeps those within the ball: when k or more are, the k
  * nearest of them are its k nearest. Otherwise it tries twice and four times the radius, and
  * beyond that asks a kd-tree. A frame of a captured take (jumping, 20 000 points, k = 16): 22 ms
- * instead of 32 for a kd-tree query per point, one thread (session 26).
+ * instead of 32 for a kd-tree query per point, one thread.
  *
  * Limits: a cloud whose bounding box would need far more cells than points (a few far outliers
  * around a dense object) is answered by the kd-tree alone.

@@ -13,8 +13,7 @@
  *
  * The coarse level (GraphRegistration) uses it on its Levenberg-Marquardt steps, where the
  * points -> mesh term's points slide along the surface a little each step (GraphOptions::
- * acceleration, three steps by default: Documentation/TrackingHistory.md, Speed, sessions 27
- * and 28).
+ * acceleration, three steps by default: Documentation/TrackingHistory.md).
  *
  * Limits: no safeguard of its own (the caller limits how far the accelerated iterate may lie from
  * the plain one, checks it and resets the history when it is worse); the coordinates should have

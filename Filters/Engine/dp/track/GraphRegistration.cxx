@@ -449,7 +449,7 @@ GraphRegistration::towardAccelerated(const Eigen::VectorXd& plain, Eigen::Vector
   // The accelerated state, brought back toward the plain step (along the straight line between
   // their coordinates) until no vertex lies farther than AcceleratedReach from where the plain
   // step put it. Without this limit two horse-gallop takes lost a part near their end (seeds 1
-  // and 3); with it they keep it (Documentation/TrackingHistory.md, Speed, session 28).
+  // and 3); with it they keep it (Documentation/TrackingHistory.md).
   std::vector<double> z(plainMesh.size());
   Graph.deform(fromCoordinates(accelerated, origin), z.data());
   const double beyond = largestDifference(plainMesh, z) / Voxel;

@@ -9,7 +9,7 @@
  * splits along the longest axis, four triangles per leaf) and refitted to new positions in
  * linear time (the boxes grow, the tree stays valid). It is searched with its levels taken two
  * at a time (four children a node, their boxes tested in one loop: half the levels to descend;
- * 1.05x on a tracked frame, session 25). Queries descend the nearest child first and prune boxes
+ * 1.05x on a tracked frame). Queries descend the nearest child first and prune boxes
  * farther than the best hit, and in a leaf the triangles whose bounding sphere is farther (about
  * half the triangle tests of a tracked take: jumping, 10 frames), so they are exact; they are
  * const and thread-safe. A query with a hint (the triangle found last time) starts at the hint's

@@ -199,6 +199,9 @@ struct Tracker::Parts
   // Of the last frames that passed (the take's usual quality): a failed frame does not lower the
   // bar for the next one, unless frames keep failing (then the take itself has changed).
   std::vector<FrameQuality> RecentQuality;
+  // Whether the last frame's quality was in doubt (Tracker::doubtful): it then sets no baseline,
+  // no reference and no retry's start, whether or not it was flagged.
+  bool InDoubt = false;
   int FailedInARow = 0;
   // The last frame that did not fail, while the frames after it fail: a retry starts there.
   std::vector<double> LastGood;
@@ -429,11 +432,13 @@ bool Tracker::failed(const Attempt& a) const
 
 bool Tracker::doubtful(const Attempt& a) const
 {
-  // More mesh without data than usual, part of which the solve took off its data (a limb left
-  // behind, its data then explained by a neighbour's mesh): worth other starts, though not a
-  // failure when none does better. Over a hole alone nothing departs: the start lay over it too.
-  return failed(a) || (!P->RecentQuality.empty() && beyondUsual(a, &FrameQuality::unsupported) &&
-                       a.quality.departed > 0.1 * Options.recovery.margin);
+  // Any share beyond the usual is worth other starts: more mesh without data than usual may be a
+  // limb left behind (its data explained by a neighbour's mesh) as well as a hole. Measured, the
+  // retries on mesh without data find such limbs again; only the flag waits for failed().
+  if (P->RecentQuality.empty())
+    return false;
+  return beyondUsual(a, &FrameQuality::unexplained) || beyondUsual(a, &FrameQuality::unsupported) ||
+         (Options.recovery.stiffRetry && a.torn());
 }
 
 void Tracker::startState(Start start, Attempt& a) const
@@ -719,8 +724,9 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   }
   result.failed = Options.recovery.enabled && failed(best);
   result.kept = kept;
-  P->FailedInARow = result.failed ? P->FailedInARow + 1 : 0;
-  if (!result.failed || P->FailedInARow >= 3)
+  P->InDoubt = Options.recovery.enabled && doubtful(best);
+  P->FailedInARow = P->InDoubt ? P->FailedInARow + 1 : 0;
+  if (!P->InDoubt || P->FailedInARow >= 3)
     P->RecentQuality.push_back(best.quality);
   if (P->RecentQuality.size() > 9)
     P->RecentQuality.erase(P->RecentQuality.begin());
@@ -762,18 +768,18 @@ void Tracker::remember(const FrameResult& result)
     // A failed frame's shape may be garbage (a frame a thousand times too large): the graph's
     // reference gives way to it only once failures persist, when the take itself has changed
     // (as the quality's baseline does).
-    if (Options.graph.yieldRate > 0 && (!result.failed || P->FailedInARow >= 3))
+    if (Options.graph.yieldRate > 0 && (!P->InDoubt || P->FailedInARow >= 3))
       P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
-    if (!result.failed)
+    if (!P->InDoubt)
       P->LastGoodState = state;
   }
   else if (result.kept == 1)
     P->Predictor.restartFrom(result.positions);
   else
     P->Predictor.push(result.positions);
-  if (!result.failed)
+  if (!P->InDoubt)
     P->LastGood = result.positions;
-  P->LastFailed = result.failed;
+  P->LastFailed = P->InDoubt;
 }
 
 PreparedFrame::PreparedFrame() = default;
@@ -828,6 +834,7 @@ FrameResult Tracker::track(PreparedFrame prepared)
   result.frozen.assign(nv, 0);
   result.rejected.assign(nv, 0);
   result.residual.assign(nv, -1.0);
+  P->InDoubt = false;
 
   if (Options.restUpdate > 0)
     Cloth.setRestState(P->Predictor.empty()
@@ -841,6 +848,7 @@ FrameResult Tracker::track(PreparedFrame prepared)
   {
     trackEmptyFrame(result);
     result.failed = true;
+    P->InDoubt = true;
     readVertexColours(nullptr, result);
   }
   else

@@ -227,8 +227,8 @@ private:
   bool beyondUsual(const Attempt& a, double FrameQuality::*share) const;
   /** Flagged: data left unexplained, mesh taken off its data, or a tear (FrameQuality). */
   bool failed(const Attempt& a) const;
-  /** Worth other starts: failed, or more mesh without data than usual with some of it taken
-   *  off its data by the solve (a limb left behind; a hole alone is not). */
+  /** Worth other starts (and no baseline for the next frames): any share beyond the usual, mesh
+   *  without data too (a limb left behind looks so, as does a hole), or a tear. */
   bool doubtful(const Attempt& a) const;
   /** Whether a first try's fine level stops after GraphOptions::fineIterations steps (the graph
    *  is on, the solver Gauss-Newton, and the limit below maxIterations). */

@@ -54,8 +54,7 @@ struct CoverageOptions
   // (SurfaceLocator::follow) instead of being searched over the whole surface again, where it
   // stays within a voxel; the tracker still searches everything where a coarse stage and the
   // fine level start (CoverageTerm). Off by default: 1.2-1.3x faster a frame, but over three
-  // seeds jumping's vertex RMS was 2.8 % higher (Documentation/TrackingHistory.md, Speed,
-  // session 29).
+  // seeds jumping's vertex RMS was 2.8 % higher (Documentation/TrackingHistory.md).
   bool followMatches = false;
 };
 
@@ -83,14 +82,14 @@ struct GraphOptions
   // maxIterations bounds the other solvers, and Gauss-Newton without the graph). The graph has
   // placed the surface and a few steps fit its detail; solved to convergence, the fine level
   // lets vertices slide along the data, where no term holds them, and the tracked vertices end
-  // farther from the true ones (Documentation/TrackingHistory.md, Speed, session 22).
+  // farther from the true ones (Documentation/TrackingHistory.md).
   int fineIterations = 3;
   // Anderson acceleration of the Levenberg-Marquardt steps (AndersonAcceleration): the number of
   // earlier steps combined (0: plain steps, stages end on the energy's gain), once steps move no
   // vertex two voxels; an accelerated state moves no vertex more than a voxel beyond the plain
   // step, and a stage also ends once a step moves no vertex a tenth of a voxel. 1.05-1.2x faster
   // where frames are not retried, and over three seeds as accurate as plain steps or more
-  // (Documentation/TrackingHistory.md, Speed, session 28).
+  // (Documentation/TrackingHistory.md).
   int acceleration = 3;
 };
 
