@@ -15,7 +15,7 @@ build="${DP_BUILD_DIR:-$root/build}"
 
 # What the build and the main job need. The SDK is ParaView 5.11's (VTK 9.2 inside); the -dev
 # libraries are the ones its CMake package looks for. Debian's libvtk9-dev cannot be installed
-# beside it (see README). OpenBLAS, serial (TBB has the cores), is the BLAS behind CHOLMOD's
+# beside it (Documentation/Development.md). OpenBLAS, serial (TBB has the cores), is the BLAS behind CHOLMOD's
 # supernodal factorisation: Debian's reference BLAS made it slower than the simplicial one.
 build_packages=(
   cmake ninja-build g++ pkg-config

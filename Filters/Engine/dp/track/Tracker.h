@@ -22,10 +22,12 @@
  * deformation graph on the template, solved from stiff and far-reaching to supple and local,
  * so large motions are caught as whole limbs, with rigidity measured against the template,
  * not the last frame); the fine level (a solver over all the terms, from the coarse result);
- * then the frame's quality from both directions (FrameQuality). A frame whose quality fails
- * is tried again from the last frame without extrapolation, from the last frame that did not
- * fail (when the last one failed), and from the template re-registered rigidly to the last
- * frame; the best attempt is kept, and the frame is flagged if it still fails. When a limb tore
+ * then the frame's quality from both directions (FrameQuality). A frame whose quality is in
+ * doubt (any share beyond the take's usual) is tried again from the last frame without
+ * extrapolation, from the last frame that was not in doubt (when the last one was), and from
+ * the template re-registered rigidly to the last frame; the best attempt is kept, and the frame
+ * is flagged if it still fails: data unexplained, mesh taken off its data or a tear, not mesh
+ * over a hole in the data (RecoveryOptions). When a limb tore
  * (an edge grew beyond its template length by more than two mean edge lengths), the first
  * retry keeps the predicted start but holds the coarse level's limbs stiffer (stretch weight
  * x4, rigidity x2): a fast limb that passes another is pulled along with the other's data by

@@ -98,9 +98,9 @@ struct GraphOptions
  *  median of the last frames kept) by more than `margin`; it is then tried again from other
  *  starts and the best attempt is kept. Relative, so data the template lacks do not count as
  *  failures, while a lost limb (a few % of the surface) does. So does mesh the solve took off its
- *  data (departed) by more than usual. Mesh without data (unsupported) fails nothing, as holes
- *  in the data look the same, but when the margin is exceeded and some of it departed, the
- *  other starts are tried (a limb left behind). A torn limb fails too (see stiffRetry). */
+ *  data (departed) by more than usual, and a torn limb (see stiffRetry). Mesh without data
+ *  (unsupported) beyond the usual is tried again from the other starts too (a limb left behind
+ *  looks so) but flags nothing: holes in the data look the same. */
 struct RecoveryOptions
 {
   bool enabled = true;
