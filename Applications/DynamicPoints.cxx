@@ -7,6 +7,7 @@
 #include "Batch.h"
 #include "CommandLine.h"
 #include "FramePlot.h"
+#include "TrackerOptionFlags.h"
 
 #include "dp/compress/PcaCompression.h"
 #include "dp/export/GltfExport.h"
@@ -95,7 +96,9 @@ Options:
                       three.js; Blender 3.4 and ParaView cannot open it)
   --output DIR        where results go (default: dynamicpoints-output)
   --quiet             no per-frame table and no progress bar
-  -h, --help          show this help
+)";
+
+const char* const UsageEnd = R"(  -h, --help          show this help
 
 Exit status: 0 when every output was written; 1 when a frame or an output failed (the
 frames tracked before it stay readable; in a batch: an input failed, named on stderr and
@@ -259,6 +262,8 @@ struct Settings
   double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
   bool quiet = false;
   bool meshopt = false;
+  std::string printOptions;   // "values" (--print-options), "json" or "markdown" (--describe-)
+  dp::TrackerOptions tracker; // --set, --options
 };
 
 Settings parse(int argc, char** argv, bool& help)
@@ -297,6 +302,16 @@ Settings parse(int argc, char** argv, bool& help)
       s.quiet = true;
     else if (arg == "--meshopt")
       s.meshopt = true;
+    else if (arg == "--print-options")
+      s.printOptions = "values";
+    else if (arg == "--describe-options")
+    {
+      s.printOptions = optionValue(argc, argv, i);
+      if (s.printOptions != "json" && s.printOptions != "markdown")
+        throw UsageError("--describe-options wants json or markdown, not '" + s.printOptions + "'");
+    }
+    else if (parseTrackerOptionFlag(arg, argc, argv, i, s.tracker))
+      continue;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
     else
@@ -389,6 +404,8 @@ private:
   {
     watch(Tracker);
     Tracker->SetInputConnection(Source->GetOutputPort());
+    for (const dp::TrackerOptionDescription& option : dp::trackerOptionTable())
+      Tracker->SetTrackerOption(option.name.c_str(), option.get(S.tracker));
     Tracker->SetTemplateVertices(S.vertices);
     Tracker->SetTemplateSource(S.templateFrom);
     if (!S.templateFile.empty())
@@ -1004,7 +1021,15 @@ int run(int argc, char** argv, dp::cli::Ranks& ranks)
   if (help)
   {
     if (ranks.rank() == 0)
-      std::cout << Usage;
+      std::cout << Usage << dp::cli::TrackerOptionHelp << UsageEnd;
+    return 0;
+  }
+  if (!settings.printOptions.empty())
+  {
+    if (ranks.rank() == 0)
+      std::cout << (settings.printOptions == "values" ? dp::trackerOptionsJson(settings.tracker)
+                    : settings.printOptions == "json" ? dp::trackerOptionTableJson()
+                                                      : dp::trackerOptionTableMarkdown());
     return 0;
   }
   std::signal(SIGINT, onInterrupt);

@@ -3,6 +3,7 @@
 
 #include "dp/field/TemplateMesh.h"
 #include "dp/track/Tracker.h"
+#include "dp/track/TrackerOptionTable.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"
@@ -27,8 +28,10 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <future>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,6 +60,7 @@ struct vtkDeformableTrackFilter::PendingFrame
 
 struct vtkDeformableTrackFilter::Internals
 {
+  dp::TrackerOptions Options;           // the properties (dp::TrackerOptionTable names them)
   std::unique_ptr<dp::Tracker> Tracker; // made at the first frame
   vtkSmartPointer<vtkCellArray> Polys;  // the template's triangles
   std::vector<dp::FrameResult> Cache;   // frames 0 .. Cache.size()-1
@@ -81,89 +85,53 @@ struct vtkDeformableTrackFilter::Internals
     Polys = nullptr;
     Cache.clear();
   }
-
-  // The properties are the engine's options under the names ParaView shows; their defaults are
-  // the engine's (one source: the plugin's XML is checked against them by a test).
-  static void takeDefaults(vtkDeformableTrackFilter& f)
-  {
-    const dp::TrackerOptions o;
-    f.Solver = o.solver == dp::TrackerSolver::LBFGS             ? LBFGS
-               : o.solver == dp::TrackerSolver::SteepestDescent ? STEEPEST_DESCENT
-                                                                : GAUSS_NEWTON;
-    f.DistanceWeight = o.distanceWeight;
-    f.DistanceMeasure =
-        o.distanceMeasure == dp::DistanceMeasure::Points ? DISTANCE_TO_POINTS : DISTANCE_TO_PLANES;
-    f.SquaredDistance = o.squaredDistance;
-    f.RestUpdate = o.restUpdate;
-    f.StretchStiffness = o.cloth.stretch;
-    f.ShearStiffness = o.cloth.shear;
-    f.BendStiffness = o.cloth.bend;
-    f.ThickPartStretch = o.softening.stretch;
-    f.CreaseStretch = o.creases.stretch;
-    f.NormalTestAngle = o.normalTestDegrees;
-    f.OutlierDistance = o.outlierDistance;
-    f.VoxelSize = o.voxelSize;
-    f.BandWidth = o.bandWidth;
-    f.MotionPrediction = o.motionPrediction;
-    f.RigidAlignment = o.rigidAlignment;
-    f.ProvisionalDetermination = o.provisionalDetermination;
-    f.MaximumIterations = o.maxIterations;
-    f.Tolerance = o.tolerance;
-    f.TemplateVertices = static_cast<int>(dp::TemplateOptions().targetVertices);
-    f.TemplateSource = TEMPLATE_AUTO;
-    f.CoverageWeight = o.coverage.weight;
-    f.CoarseLevel = o.graph.enabled;
-    f.GraphNodes = static_cast<int>(o.graph.nodes);
-    f.GraphRigidity = o.graph.rigidity;
-    f.FineIterations = o.graph.fineIterations;
-    f.Plasticity = o.graph.yieldRate;
-    f.TemporalWeight = o.temporalWeight;
-    f.ColourWeight = o.colourWeight;
-    f.Recovery = o.recovery.enabled;
-    f.FailureMargin = o.recovery.margin;
-  }
-
-  static dp::TrackerOptions optionsOf(const vtkDeformableTrackFilter& f)
-  {
-    dp::TrackerOptions o;
-    o.solver = f.Solver == LBFGS              ? dp::TrackerSolver::LBFGS
-               : f.Solver == STEEPEST_DESCENT ? dp::TrackerSolver::SteepestDescent
-                                              : dp::TrackerSolver::GaussNewton;
-    o.distanceWeight = f.DistanceWeight;
-    o.distanceMeasure = f.DistanceMeasure == DISTANCE_TO_POINTS ? dp::DistanceMeasure::Points
-                                                                : dp::DistanceMeasure::Planes;
-    o.squaredDistance = f.SquaredDistance;
-    o.restUpdate = f.RestUpdate;
-    o.cloth = {f.StretchStiffness, f.ShearStiffness, f.BendStiffness};
-    o.softening.stretch = f.ThickPartStretch;
-    o.creases.stretch = f.CreaseStretch;
-    o.normalTestDegrees = f.NormalTestAngle;
-    o.outlierDistance = f.OutlierDistance;
-    o.voxelSize = f.VoxelSize;
-    o.bandWidth = f.BandWidth;
-    o.motionPrediction = f.MotionPrediction;
-    o.rigidAlignment = f.RigidAlignment;
-    o.provisionalDetermination = f.ProvisionalDetermination;
-    o.maxIterations = f.MaximumIterations;
-    o.tolerance = f.Tolerance;
-    o.coverage.weight = f.CoverageWeight;
-    o.graph.enabled = f.CoarseLevel;
-    o.graph.nodes = static_cast<std::size_t>(f.GraphNodes);
-    o.graph.rigidity = f.GraphRigidity;
-    o.graph.fineIterations = f.FineIterations;
-    o.graph.yieldRate = f.Plasticity;
-    o.temporalWeight = f.TemporalWeight;
-    o.colourWeight = f.ColourWeight;
-    o.recovery.enabled = f.Recovery;
-    o.recovery.margin = f.FailureMargin;
-    return o;
-  }
 };
 
 vtkDeformableTrackFilter::vtkDeformableTrackFilter() : Internal(new Internals)
 {
   this->SetNumberOfInputPorts(2);
-  Internals::takeDefaults(*this);
+  this->TemplateVertices = static_cast<int>(dp::TemplateOptions().targetVertices);
+  this->TemplateSource = TEMPLATE_AUTO;
+}
+
+void vtkDeformableTrackFilter::SetTrackerOption(const char* name, double value)
+{
+  try
+  {
+    const dp::TrackerOptionDescription& option = dp::trackerOption(name ? name : "");
+    if (std::isnan(value))
+    {
+      vtkErrorMacro(<< "tracker option " << option.name << ": NaN is no value");
+      return;
+    }
+    double v = (option.zeroAllowed && value == 0)
+                   ? 0.0
+                   : std::clamp(value, option.minimum, option.maximum);
+    if (option.kind != dp::OptionKind::Real)
+      v = std::round(v);
+    if (option.get(this->Internal->Options) != v)
+    {
+      option.set(this->Internal->Options, v);
+      this->Modified();
+    }
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorMacro(<< e.what());
+  }
+}
+
+double vtkDeformableTrackFilter::GetTrackerOption(const char* name)
+{
+  try
+  {
+    return dp::trackerOption(name ? name : "").get(this->Internal->Options);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return 0;
+  }
 }
 
 vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
@@ -372,7 +340,7 @@ bool vtkDeformableTrackFilter::MakeTracker(vtkInformationVector** inputVector, v
   {
     const std::size_t vertices = positions.size() / 3;
     in.Tracker = std::make_unique<dp::Tracker>(dp::TriangleMesh(triangles, vertices), positions,
-                                               Internals::optionsOf(*this));
+                                               this->Internal->Options);
   }
   catch (const std::exception& e)
   {
@@ -381,7 +349,7 @@ bool vtkDeformableTrackFilter::MakeTracker(vtkInformationVector** inputVector, v
   }
   // Slivers slide flat without the shear terms: say so once, with the remedy.
   const double slivers = in.Tracker->mesh().poorlyShapedShare(positions.data());
-  if (this->ShearStiffness == 0 && slivers > 0.002)
+  if (this->Internal->Options.cloth.shear == 0 && slivers > 0.002)
   {
     vtkWarningMacro(<< 100 * slivers
                     << "% of the template's triangles are slivers (nearly flat): with "
@@ -598,36 +566,9 @@ void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, bool done)
 void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Solver: " << this->Solver << "\n";
-  os << indent << "DistanceWeight: " << this->DistanceWeight << "\n";
-  os << indent << "DistanceMeasure: " << this->DistanceMeasure << "\n";
-  os << indent << "SquaredDistance: " << this->SquaredDistance << "\n";
-  os << indent << "RestUpdate: " << this->RestUpdate << "\n";
-  os << indent << "ThickPartStretch: " << this->ThickPartStretch << "\n";
-  os << indent << "CreaseStretch: " << this->CreaseStretch << "\n";
-  os << indent << "StretchStiffness: " << this->StretchStiffness << "\n";
-  os << indent << "ShearStiffness: " << this->ShearStiffness << "\n";
-  os << indent << "BendStiffness: " << this->BendStiffness << "\n";
-  os << indent << "NormalTestAngle: " << this->NormalTestAngle << "\n";
-  os << indent << "OutlierDistance: " << this->OutlierDistance << "\n";
-  os << indent << "VoxelSize: " << this->VoxelSize << "\n";
-  os << indent << "BandWidth: " << this->BandWidth << "\n";
-  os << indent << "MotionPrediction: " << this->MotionPrediction << "\n";
-  os << indent << "RigidAlignment: " << this->RigidAlignment << "\n";
-  os << indent << "ProvisionalDetermination: " << this->ProvisionalDetermination << "\n";
-  os << indent << "MaximumIterations: " << this->MaximumIterations << "\n";
-  os << indent << "Tolerance: " << this->Tolerance << "\n";
+  for (const dp::TrackerOptionDescription& option : dp::trackerOptionTable())
+    os << indent << option.name << ": " << option.get(this->Internal->Options) << "\n";
   os << indent << "TemplateVertices: " << this->TemplateVertices << "\n";
   os << indent << "TemplateSource: " << this->TemplateSource << "\n";
-  os << indent << "CoverageWeight: " << this->CoverageWeight << "\n";
-  os << indent << "CoarseLevel: " << this->CoarseLevel << "\n";
-  os << indent << "GraphNodes: " << this->GraphNodes << "\n";
-  os << indent << "GraphRigidity: " << this->GraphRigidity << "\n";
-  os << indent << "FineIterations: " << this->FineIterations << "\n";
-  os << indent << "Plasticity: " << this->Plasticity << "\n";
-  os << indent << "TemporalWeight: " << this->TemporalWeight << "\n";
-  os << indent << "ColourWeight: " << this->ColourWeight << "\n";
-  os << indent << "Recovery: " << this->Recovery << "\n";
-  os << indent << "FailureMargin: " << this->FailureMargin << "\n";
   os << indent << "CachedFrames: " << this->Internal->Cache.size() << "\n";
 }

@@ -67,6 +67,18 @@ public:
   vtkTypeMacro(vtkDeformableTrackFilter, vtkDPTemporalFilter);
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
+  ///@{
+  /**
+   * Any tracker option by its name in dp::TrackerOptions ("graph.yieldLimit") or its property
+   * name ("Plasticity"): the named accessors below are these for the options ParaView's panel
+   * shows; the others (`dynamicpoints --print-options` lists them all, with their ranges, as
+   * does Documentation/TrackerOptions.md) are reached only so. A value out of the option's
+   * range is clamped to it, as VTK's setters do; an unknown name is an error.
+   */
+  void SetTrackerOption(const char* name, double value);
+  double GetTrackerOption(const char* name);
+  ///@}
+
   /** The template mesh (optional input 1). */
   void SetTemplateConnection(vtkAlgorithmOutput* output) { this->SetInputConnection(1, output); }
 
@@ -79,8 +91,8 @@ public:
 
   ///@{
   /** The minimiser: Gauss-Newton (default), L-BFGS, or the paper's steepest descent. */
-  vtkSetClampMacro(Solver, int, GAUSS_NEWTON, STEEPEST_DESCENT);
-  vtkGetMacro(Solver, int);
+  void SetSolver(int value) { this->SetTrackerOption("Solver", value); }
+  int GetSolver() { return static_cast<int>(this->GetTrackerOption("Solver")); }
   ///@}
 
   enum DistanceMeasureType
@@ -92,35 +104,48 @@ public:
   ///@{
   /** What the distance term measures: the distance to the tangent planes of the nearest data
    *  points (default; vertices can slide along the data) or to the points (the paper). */
-  vtkSetClampMacro(DistanceMeasure, int, DISTANCE_TO_PLANES, DISTANCE_TO_POINTS);
-  vtkGetMacro(DistanceMeasure, int);
+  void SetDistanceMeasure(int value) { this->SetTrackerOption("DistanceMeasure", value); }
+  int GetDistanceMeasure() { return static_cast<int>(this->GetTrackerOption("DistanceMeasure")); }
   ///@}
 
   ///@{
   /** Penalise the squared distance D^2 / (2 voxel) (default on) or the distance D (the
    *  paper). */
-  vtkSetMacro(SquaredDistance, vtkTypeBool);
-  vtkGetMacro(SquaredDistance, vtkTypeBool);
-  vtkBooleanMacro(SquaredDistance, vtkTypeBool);
+  void SetSquaredDistance(vtkTypeBool value) { this->SetTrackerOption("SquaredDistance", value); }
+  vtkTypeBool GetSquaredDistance()
+  {
+    return static_cast<vtkTypeBool>(this->GetTrackerOption("SquaredDistance"));
+  }
+  void SquaredDistanceOn() { this->SetSquaredDistance(1); }
+  void SquaredDistanceOff() { this->SetSquaredDistance(0); }
   ///@}
 
   ///@{
   /** Share of the previous frame in the rest state of the deformation energy (default 0.3;
    *  0 = the template, as in the paper; 1 = the previous frame). */
-  vtkSetClampMacro(RestUpdate, double, 0.0, 1.0);
-  vtkGetMacro(RestUpdate, double);
+  void SetRestUpdate(double value) { this->SetTrackerOption("RestUpdate", value); }
+  double GetRestUpdate() { return static_cast<double>(this->GetTrackerOption("RestUpdate")); }
   ///@}
 
   ///@{
   /** Weights of the energy terms (all dimensionless; defaults 50, 1, 0, 0.5). */
-  vtkSetClampMacro(DistanceWeight, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(DistanceWeight, double);
-  vtkSetClampMacro(StretchStiffness, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(StretchStiffness, double);
-  vtkSetClampMacro(ShearStiffness, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(ShearStiffness, double);
-  vtkSetClampMacro(BendStiffness, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(BendStiffness, double);
+  void SetDistanceWeight(double value) { this->SetTrackerOption("DistanceWeight", value); }
+  double GetDistanceWeight()
+  {
+    return static_cast<double>(this->GetTrackerOption("DistanceWeight"));
+  }
+  void SetStretchStiffness(double value) { this->SetTrackerOption("StretchStiffness", value); }
+  double GetStretchStiffness()
+  {
+    return static_cast<double>(this->GetTrackerOption("StretchStiffness"));
+  }
+  void SetShearStiffness(double value) { this->SetTrackerOption("ShearStiffness", value); }
+  double GetShearStiffness()
+  {
+    return static_cast<double>(this->GetTrackerOption("ShearStiffness"));
+  }
+  void SetBendStiffness(double value) { this->SetTrackerOption("BendStiffness", value); }
+  double GetBendStiffness() { return static_cast<double>(this->GetTrackerOption("BendStiffness")); }
   ///@}
 
   ///@{
@@ -128,75 +153,105 @@ public:
    *  limbs; dp::ThicknessSoftening): default 0.3, so that a body's skin stretches and slides
    *  over the torso as it bends; 1 is one stiffness everywhere, better for slow non-rigid
    *  motion far from isometric (a collapse; Documentation/Tracking.md). */
-  vtkSetClampMacro(ThickPartStretch, double, 0.0, 1.0);
-  vtkGetMacro(ThickPartStretch, double);
+  void SetThickPartStretch(double value) { this->SetTrackerOption("ThickPartStretch", value); }
+  double GetThickPartStretch()
+  {
+    return static_cast<double>(this->GetTrackerOption("ThickPartStretch"));
+  }
   ///@}
 
   ///@{
   /** Factor on the stretch stiffness in the template's creases (armpits, crotch, an arm that
    *  touches the body in the template; dp::CreaseSoftening): default 0.1, so that those bridges
    *  stretch as the parts move apart instead of dragging the torso's skin; 1 switches it off. */
-  vtkSetClampMacro(CreaseStretch, double, 0.0, 1.0);
-  vtkGetMacro(CreaseStretch, double);
+  void SetCreaseStretch(double value) { this->SetTrackerOption("CreaseStretch", value); }
+  double GetCreaseStretch() { return static_cast<double>(this->GetTrackerOption("CreaseStretch")); }
   ///@}
 
   ///@{
   /** Normal test: drop a vertex's distance term when its normal and its nearest point's normal
    *  differ by more than this angle in degrees (default 90; 180 switches the test off). */
-  vtkSetClampMacro(NormalTestAngle, double, 0.0, 180.0);
-  vtkGetMacro(NormalTestAngle, double);
+  void SetNormalTestAngle(double value) { this->SetTrackerOption("NormalTestAngle", value); }
+  double GetNormalTestAngle()
+  {
+    return static_cast<double>(this->GetTrackerOption("NormalTestAngle"));
+  }
   ///@}
 
   ///@{
   /** Drop the distance term of vertices farther than this from the data (world units;
    *  default 0 = never). */
-  vtkSetClampMacro(OutlierDistance, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(OutlierDistance, double);
+  void SetOutlierDistance(double value) { this->SetTrackerOption("OutlierDistance", value); }
+  double GetOutlierDistance()
+  {
+    return static_cast<double>(this->GetTrackerOption("OutlierDistance"));
+  }
   ///@}
 
   ///@{
   /** Distance field resolution and band in world units (0 = automatic: the template's
    *  diagonal / 200, and 4 voxels). */
-  vtkSetClampMacro(VoxelSize, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(VoxelSize, double);
-  vtkSetClampMacro(BandWidth, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(BandWidth, double);
+  void SetVoxelSize(double value) { this->SetTrackerOption("VoxelSize", value); }
+  double GetVoxelSize() { return static_cast<double>(this->GetTrackerOption("VoxelSize")); }
+  void SetBandWidth(double value) { this->SetTrackerOption("BandWidth", value); }
+  double GetBandWidth() { return static_cast<double>(this->GetTrackerOption("BandWidth")); }
   ///@}
 
   ///@{
   /** The paper's speed-ups: motion prediction (MP) and provisional determination (PD). */
-  vtkSetMacro(MotionPrediction, vtkTypeBool);
-  vtkGetMacro(MotionPrediction, vtkTypeBool);
-  vtkBooleanMacro(MotionPrediction, vtkTypeBool);
-  vtkSetMacro(ProvisionalDetermination, vtkTypeBool);
-  vtkGetMacro(ProvisionalDetermination, vtkTypeBool);
-  vtkBooleanMacro(ProvisionalDetermination, vtkTypeBool);
+  void SetMotionPrediction(vtkTypeBool value) { this->SetTrackerOption("MotionPrediction", value); }
+  vtkTypeBool GetMotionPrediction()
+  {
+    return static_cast<vtkTypeBool>(this->GetTrackerOption("MotionPrediction"));
+  }
+  void MotionPredictionOn() { this->SetMotionPrediction(1); }
+  void MotionPredictionOff() { this->SetMotionPrediction(0); }
+  void SetProvisionalDetermination(vtkTypeBool value)
+  {
+    this->SetTrackerOption("ProvisionalDetermination", value);
+  }
+  vtkTypeBool GetProvisionalDetermination()
+  {
+    return static_cast<vtkTypeBool>(this->GetTrackerOption("ProvisionalDetermination"));
+  }
+  void ProvisionalDeterminationOn() { this->SetProvisionalDetermination(1); }
+  void ProvisionalDeterminationOff() { this->SetProvisionalDetermination(0); }
   ///@}
 
   ///@{
   /** Move the predicted mesh rigidly onto each frame's points before deforming it (default on):
    *  keeps a turning shape from slipping along its surface. Used only without the coarse level
    *  (CoarseLevel off), whose registration includes the rigid motion. */
-  vtkSetMacro(RigidAlignment, vtkTypeBool);
-  vtkGetMacro(RigidAlignment, vtkTypeBool);
-  vtkBooleanMacro(RigidAlignment, vtkTypeBool);
+  void SetRigidAlignment(vtkTypeBool value) { this->SetTrackerOption("RigidAlignment", value); }
+  vtkTypeBool GetRigidAlignment()
+  {
+    return static_cast<vtkTypeBool>(this->GetTrackerOption("RigidAlignment"));
+  }
+  void RigidAlignmentOn() { this->SetRigidAlignment(1); }
+  void RigidAlignmentOff() { this->SetRigidAlignment(0); }
   ///@}
 
   ///@{
   /** Iteration limit of a frame's cloth solve (with the coarse level on, Gauss-Newton takes at
    *  most FineIterations) and relative tolerance of the stopping rule. */
-  vtkSetClampMacro(MaximumIterations, int, 1, VTK_INT_MAX);
-  vtkGetMacro(MaximumIterations, int);
-  vtkSetClampMacro(Tolerance, double, 1e-15, 1.0);
-  vtkGetMacro(Tolerance, double);
+  void SetMaximumIterations(int value) { this->SetTrackerOption("MaximumIterations", value); }
+  int GetMaximumIterations()
+  {
+    return static_cast<int>(this->GetTrackerOption("MaximumIterations"));
+  }
+  void SetTolerance(double value) { this->SetTrackerOption("Tolerance", value); }
+  double GetTolerance() { return static_cast<double>(this->GetTrackerOption("Tolerance")); }
   ///@}
 
   ///@{
   /** Weight of the points -> mesh term (default 50; 0 = the paper's energy alone): the data
    *  pulls the closest point of the mesh, so a part of the mesh cannot let go of its data (a
    *  limb) at no cost. */
-  vtkSetClampMacro(CoverageWeight, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(CoverageWeight, double);
+  void SetCoverageWeight(double value) { this->SetTrackerOption("CoverageWeight", value); }
+  double GetCoverageWeight()
+  {
+    return static_cast<double>(this->GetTrackerOption("CoverageWeight"));
+  }
   ///@}
 
   ///@{
@@ -208,25 +263,32 @@ public:
    *  template (a collapse, clothes), the graph's reference gives way by this share per frame.
    *  FineIterations (default 3): the Gauss-Newton steps the cloth solve takes after the graph
    *  (at most); more let vertices slide along the data and end farther from the true ones. */
-  vtkSetMacro(CoarseLevel, vtkTypeBool);
-  vtkGetMacro(CoarseLevel, vtkTypeBool);
-  vtkBooleanMacro(CoarseLevel, vtkTypeBool);
-  vtkSetClampMacro(GraphNodes, int, 0, VTK_INT_MAX);
-  vtkGetMacro(GraphNodes, int);
-  vtkSetClampMacro(GraphRigidity, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(GraphRigidity, double);
-  vtkSetClampMacro(Plasticity, double, 0.0, 1.0);
-  vtkGetMacro(Plasticity, double);
-  vtkSetClampMacro(FineIterations, int, 1, VTK_INT_MAX);
-  vtkGetMacro(FineIterations, int);
+  void SetCoarseLevel(vtkTypeBool value) { this->SetTrackerOption("CoarseLevel", value); }
+  vtkTypeBool GetCoarseLevel()
+  {
+    return static_cast<vtkTypeBool>(this->GetTrackerOption("CoarseLevel"));
+  }
+  void CoarseLevelOn() { this->SetCoarseLevel(1); }
+  void CoarseLevelOff() { this->SetCoarseLevel(0); }
+  void SetGraphNodes(int value) { this->SetTrackerOption("GraphNodes", value); }
+  int GetGraphNodes() { return static_cast<int>(this->GetTrackerOption("GraphNodes")); }
+  void SetGraphRigidity(double value) { this->SetTrackerOption("GraphRigidity", value); }
+  double GetGraphRigidity() { return static_cast<double>(this->GetTrackerOption("GraphRigidity")); }
+  void SetPlasticity(double value) { this->SetTrackerOption("Plasticity", value); }
+  double GetPlasticity() { return static_cast<double>(this->GetTrackerOption("Plasticity")); }
+  void SetFineIterations(int value) { this->SetTrackerOption("FineIterations", value); }
+  int GetFineIterations() { return static_cast<int>(this->GetTrackerOption("FineIterations")); }
   ///@}
 
   ///@{
   /** Weight of the temporal term pulling vertices toward their constant-velocity course
    *  (default 0 = off; about 1 halves the shake of slow, non-rigid motion, but lags fast
    *  motion such as a jumping human). */
-  vtkSetClampMacro(TemporalWeight, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(TemporalWeight, double);
+  void SetTemporalWeight(double value) { this->SetTrackerOption("TemporalWeight", value); }
+  double GetTemporalWeight()
+  {
+    return static_cast<double>(this->GetTrackerOption("TemporalWeight"));
+  }
   ///@}
 
   ///@{
@@ -236,8 +298,8 @@ public:
    *  Geometry says where the surface is, not where on it a vertex lies: colour keeps each vertex
    *  on its material point. The tracked mesh then carries "Colors" (the frame's colour at each
    *  vertex; where the frame has no points near a vertex, its last colour). */
-  vtkSetClampMacro(ColourWeight, double, 0.0, VTK_DOUBLE_MAX);
-  vtkGetMacro(ColourWeight, double);
+  void SetColourWeight(double value) { this->SetTrackerOption("ColourWeight", value); }
+  double GetColourWeight() { return static_cast<double>(this->GetTrackerOption("ColourWeight")); }
   ///@}
 
   ///@{
@@ -247,11 +309,12 @@ public:
    *  template re-registered; the best attempt is kept, and flagged in "Failed" if it still
    *  fails. Mesh the solve took off its data fails too; mesh without data over a hole in the
    *  data fails nothing. */
-  vtkSetMacro(Recovery, vtkTypeBool);
-  vtkGetMacro(Recovery, vtkTypeBool);
-  vtkBooleanMacro(Recovery, vtkTypeBool);
-  vtkSetClampMacro(FailureMargin, double, 0.0, 1.0);
-  vtkGetMacro(FailureMargin, double);
+  void SetRecovery(vtkTypeBool value) { this->SetTrackerOption("Recovery", value); }
+  vtkTypeBool GetRecovery() { return static_cast<vtkTypeBool>(this->GetTrackerOption("Recovery")); }
+  void RecoveryOn() { this->SetRecovery(1); }
+  void RecoveryOff() { this->SetRecovery(0); }
+  void SetFailureMargin(double value) { this->SetTrackerOption("FailureMargin", value); }
+  double GetFailureMargin() { return static_cast<double>(this->GetTrackerOption("FailureMargin")); }
   ///@}
 
   enum TemplateSourceType
@@ -293,38 +356,8 @@ protected:
   long long NextInputFrame(std::size_t requestedFrame) override;
   int RequestFrameData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  // The properties; their defaults are the engine's (dp::TrackerOptions), set by the constructor.
-  int Solver;
-  double DistanceWeight;
-  int DistanceMeasure;
-  vtkTypeBool SquaredDistance;
-  double RestUpdate;
-  double StretchStiffness;
-  double ShearStiffness;
-  double BendStiffness;
-  double ThickPartStretch;
-  double CreaseStretch;
-  double NormalTestAngle;
-  double OutlierDistance;
-  double VoxelSize;
-  double BandWidth;
-  vtkTypeBool MotionPrediction;
-  vtkTypeBool RigidAlignment;
-  vtkTypeBool ProvisionalDetermination;
-  int MaximumIterations;
-  double Tolerance;
   int TemplateVertices;
   int TemplateSource;
-  double CoverageWeight;
-  vtkTypeBool CoarseLevel;
-  int GraphNodes;
-  double GraphRigidity;
-  int FineIterations;
-  double Plasticity;
-  double TemporalWeight;
-  double ColourWeight;
-  vtkTypeBool Recovery;
-  double FailureMargin;
 
 private:
   // RequestFrameData's steps; each reports its own errors and returns false on one.

@@ -18,6 +18,7 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 #include "TakeFigures.h"
+#include "TrackerOptionFlags.h"
 #include "TrackingTruth.h"
 
 #include "dp/geometry/BoundingBox.h"
@@ -551,25 +552,13 @@ const char* Usage =
     "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
-    "  tracker:   [--solver gn|lbfgs|sd] [--distance-weight W] [--normal-test DEGREES]\n"
-    "             [--stiffness ST,SH,BE] [--soften-thick ST,BE,FROM,TO]\n"
-    "             [--soften-creases ST,WIDTH] [--tolerance T]\n"
-    "             [--max-iterations N]\n"
-    "             [--measure planes|points] [--penalty squared|linear] [--rest-update B]\n"
-    "             [--no-pipeline] [--no-mp] [--no-rigid] [--no-graph] [--graph-nodes N] "
-    "[--graph-iterations N]\n"
-    "             [--fine-iterations N] [--acceleration N (0: plain coarse steps)]\n"
-    "             [--rigidity R] [--rigidity-scale VOXELS] [--stretch-weight W] [--plasticity "
-    "RATE] [--coverage-weight "
-    "W] "
-    "[--coverage-points N] [--follow-matches] [--point-to-point SHARE] [--temporal-weight W] "
-    "[--no-recovery]\n"
-    "             [--no-stiff-retry]\n"
-    "             [--fail-margin SHARE]\n"
+    "  tracker:   [--set NAME=VALUE (repeatable; every option of dp::TrackerOptionTable,\n"
+    "             listed by dynamicpoints --describe-options markdown)] [--options FILE.json]\n"
+    "             [--no-pipeline (frames prepared one after the other)]\n"
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
     "  take:      [--colour (a colour fixed to the material; colour swim printed)]\n"
-    "             [--colour-weight W] [--compress (beside the true motion's)]\n"
+    "             [--compress (beside the true motion's)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
 // What to run: the sequences, templates and conditions of the table, and the tracker's options.
@@ -643,115 +632,6 @@ bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan
   return true;
 }
 
-// The fine level's energy and solver.
-bool parseEnergyOption(const std::string& arg, int argc, char** argv, int& i,
-                       dp::TrackerOptions& options)
-{
-  using namespace dp::cli;
-  if (arg == "--solver")
-  {
-    const std::string s = optionValue(argc, argv, i);
-    options.solver = s == "lbfgs" ? dp::TrackerSolver::LBFGS
-                     : s == "sd"  ? dp::TrackerSolver::SteepestDescent
-                                  : dp::TrackerSolver::GaussNewton;
-  }
-  else if (arg == "--distance-weight")
-    options.distanceWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--normal-test")
-    options.normalTestDegrees = parseDouble(arg, optionValue(argc, argv, i), 0, 180);
-  else if (arg == "--measure")
-    options.distanceMeasure = oneOf(arg, optionValue(argc, argv, i), "planes", "points")
-                                  ? dp::DistanceMeasure::Points
-                                  : dp::DistanceMeasure::Planes;
-  else if (arg == "--penalty")
-    options.squaredDistance = !oneOf(arg, optionValue(argc, argv, i), "squared", "linear");
-  else if (arg == "--tolerance")
-    options.tolerance = parseDouble(arg, optionValue(argc, argv, i), 1e-15, 1);
-  else if (arg == "--max-iterations")
-    options.maxIterations =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 1000000));
-  else if (arg == "--rest-update")
-    options.restUpdate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-  else if (arg == "--temporal-weight")
-    options.temporalWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--stiffness")
-  {
-    const std::string v = optionValue(argc, argv, i);
-    if (std::sscanf(v.c_str(), "%lf,%lf,%lf", &options.cloth.stretch, &options.cloth.shear,
-                    &options.cloth.bend) != 3)
-      throw UsageError("--stiffness wants stretch,shear,bend");
-  }
-  else if (arg == "--soften-thick")
-  {
-    const std::string v = optionValue(argc, argv, i);
-    dp::ThicknessSoftening& soft = options.softening;
-    if (std::sscanf(v.c_str(), "%lf,%lf,%lf,%lf", &soft.stretch, &soft.bend, &soft.from,
-                    &soft.to) != 4)
-      throw UsageError("--soften-thick wants stretch,bend,from,to");
-  }
-  else if (arg == "--soften-creases")
-  {
-    const std::string v = optionValue(argc, argv, i);
-    dp::CreaseSoftening& creases = options.creases;
-    if (std::sscanf(v.c_str(), "%lf,%lf", &creases.stretch, &creases.width) != 2)
-      throw UsageError("--soften-creases wants stretch,width");
-  }
-  else
-    return false;
-  return true;
-}
-
-// The start, the coarse level, the points -> mesh term and the recovery.
-bool parseScheduleOption(const std::string& arg, int argc, char** argv, int& i,
-                         dp::TrackerOptions& options)
-{
-  using namespace dp::cli;
-  if (arg == "--no-mp")
-    options.motionPrediction = false;
-  else if (arg == "--no-rigid")
-    options.rigidAlignment = false;
-  else if (arg == "--no-graph")
-    options.graph.enabled = false;
-  else if (arg == "--graph-nodes")
-    options.graph.nodes = parseCount(arg, optionValue(argc, argv, i), 1, 1000000);
-  else if (arg == "--graph-iterations")
-    options.graph.iterations =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 1000));
-  else if (arg == "--fine-iterations")
-    options.graph.fineIterations =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 1, 100000));
-  else if (arg == "--acceleration")
-    options.graph.acceleration =
-        static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 0, 20));
-  else if (arg == "--rigidity")
-    options.graph.rigidity = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--rigidity-scale")
-    options.graph.robustScale = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--stretch-weight")
-    options.graph.stretchWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--plasticity")
-    options.graph.yieldRate = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-  else if (arg == "--coverage-weight")
-    options.coverage.weight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--coverage-points")
-    options.coverage.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
-  else if (arg == "--follow-matches")
-    options.coverage.followMatches = true;
-  else if (arg == "--point-to-point")
-    options.coverage.pointToPoint = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-  else if (arg == "--no-recovery")
-    options.recovery.enabled = false;
-  else if (arg == "--colour-weight")
-    options.colourWeight = parseDouble(arg, optionValue(argc, argv, i), 0, 1e12);
-  else if (arg == "--no-stiff-retry")
-    options.recovery.stiffRetry = false;
-  else if (arg == "--fail-margin")
-    options.recovery.margin = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-  else
-    return false;
-  return true;
-}
-
 // What the benchmark runs besides the table, and what it writes.
 bool parseOutputOption(const std::string& arg, int argc, char** argv, int& i, Plan& plan)
 {
@@ -797,8 +677,7 @@ std::optional<int> parseArguments(int argc, char** argv, Plan& plan)
     {
       const std::string arg = argv[i];
       if (!parseDataOption(arg, argc, argv, i, plan) &&
-          !parseEnergyOption(arg, argc, argv, i, plan.options) &&
-          !parseScheduleOption(arg, argc, argv, i, plan.options) &&
+          !dp::cli::parseTrackerOptionFlag(arg, argc, argv, i, plan.options) &&
           !parseOutputOption(arg, argc, argv, i, plan))
       {
         std::cout << Usage;

@@ -47,7 +47,7 @@ TEST(Tracker, RefusesOptionsOutOfRange)
     EXPECT_THROW(make(o), std::invalid_argument) << "rest update " << bad;
   }
   dp::TrackerOptions o;
-  o.distanceWeight = -1;
+  o.distance.weight = -1;
   EXPECT_THROW(make(o), std::invalid_argument);
   o = dp::TrackerOptions{};
   o.maxIterations = 0;
@@ -71,7 +71,7 @@ TEST(Tracker, RefusesOptionsOutOfRange)
   }
   catch (const std::invalid_argument& e)
   {
-    EXPECT_NE(std::string(e.what()).find("yield rate"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("graph.yieldRate"), std::string::npos) << e.what();
   }
   o = dp::TrackerOptions{};
   o.graph.fineIterations = 0;
@@ -127,13 +127,13 @@ TEST(Tracker, FollowsANoisySequenceWithEverySolver)
     // balance of terms.
     if (solver == dp::TrackerSolver::SteepestDescent)
     {
-      o.distanceWeight = 1.0;
-      o.distanceMeasure = dp::DistanceMeasure::Points; // and the paper's distance term, D
-      o.squaredDistance = false;
+      o.distance.weight = 1.0;
+      o.distance.measure = dp::DistanceMeasure::Points; // and the paper's distance term, D
+      o.distance.squared = false;
     }
     // L-BFGS also slows down on the stiff default data term (300): it runs with a softer one.
     if (solver == dp::TrackerSolver::LBFGS)
-      o.distanceWeight = 10.0;
+      o.distance.weight = 10.0;
     dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
                         s.animation.positions(0), o);
     double sum = 0;

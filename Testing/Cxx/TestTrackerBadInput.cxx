@@ -239,7 +239,7 @@ TEST(TrackerBadInput, AnAbsurdFramePointLimitIsRefusedByName)
   o.maxFramePoints = 5;
   const std::string message = refusal(
       [&] { dp::Tracker(dp::TriangleMesh(m.triangles, m.positions.size() / 3), m.positions, o); });
-  EXPECT_NE(message.find("frame point limit"), std::string::npos) << message;
+  EXPECT_NE(message.find("maxFramePoints"), std::string::npos) << message;
 }
 
 } // namespace

@@ -1,5 +1,6 @@
 """The command-line tools: help for both, the sampler's options and inputs (the main job's run
 and its bad input: test_main_job.py)."""
+import json
 import os
 import unittest
 
@@ -32,6 +33,32 @@ class TestCommandLineTools(TempDirTestCase):
                            check=False)
         self.assertEqual(missing.returncode, 1)
         self.assertIn("nowhere: folder does not exist", missing.stderr)
+
+    def test_tracker_options_by_name_from_flags_and_a_file(self):
+        printed = json.loads(run_tool("dynamicpoints", "--print-options").stdout)
+        self.assertEqual(printed["graph.yieldRate"], 0.3)
+        self.assertEqual(printed["solver"], "gauss-newton")
+        self.assertGreaterEqual(len(printed), 45)
+        # What --print-options writes, --options reads; --set after it wins.
+        printed["graph.yieldRate"] = 0.5
+        printed["solver"] = "lbfgs"
+        with open(self.path("options.json"), "w") as f:
+            json.dump(printed, f)
+        changed = json.loads(run_tool("dynamicpoints", "--options", self.path("options.json"),
+                                      "--set", "colourWeight=7", "--set", "CoarseLevel=off",
+                                      "--print-options").stdout)
+        self.assertEqual((changed["graph.yieldRate"], changed["solver"]), (0.5, "lbfgs"))
+        self.assertEqual((changed["colourWeight"], changed["graph.enabled"]), (7, False))
+        for args, message in (
+                (["--set", "graph.yieldRate=1.5"],
+                 "tracker option graph.yieldRate: 1.5 is out of its range [0, 1]"),
+                (["--set", "graph.yieldrate=1"], "no tracker option 'graph.yieldrate'"),
+                (["--set", "solver"], "--set wants NAME=VALUE"),
+                (["--options", self.path("missing.json")], "cannot read"),
+                (["--describe-options", "yaml"], "wants json or markdown")):
+            result = run_tool("dynamicpoints", *args, "--print-options", check=False)
+            self.assertEqual(result.returncode, 2, args)
+            self.assertIn(message, result.stderr)
 
 
 if __name__ == "__main__":

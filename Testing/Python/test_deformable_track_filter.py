@@ -293,11 +293,22 @@ class TestDeformableTrackFilter(TempDirTestCase):
 
     def test_absurd_tracking_parameters_get_an_error_naming_them(self):
         f = self.tracker()
-        f.SetCoverageWeight(float("nan"))
         rec = MessageRecorder(f)
+        f.SetCoverageWeight(float("nan"))
+        self.assertIn("tracker option coverage.weight: NaN is no value", rec.error_text)
+        self.assertEqual(f.GetCoverageWeight(), 50)  # the default kept
+        f.SetTrackerOption("no.such.option", 1)
+        self.assertIn("no tracker option 'no.such.option'", rec.error_text)
+        # Out of range is clamped, as VTK's setters do, by any of the option's two names.
+        f.SetTrackerOption("graph.yieldRate", 7)
+        self.assertEqual(f.GetPlasticity(), 1)
+        f.SetTrackerOption("Plasticity", -1)
+        self.assertEqual(f.GetTrackerOption("graph.yieldRate"), 0)
+        # An option without a property of its own is reached by its name only.
+        f.SetTrackerOption("graph.acceleration", 2.6)
+        self.assertEqual(f.GetTrackerOption("graph.acceleration"), 3)
         f.UpdateTimeStep(0)
-        self.assertIn("cannot track: tracker option out of range: coverage weight", rec.error_text)
-        self.assertEqual(f.GetNumberOfCachedFrames(), 0)
+        self.assertEqual(f.GetNumberOfCachedFrames(), 1)
 
     def test_without_a_usable_template_it_says_what_to_do(self):
         from vtkmodules.vtkCommonCore import vtkPoints

@@ -4,13 +4,30 @@ Each filter takes its defaults from the engine's option structs (its constructor
 default_values are a second statement of them that ParaView shows and traces. A property whose
 XML default differs from a fresh object's value would make the GUI and a Python script track
 differently with "the defaults"."""
+import json
 import os
+import subprocess
 import unittest
 import xml.etree.ElementTree as ET
 
 import dynamicpoints
 
-PLUGIN_DIR = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "ParaViewPlugin")
+ROOT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..")
+PLUGIN_DIR = os.path.join(ROOT, "ParaViewPlugin")
+TRACK_XML = os.path.join(PLUGIN_DIR, "DeformableTrackFilter.xml")
+OPTIONS_DOC = os.path.join(ROOT, "Documentation", "TrackerOptions.md")
+# The track filter's properties that are not tracker options.
+NOT_TRACKER_OPTIONS = {"Input", "Template", "TemplateVertices", "TemplateSource", "TimestepValues"}
+
+
+def describe_options(form):
+    exe = os.path.join(os.environ["DP_BIN_DIR"], "dynamicpoints")
+    return subprocess.run([exe, "--describe-options", form], check=True, capture_output=True,
+                          text=True).stdout
+
+
+def close(a, b):
+    return abs(float(a) - float(b)) <= 1e-12 * max(1.0, abs(float(b)))
 
 
 def plugin_properties():
@@ -62,6 +79,49 @@ class PluginDefaults(unittest.TestCase):
                 getter = getattr(obj, "Get" + command[3:])
                 self.assertTrue(same(xml_values, getter()),
                                 f"{cls}.{name}: XML default {xml_values}, class default {getter()}")
+
+    def test_the_track_filters_xml_agrees_with_the_option_table(self):
+        # Every tracker option is described once (dp::TrackerOptionTable); the panel's property
+        # of each says the same default, range, kind and visibility.
+        table = json.loads(describe_options("json"))
+        self.assertGreaterEqual(len(table), 40)
+        rows = {row["property"]: row for row in table if row["property"]}
+        proxy = next(p for p in ET.parse(TRACK_XML).getroot().iter("SourceProxy"))
+        xml = {p.get("name"): p for p in proxy if p.get("command")}
+        self.assertEqual(set(xml) - NOT_TRACKER_OPTIONS, set(rows),
+                         "the XML's tracker properties and the table's differ")
+        for name, row in rows.items():
+            with self.subTest(property=name):
+                prop = xml[name]
+                self.assertEqual(prop.get("command"), "Set" + name)
+                self.assertEqual(prop.get("panel_visibility") == "advanced",
+                                 row["panel"] == "advanced", "panel visibility")
+                self.assertTrue(close(prop.get("default_values"), row["value"]), "default")
+                kind = row["kind"]
+                self.assertEqual(prop.tag, "DoubleVectorProperty" if kind == "real"
+                                 else "IntVectorProperty")
+                if kind == "flag":
+                    self.assertIsNotNone(prop.find("BooleanDomain"))
+                elif kind == "choice":
+                    entries = prop.find("EnumerationDomain").findall("Entry")
+                    self.assertEqual([int(e.get("value")) for e in entries],
+                                     list(range(len(row["choices"]))))
+                else:
+                    domain = prop.find("DoubleRangeDomain" if kind == "real" else "IntRangeDomain")
+                    low = 0 if row["zero_allowed"] else row["minimum"]
+                    self.assertTrue(close(domain.get("min"), low), "minimum")
+                    if row["maximum"] is None:
+                        self.assertIsNone(domain.get("max"), "an unbounded option has no max")
+                    else:
+                        self.assertIsNotNone(domain.get("max"), "maximum")
+                        self.assertTrue(close(domain.get("max"), row["maximum"]), "maximum")
+
+    def test_the_option_documentation_is_the_table(self):
+        with open(OPTIONS_DOC, encoding="utf-8") as f:
+            doc = f.read()
+        self.assertIn(describe_options("markdown"), doc,
+                      "Documentation/TrackerOptions.md is stale: regenerate its table with "
+                      "dynamicpoints --describe-options markdown")
 
     def test_a_changed_default_is_caught(self):
         # The comparison itself: a value off by a little, or of another length, is not the same.

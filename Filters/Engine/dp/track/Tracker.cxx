@@ -17,6 +17,7 @@
 #include "dp/track/Solvers.h"
 #include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
+#include "dp/track/TrackerOptionTable.h"
 
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -51,50 +52,6 @@ constexpr double SureCosine = 0.7;
 // The colour term's kernel on the coarse level, in times the fine one (ColourField::kernel): it
 // reaches farther, as the coarse level's data terms do.
 constexpr double CoarseColourKernel = 3.0;
-
-// Throws std::invalid_argument naming the first option out of its range (NaN included).
-void validate(const TrackerOptions& o)
-{
-  const auto check = [](bool ok, const char* what)
-  {
-    if (!ok)
-      throw std::invalid_argument(std::string("tracker option out of range: ") + what);
-  };
-  const auto nonNegative = [](double v) { return v >= 0 && std::isfinite(v); };
-  check(nonNegative(o.distanceWeight), "distance weight (>= 0)");
-  check(nonNegative(o.cloth.stretch) && nonNegative(o.cloth.shear) && nonNegative(o.cloth.bend),
-        "cloth stiffnesses (>= 0)");
-  check(o.maxIterations >= 1, "iteration limit (>= 1)");
-  check(o.maxFramePoints == 0 || o.maxFramePoints >= 100, "frame point limit (0 or >= 100)");
-  check(o.tolerance > 0 && o.tolerance <= 1, "tolerance (in (0, 1])");
-  check(nonNegative(o.voxelSize) && nonNegative(o.bandWidth), "voxel size and band (>= 0)");
-  check(nonNegative(o.outlierDistance), "outlier distance (>= 0)");
-  check(o.restUpdate >= 0 && o.restUpdate <= 1, "rest update (in [0, 1])");
-  check(nonNegative(o.coverage.weight) && nonNegative(o.coverage.pointToPoint),
-        "coverage weight and point-to-point share (>= 0)");
-  check(nonNegative(o.coverage.robustScale) && nonNegative(o.coverage.maxDistance),
-        "coverage robust scale and reach (>= 0)");
-  check(nonNegative(o.temporalWeight), "temporal weight (>= 0)");
-  check(nonNegative(o.colourWeight), "colour weight (>= 0)");
-  check(nonNegative(o.graph.rigidity) && nonNegative(o.graph.robustScale),
-        "graph rigidity and robust scale (>= 0)");
-  check(o.graph.iterations >= 0, "graph iterations (>= 0)");
-  check(o.graph.fineIterations >= 1, "fine iterations after the graph (>= 1)");
-  check(o.graph.acceleration >= 0 && o.graph.acceleration <= 20,
-        "graph acceleration depth (0 to 20 earlier steps)");
-  check(o.graph.yieldRate >= 0 && o.graph.yieldRate <= 1, "graph yield rate (in [0, 1])");
-  check(nonNegative(o.graph.yieldLimit), "graph yield limit (>= 0)");
-  check(nonNegative(o.graph.stretchWeight), "graph stretch weight (>= 0)");
-  const ThicknessSoftening& soft = o.softening;
-  check(nonNegative(soft.stretch) && nonNegative(soft.bend),
-        "thickness softening stiffness factors (>= 0)");
-  check(nonNegative(soft.from) && soft.to > soft.from && std::isfinite(soft.to),
-        "thickness softening range (0 <= from < to)");
-  check(nonNegative(o.creases.stretch) && nonNegative(o.creases.width),
-        "crease softening stretch factor and width (>= 0)");
-  check(o.recovery.reach > 0 && std::isfinite(o.recovery.reach), "recovery reach (> 0)");
-  check(nonNegative(o.recovery.margin), "failure margin (>= 0)");
-}
 
 // The cloth's stiffness by region (ThicknessSoftening, CreaseSoftening), from the template's
 // medial balls measured against its thickness (the 90th percentile of the inner radii). Thick
@@ -254,7 +211,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
     : Mesh(std::move(mesh)), Template(finiteTemplate(std::move(templatePositions))),
       Options(options), Cloth(Mesh, Template.data(), options.cloth), P(std::make_unique<Parts>())
 {
-  validate(options);
+  checkTrackerOptions(options);
   TemplateRest = Cloth.restState();
   setRegionStiffness(Cloth, Mesh, Template.data(), options.softening, options.creases);
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
@@ -496,13 +453,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   Attempt a;
   auto clock = std::chrono::steady_clock::now();
   const double L = Cloth.lengthScale();
-  DistanceTermOptions distanceOptions;
-  distanceOptions.weight = Options.distanceWeight;
-  distanceOptions.measure = Options.distanceMeasure;
-  distanceOptions.squared = Options.squaredDistance;
-  distanceOptions.normalTestDegrees = Options.normalTestDegrees;
-  distanceOptions.outlierDistance = Options.outlierDistance;
-  DistanceTerm distance(frame, Mesh, Cloth.vertexMass(), L, distanceOptions);
+  DistanceTerm distance(frame, Mesh, Cloth.vertexMass(), L, Options.distance);
   std::unique_ptr<CoverageTerm> coverage;
   if (Options.coverage.weight > 0 && !frame.spread().empty())
     coverage = std::make_unique<CoverageTerm>(frame.spreadSamples(), Mesh, L, Options.coverage);

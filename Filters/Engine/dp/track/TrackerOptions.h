@@ -4,7 +4,9 @@
  * @brief The settings of the tracker (dp::Tracker) and of its parts: the paper's energy and
  *        solvers, and what goes beyond it (the points -> mesh term, the deformation graph's
  *        coarse level, the temporal term, failure detection and recovery). Plain values; every
- *        default is the product's default (the filter and the plugin take theirs from here).
+ *        default is the product's default. Their names, ranges and documentation are in
+ *        TrackerOptionTable (one row each), from which the validation, the filter, the command
+ *        line and the documentation are derived.
  */
 #pragma once
 
@@ -30,7 +32,8 @@ enum class TrackerSolver
   SteepestDescent
 };
 
-/** The mesh -> points term (the paper's E_dis; DistanceTerm). */
+/** The mesh -> points term (the paper's E_dis; DistanceTerm). `squared`: each vertex's term is
+ *  D_i^2 / (2 voxel), smooth at the data, so vertices do not stick where they first touch it. */
 struct DistanceTermOptions
 {
   double weight = 50.0; // k_dis
@@ -154,13 +157,7 @@ struct TrackerOptions
   ClothParameters cloth;
   ThicknessSoftening softening;
   CreaseSoftening creases;
-  double distanceWeight = 50.0;    // k_dis
-  double normalTestDegrees = 90.0; // >= 180 switches the normal test off
-  double outlierDistance = 0.0;    // world units; 0: no cut-off
-  DistanceMeasure distanceMeasure = DistanceMeasure::Planes;
-  // true: each vertex's term is D_i^2 / (2 voxel) (smooth at the data, so vertices do not stick
-  // where they first touch it); false: the paper's D_i.
-  bool squaredDistance = true;
+  DistanceTermOptions distance;
   double voxelSize = 0.0; // world units; 0: template diagonal / 200
   double bandWidth = 0.0; // world units; 0: 4 voxels
   // A frame of more points is thinned evenly to this many (FrameData): the field resolves

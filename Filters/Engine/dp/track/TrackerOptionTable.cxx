@@ -1,0 +1,532 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/track/TrackerOptionTable.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+namespace dp
+{
+
+namespace
+{
+
+constexpr double Unbounded = std::numeric_limits<double>::max();
+
+using Row = TrackerOptionDescription;
+
+// Accessors of a double, int, size_t or bool member reached by `field` (a lambda returning a
+// reference): the table stores every value as a double.
+template <typename Field>
+void bind(Row& row, Field field)
+{
+  row.get = [field](const TrackerOptions& o)
+  { return static_cast<double>(field(const_cast<TrackerOptions&>(o))); };
+  row.set = [field](TrackerOptions& o, double v)
+  {
+    auto& member = field(o);
+    using T = std::decay_t<decltype(member)>;
+    if constexpr (std::is_same_v<T, bool>)
+      member = v != 0;
+    else
+      member = static_cast<T>(v);
+  };
+}
+
+template <typename Field>
+Row real(const char* name, const char* property, OptionPanel panel, double lo, double hi,
+         const char* unit, const char* doc, Field field)
+{
+  Row row;
+  row.name = name;
+  row.property = property;
+  row.kind = OptionKind::Real;
+  row.minimum = lo;
+  row.maximum = hi;
+  row.unit = unit;
+  row.doc = doc;
+  row.panel = panel;
+  bind(row, field);
+  return row;
+}
+
+template <typename Field>
+Row integer(const char* name, const char* property, OptionPanel panel, double lo, double hi,
+            const char* doc, Field field)
+{
+  Row row = real(name, property, panel, lo, hi, "", doc, field);
+  row.kind = OptionKind::Integer;
+  return row;
+}
+
+template <typename Field>
+Row flag(const char* name, const char* property, OptionPanel panel, const char* doc, Field field)
+{
+  Row row = real(name, property, panel, 0, 1, "", doc, field);
+  row.kind = OptionKind::Flag;
+  return row;
+}
+
+Row automatic(Row row)
+{
+  row.zeroAllowed = true;
+  return row;
+}
+
+Row solverRow()
+{
+  Row row;
+  row.name = "solver";
+  row.property = "Solver";
+  row.kind = OptionKind::Choice;
+  row.maximum = 2;
+  row.doc = "the fine level's minimiser: Gauss-Newton, L-BFGS or the paper's steepest descent";
+  row.panel = OptionPanel::Shown;
+  row.choices = {"gauss-newton", "lbfgs", "steepest-descent"};
+  row.get = [](const TrackerOptions& o) { return static_cast<double>(o.solver); };
+  row.set = [](TrackerOptions& o, double v) { o.solver = static_cast<TrackerSolver>(v); };
+  return row;
+}
+
+Row measureRow()
+{
+  Row row;
+  row.name = "distance.measure";
+  row.property = "DistanceMeasure";
+  row.kind = OptionKind::Choice;
+  row.maximum = 1;
+  row.doc = "what the distance term measures: the distance to the tangent planes of the nearest "
+            "points (vertices may slide along the data) or to the points (the paper)";
+  row.panel = OptionPanel::Advanced;
+  row.choices = {"planes", "points"};
+  row.get = [](const TrackerOptions& o)
+  { return o.distance.measure == DistanceMeasure::Points ? 1.0 : 0.0; };
+  row.set = [](TrackerOptions& o, double v)
+  { o.distance.measure = v == 1 ? DistanceMeasure::Points : DistanceMeasure::Planes; };
+  return row;
+}
+
+std::vector<Row> energyRows()
+{
+  using P = OptionPanel;
+  return {
+      real(
+          "cloth.stretch", "StretchStiffness", P::Shown, 0, Unbounded, "",
+          "k_st: the cloth's stiffness against stretch",
+          [](auto& o) -> auto& { return o.cloth.stretch; }),
+      real(
+          "cloth.shear", "ShearStiffness", P::Shown, 0, Unbounded, "",
+          "k_sh: against the change of the triangles' corner angles (0: edges alone)",
+          [](auto& o) -> auto& { return o.cloth.shear; }),
+      real(
+          "cloth.bend", "BendStiffness", P::Shown, 0, Unbounded, "",
+          "k_ben: against bending across edges", [](auto& o) -> auto& { return o.cloth.bend; }),
+      real(
+          "softening.stretch", "ThickPartStretch", P::Advanced, 0, 1, "",
+          "factor on the stretch stiffness of thick parts (a trunk: its skin slides); 1: off",
+          [](auto& o) -> auto& { return o.softening.stretch; }),
+      real(
+          "softening.bend", "", P::None, 0, 1, "",
+          "factor on the bending stiffness of thick parts; 1: off",
+          [](auto& o) -> auto& { return o.softening.bend; }),
+      real(
+          "softening.from", "", P::None, 0, Unbounded, "",
+          "inner medial radius (over the template's 90th percentile) where softening starts",
+          [](auto& o) -> auto& { return o.softening.from; }),
+      real(
+          "softening.to", "", P::None, 0, Unbounded, "",
+          "inner medial radius where softening is whole (above `from`)",
+          [](auto& o) -> auto& { return o.softening.to; }),
+      real(
+          "creases.stretch", "CreaseStretch", P::Advanced, 0, 1, "",
+          "factor on the stretch stiffness in the template's creases (armpits, crotch); 1: off",
+          [](auto& o) -> auto& { return o.creases.stretch; }),
+      real(
+          "creases.width", "", P::None, 0, Unbounded, "",
+          "outer medial radius, over the template's thickness, below which a vertex is in a crease",
+          [](auto& o) -> auto& { return o.creases.width; }),
+      real(
+          "restUpdate", "RestUpdate", P::Advanced, 0, 1, "",
+          "share of the last frame in the cloth's rest state (0: the template, the paper)",
+          [](auto& o) -> auto& { return o.restUpdate; }),
+      real(
+          "distance.weight", "DistanceWeight", P::Shown, 0, Unbounded, "",
+          "k_dis: the weight of the mesh -> points term",
+          [](auto& o) -> auto& { return o.distance.weight; }),
+      measureRow(),
+      flag(
+          "distance.squared", "SquaredDistance", P::Advanced,
+          "penalise D^2 / (2 voxel), smooth at the data; off: the paper's D",
+          [](auto& o) -> auto& { return o.distance.squared; }),
+      real(
+          "distance.normalTestDegrees", "NormalTestAngle", P::Advanced, 0, 180, "degrees",
+          "a vertex's distance term drops where its normal and its data's differ by more; 180: "
+          "no test",
+          [](auto& o) -> auto& { return o.distance.normalTestDegrees; }),
+      real(
+          "distance.outlierDistance", "OutlierDistance", P::Advanced, 0, Unbounded, "world units",
+          "a vertex farther than this from the data has no distance term; 0: none",
+          [](auto& o) -> auto& { return o.distance.outlierDistance; }),
+      real(
+          "distance.robustScale", "", P::None, 0, Unbounded, "world units",
+          "Geman-McClure scale of the distance term; 0: plain least squares",
+          [](auto& o) -> auto& { return o.distance.robustScale; }),
+      real(
+          "coverage.weight", "CoverageWeight", P::Shown, 0, Unbounded, "",
+          "k_cov: the weight of the points -> mesh term (0: the paper's energy alone)",
+          [](auto& o) -> auto& { return o.coverage.weight; }),
+      real(
+          "coverage.pointToPoint", "", P::None, 0, 1, "",
+          "share of the point-to-point distance in the points -> mesh term",
+          [](auto& o) -> auto& { return o.coverage.pointToPoint; }),
+      real(
+          "coverage.normalTestDegrees", "", P::None, 0, 180, "degrees",
+          "a point pulls only mesh whose normal is within this angle of its own; 180: no test",
+          [](auto& o) -> auto& { return o.coverage.normalTestDegrees; }),
+      real(
+          "coverage.robustScale", "", P::None, 0, Unbounded, "world units",
+          "Geman-McClure scale of the points -> mesh term; 0: plain least squares",
+          [](auto& o) -> auto& { return o.coverage.robustScale; }),
+      real(
+          "coverage.maxDistance", "", P::None, 0, Unbounded, "world units",
+          "points farther than this from the mesh do not pull; 0: no cut-off",
+          [](auto& o) -> auto& { return o.coverage.maxDistance; }),
+      integer(
+          "coverage.points", "", P::None, 0, 1e9,
+          "size of the well-spread subsample that pulls; 0: 4 per vertex",
+          [](auto& o) -> auto& { return o.coverage.points; }),
+      flag(
+          "coverage.followMatches", "", P::None,
+          "within a solve, each point's match follows the surface instead of a new search",
+          [](auto& o) -> auto& { return o.coverage.followMatches; }),
+      real(
+          "temporalWeight", "TemporalWeight", P::Advanced, 0, Unbounded, "",
+          "k_acc: pull toward the constant-velocity course (smoother, lags fast motion); 0: off",
+          [](auto& o) -> auto& { return o.temporalWeight; }),
+      real(
+          "colourWeight", "ColourWeight", P::Shown, 0, Unbounded, "",
+          "k_col: where points carry colour, pull each vertex along the surface to its material "
+          "point's colour; 0: off",
+          [](auto& o) -> auto& { return o.colourWeight; }),
+  };
+}
+
+std::vector<Row> scheduleRows()
+{
+  using P = OptionPanel;
+  return {
+      real(
+          "voxelSize", "VoxelSize", P::Advanced, 0, Unbounded, "world units",
+          "the distance field's voxel; 0: the template's diagonal / 200",
+          [](auto& o) -> auto& { return o.voxelSize; }),
+      real(
+          "bandWidth", "BandWidth", P::Advanced, 0, Unbounded, "world units",
+          "the distance field's narrow band; 0: 4 voxels",
+          [](auto& o) -> auto& { return o.bandWidth; }),
+      automatic(integer(
+          "maxFramePoints", "", P::None, 100, 1e12,
+          "a frame of more points is thinned evenly to this many; 0: no limit",
+          [](auto& o) -> auto& { return o.maxFramePoints; })),
+      solverRow(),
+      flag(
+          "motionPrediction", "MotionPrediction", P::Advanced,
+          "start each frame from the last frames' motion continued (the paper's MP)",
+          [](auto& o) -> auto& { return o.motionPrediction; }),
+      flag(
+          "rigidAlignment", "RigidAlignment", P::Advanced,
+          "without the coarse level: align the start rigidly to the data first",
+          [](auto& o) -> auto& { return o.rigidAlignment; }),
+      flag(
+          "provisionalDetermination", "ProvisionalDetermination", P::Advanced,
+          "steepest descent only: fix vertices that have settled (the paper's PD)",
+          [](auto& o) -> auto& { return o.provisionalDetermination; }),
+      integer(
+          "maxIterations", "MaximumIterations", P::Advanced, 1, 1e6,
+          "iteration limit of the fine level's solve (without the coarse level)",
+          [](auto& o) -> auto& { return o.maxIterations; }),
+      real(
+          "tolerance", "Tolerance", P::Advanced, 1e-15, 1, "",
+          "relative energy decrease that ends a solve",
+          [](auto& o) -> auto& { return o.tolerance; }),
+      flag(
+          "graph.enabled", "CoarseLevel", P::Shown,
+          "register an embedded deformation graph first: fast motion caught as whole limbs",
+          [](auto& o) -> auto& { return o.graph.enabled; }),
+      integer(
+          "graph.nodes", "GraphNodes", P::Advanced, 0, 1e7,
+          "the graph's node count; 0: one per 5 vertices, 30 to 600",
+          [](auto& o) -> auto& { return o.graph.nodes; }),
+      integer(
+          "graph.influences", "", P::None, 1, 16, "nodes blended per vertex",
+          [](auto& o) -> auto& { return o.graph.influences; }),
+      real(
+          "graph.rigidity", "GraphRigidity", P::Advanced, 0, Unbounded, "",
+          "factor on the graph's regularisation weights",
+          [](auto& o) -> auto& { return o.graph.rigidity; }),
+      real(
+          "graph.robustScale", "", P::None, 0, Unbounded, "voxels",
+          "Huber scale of the graph's regulariser: edges bending more cost in proportion",
+          [](auto& o) -> auto& { return o.graph.robustScale; }),
+      real(
+          "graph.yieldRate", "Plasticity", P::Advanced, 0, 1, "",
+          "share of a lasting bend the graph's reference yields each frame; 0: off",
+          [](auto& o) -> auto& { return o.graph.yieldRate; }),
+      real(
+          "graph.yieldLimit", "", P::None, 0, Unbounded, "voxels",
+          "bend of a graph edge below which its reference does not yield",
+          [](auto& o) -> auto& { return o.graph.yieldLimit; }),
+      real(
+          "graph.stretchWeight", "", P::None, 0, Unbounded, "",
+          "weight of the graph's stretch term against its bending term; 0: off",
+          [](auto& o) -> auto& { return o.graph.stretchWeight; }),
+      integer(
+          "graph.iterations", "", P::None, 0, 1000,
+          "Levenberg-Marquardt steps per stage of the coarse level (at most)",
+          [](auto& o) -> auto& { return o.graph.iterations; }),
+      integer(
+          "graph.fineIterations", "FineIterations", P::Advanced, 1, 1e6,
+          "Gauss-Newton steps of the fine level after the coarse level (at most)",
+          [](auto& o) -> auto& { return o.graph.fineIterations; }),
+      integer(
+          "graph.acceleration", "", P::None, 0, 20,
+          "earlier steps Anderson acceleration combines; 0: plain steps",
+          [](auto& o) -> auto& { return o.graph.acceleration; }),
+      flag(
+          "recovery.enabled", "Recovery", P::Shown,
+          "try a frame that failed again from other starts, keep the best, flag it if it fails",
+          [](auto& o) -> auto& { return o.recovery.enabled; }),
+      real(
+          "recovery.reach", "", P::None, 1e-3, 1e3, "voxels",
+          "data farther than this from the mesh is unexplained (and mesh from the data, "
+          "unsupported)",
+          [](auto& o) -> auto& { return o.recovery.reach; }),
+      real(
+          "recovery.margin", "FailureMargin", P::Advanced, 0, 1, "",
+          "share of unexplained data beyond the take's usual that fails a frame",
+          [](auto& o) -> auto& { return o.recovery.margin; }),
+      flag(
+          "recovery.stiffRetry", "", P::None,
+          "a frame with a torn limb is tried again with the coarse level's limbs stiffer",
+          [](auto& o) -> auto& { return o.recovery.stiffRetry; }),
+  };
+}
+
+std::vector<Row> makeTable()
+{
+  std::vector<Row> rows = energyRows();
+  for (Row& row : scheduleRows())
+    rows.push_back(std::move(row));
+  return rows;
+}
+
+std::string number(double v)
+{
+  std::ostringstream s;
+  s.precision(15);
+  s << v;
+  return s.str();
+}
+
+std::string kindName(OptionKind kind)
+{
+  switch (kind)
+  {
+  case OptionKind::Integer:
+    return "integer";
+  case OptionKind::Flag:
+    return "flag";
+  case OptionKind::Choice:
+    return "choice";
+  default:
+    return "real";
+  }
+}
+
+std::string panelName(OptionPanel panel)
+{
+  return panel == OptionPanel::Shown ? "shown" : panel == OptionPanel::Advanced ? "advanced" : "";
+}
+
+// A value as JSON: flags as true/false, choices by name.
+nlohmann::json jsonValue(const Row& row, double v)
+{
+  if (row.kind == OptionKind::Flag)
+    return v != 0;
+  if (row.kind == OptionKind::Choice)
+    return row.choices.at(static_cast<std::size_t>(v));
+  if (row.kind == OptionKind::Integer)
+    return static_cast<long long>(v);
+  return v;
+}
+
+void setChecked(TrackerOptions& options, const Row& row, double v)
+{
+  if (!row.accepts(v))
+    throw std::invalid_argument("tracker option " + row.name + ": " + number(v) +
+                                " is out of its range " + row.range() + " (" + row.doc + ")");
+  row.set(options, v);
+}
+
+} // namespace
+
+bool TrackerOptionDescription::accepts(double value) const
+{
+  if (!std::isfinite(value))
+    return false;
+  if (kind != OptionKind::Real && value != std::floor(value))
+    return false;
+  return (zeroAllowed && value == 0) || (value >= minimum && value <= maximum);
+}
+
+std::string TrackerOptionDescription::range() const
+{
+  if (kind == OptionKind::Choice)
+  {
+    std::string names;
+    for (const std::string& c : choices)
+      names += (names.empty() ? "" : "|") + c;
+    return names;
+  }
+  if (kind == OptionKind::Flag)
+    return "true|false";
+  const std::string upper = maximum == Unbounded ? "inf" : number(maximum);
+  return (zeroAllowed ? "0 or " : "") + std::string("[") + number(minimum) + ", " + upper + "]";
+}
+
+const std::vector<TrackerOptionDescription>& trackerOptionTable()
+{
+  static const std::vector<Row> table = makeTable();
+  return table;
+}
+
+const TrackerOptionDescription& trackerOption(std::string_view nameOrProperty)
+{
+  for (const Row& row : trackerOptionTable())
+    if (row.name == nameOrProperty || (!row.property.empty() && row.property == nameOrProperty))
+      return row;
+  throw std::invalid_argument("no tracker option '" + std::string(nameOrProperty) +
+                              "' (--print-options lists them)");
+}
+
+void checkTrackerOptions(const TrackerOptions& options)
+{
+  for (const Row& row : trackerOptionTable())
+  {
+    const double v = row.get(options);
+    if (!row.accepts(v))
+      throw std::invalid_argument("tracker option " + row.name + ": " + number(v) +
+                                  " is out of its range " + row.range() + " (" + row.doc + ")");
+  }
+  if (!(options.softening.to > options.softening.from))
+    throw std::invalid_argument("tracker options softening.from and softening.to: from (" +
+                                number(options.softening.from) + ") must be below to (" +
+                                number(options.softening.to) + ")");
+}
+
+void setTrackerOption(TrackerOptions& options, std::string_view name, std::string_view text)
+{
+  const Row& row = trackerOption(name);
+  const std::string value(text);
+  if (row.kind == OptionKind::Flag && (value == "true" || value == "on" || value == "yes"))
+    return row.set(options, 1);
+  if (row.kind == OptionKind::Flag && (value == "false" || value == "off" || value == "no"))
+    return row.set(options, 0);
+  for (std::size_t c = 0; c < row.choices.size(); ++c)
+    if (row.choices[c] == value)
+      return row.set(options, static_cast<double>(c));
+  char* end = nullptr;
+  const double v = std::strtod(value.c_str(), &end);
+  if (value.empty() || end != value.c_str() + value.size())
+    throw std::invalid_argument("tracker option " + row.name + " wants " + row.range() + ", not '" +
+                                value + "'");
+  setChecked(options, row, v);
+}
+
+std::string trackerOptionsJson(const TrackerOptions& options)
+{
+  nlohmann::ordered_json out = nlohmann::ordered_json::object();
+  for (const Row& row : trackerOptionTable())
+    out[row.name] = jsonValue(row, row.get(options));
+  return out.dump(2) + "\n";
+}
+
+void readTrackerOptionsJson(TrackerOptions& options, const std::string& json,
+                            const std::string& source)
+{
+  nlohmann::json in;
+  try
+  {
+    in = nlohmann::json::parse(json);
+  }
+  catch (const nlohmann::json::exception& e)
+  {
+    throw std::invalid_argument(source + ": not JSON: " + e.what());
+  }
+  if (!in.is_object())
+    throw std::invalid_argument(source + ": wants one JSON object of option names and values");
+  for (const auto& [name, value] : in.items())
+  {
+    try
+    {
+      setTrackerOption(options, name,
+                       value.is_string()    ? value.get<std::string>()
+                       : value.is_boolean() ? (value.get<bool>() ? "true" : "false")
+                                            : value.dump());
+    }
+    catch (const std::invalid_argument& e)
+    {
+      throw std::invalid_argument(source + ": " + e.what());
+    }
+  }
+}
+
+std::string trackerOptionTableJson()
+{
+  const TrackerOptions defaults;
+  nlohmann::ordered_json out = nlohmann::ordered_json::array();
+  for (const Row& row : trackerOptionTable())
+  {
+    nlohmann::ordered_json r;
+    r["name"] = row.name;
+    r["property"] = row.property;
+    r["kind"] = kindName(row.kind);
+    r["default"] = jsonValue(row, row.get(defaults));
+    r["value"] = row.get(defaults); // the number the filter's property holds
+    r["minimum"] = row.minimum;
+    r["maximum"] =
+        row.maximum == Unbounded ? nlohmann::ordered_json() : nlohmann::ordered_json(row.maximum);
+    r["zero_allowed"] = row.zeroAllowed;
+    r["unit"] = row.unit;
+    r["doc"] = row.doc;
+    r["panel"] = panelName(row.panel);
+    r["choices"] = row.choices;
+    out.push_back(r);
+  }
+  return out.dump(2) + "\n";
+}
+
+std::string trackerOptionTableMarkdown()
+{
+  const TrackerOptions defaults;
+  std::ostringstream md;
+  md << "| option | ParaView | default | range | unit | what |\n"
+        "|---|---|---|---|---|---|\n";
+  for (const Row& row : trackerOptionTable())
+  {
+    const std::string shown =
+        row.property.empty()
+            ? ""
+            : row.property + (row.panel == OptionPanel::Advanced ? " (advanced)" : "");
+    md << "| `" << row.name << "` | " << shown << " | " << jsonValue(row, row.get(defaults)).dump()
+       << " | " << row.range() << " | " << row.unit << " | " << row.doc << " |\n";
+  }
+  return md.str();
+}
+
+} // namespace dp
