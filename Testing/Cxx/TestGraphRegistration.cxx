@@ -341,8 +341,8 @@ TEST(GraphRegistration, AcceleratedStepsFitTheDataAsWellInFewerSteps)
     CoarseTerms data(f, dp::DistanceTermOptions{});
     std::mt19937_64 rng(11);
     dp::DeformationGraph::State state = turnedState(graph, 0.3, rng);
-    const int steps =
-        registration.registerFrame(state, data.distance, &data.coverage, 1.0, 0.5 * f.voxel, 10);
+    const int steps = registration.registerFrame(state, data.distance, &data.coverage, {1.0, 1.0},
+                                                 0.5 * f.voxel, 10);
     std::vector<double> x(f.shape.positions.size());
     graph.deform(state, x.data());
     double sum = 0;

@@ -507,9 +507,12 @@ bool GraphRegistration::dampedStep(DeformationGraph::State& state,
 }
 
 int GraphRegistration::registerFrame(DeformationGraph::State& state, DistanceTerm& distance,
-                                     CoverageTerm* coverage, double rigidity, double robustScale,
-                                     int iterationsPerStage, const std::vector<EnergyTerm*>& extra)
+                                     CoverageTerm* coverage, GraphStiffness stiffness,
+                                     double robustScale, int iterationsPerStage,
+                                     const std::vector<EnergyTerm*>& extra)
 {
+  const double rigidity = stiffness.rigidity;
+  StretchWeight = stiffness.stretchWeight;
   std::vector<EnergyTerm*> terms{&distance};
   if (coverage)
   {

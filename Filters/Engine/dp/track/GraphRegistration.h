@@ -65,6 +65,15 @@ namespace dp
 class CoverageTerm;
 class DistanceTerm;
 
+/** How stiff the coarse level is for one frame: `rigidity` scales the schedule's k_reg,
+ *  `stretchWeight` is k_s (0: no stretch term). A value per call, so a stiffer retry leaves no
+ *  state behind. */
+struct GraphStiffness
+{
+  double rigidity = 1.0;
+  double stretchWeight = 1.0;
+};
+
 class GraphRegistration
 {
 public:
@@ -77,11 +86,12 @@ public:
             int iterations);
 
   /** The coarse schedule (see the file comment) on the frame's data terms; `coverage` may be
-   *  null. `rigidity` scales the schedule's k_reg; `robustScale` (world units) is E_reg's Huber
+   *  null. `stiffness`: its rigidity scales the schedule's k_reg, its stretch weight is k_s for
+   *  this frame (setStretchWeight); `robustScale` (world units) is E_reg's Huber
    *  scale (0: least squares). `extra` terms (whose models couple no vertices, e.g. ColourTerm)
    *  join every stage as they are. Returns the steps taken. */
   int registerFrame(DeformationGraph::State& state, DistanceTerm& distance, CoverageTerm* coverage,
-                    double rigidity, double robustScale, int iterationsPerStage,
+                    GraphStiffness stiffness, double robustScale, int iterationsPerStage,
                     const std::vector<EnergyTerm*>& extra = {});
 
   /** The Gauss-Newton model of the terms (as they were last linearised) plus E_reg at a state:

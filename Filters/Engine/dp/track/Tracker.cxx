@@ -13,6 +13,7 @@
 #include "dp/track/LocalThickness.h"
 #include "dp/track/MotionPredictor.h"
 #include "dp/track/Parallel.h"
+#include "dp/track/RecoveryPolicy.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
 #include "dp/track/SurfaceLocator.h"
@@ -39,10 +40,6 @@ constexpr double SettledStep = 0.1;
 // The fine level's points -> mesh term: robust scale and reach, in voxels (defaults).
 constexpr double FineCoverageScale = 3.0;
 constexpr double FineCoverageReach = 8.0;
-// A frame whose stiff edges grew beyond their template length by more than this many mean edge
-// lengths has a torn limb (FrameQuality::tear): it fails, and its retries start with the coarse
-// level held stiffer.
-constexpr double TearGrowth = 2.0;
 // Robust scale, in voxels, of the distance term that chooses the coarse level's start.
 constexpr double StartChoiceScale = 3.0;
 // A sure vote on a data normal's orientation (Tracker::orientData): the last shape's surface
@@ -149,17 +146,14 @@ void rigidFit(const std::vector<double>& from, const std::vector<double>& to,
 // pattern and symbolic analysis live as long as the tracker), the motion history.
 struct Tracker::Parts
 {
+  explicit Parts(const RecoveryOptions& recovery) : Recovery(recovery) {}
   std::unique_ptr<DeformationGraph> Graph;
   std::unique_ptr<GraphRegistration> Registration;
   std::unique_ptr<GaussNewtonSolver> Newton;
   MotionPredictor Predictor;
-  // Of the last frames that passed (the take's usual quality): a failed frame does not lower the
-  // bar for the next one, unless frames keep failing (then the take itself has changed).
-  std::vector<FrameQuality> RecentQuality;
-  // Whether the last frame's quality was in doubt (Tracker::doubtful): it then sets no baseline,
-  // no reference and no retry's start, whether or not it was flagged.
-  bool InDoubt = false;
-  int FailedInARow = 0;
+  // The take's usual quality and whether the last frame is in doubt: a frame in doubt sets no
+  // baseline, no reference and no retry's start, whether or not it was flagged.
+  RecoveryPolicy Recovery;
   // The last frame that did not fail, while the frames after it fail: a retry starts there.
   std::vector<double> LastGood;
   DeformationGraph::State LastGoodState;
@@ -182,8 +176,7 @@ struct Tracker::Attempt
   std::vector<double> residual;
   double internalEnergy = 0, distanceEnergy = 0;
   FrameTimings timings;
-  double score() const { return quality.unexplained + quality.unsupported; }
-  bool torn() const { return quality.tear > TearGrowth; }
+  double score() const { return RecoveryPolicy::score(quality); }
 };
 
 namespace
@@ -209,7 +202,8 @@ bool tooLittleData(const double* points, std::size_t count, double voxel)
 Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
                  const TrackerOptions& options)
     : Mesh(std::move(mesh)), Template(finiteTemplate(std::move(templatePositions))),
-      Options(options), Cloth(Mesh, Template.data(), options.cloth), P(std::make_unique<Parts>())
+      Options(options), Cloth(Mesh, Template.data(), options.cloth),
+      P(std::make_unique<Parts>(options.recovery))
 {
   checkTrackerOptions(options);
   TemplateRest = Cloth.restState();
@@ -224,7 +218,6 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
     P->Graph = std::make_unique<DeformationGraph>(
         Mesh, Template.data(), nodes, std::max<std::size_t>(1, options.graph.influences));
     P->Registration = std::make_unique<GraphRegistration>(*P->Graph, Cloth.lengthScale(), Voxel);
-    P->Registration->setStretchWeight(options.graph.stretchWeight);
     P->Registration->setAcceleration(options.graph.acceleration);
   }
 }
@@ -266,8 +259,7 @@ void Tracker::reset()
   P->ColourCoarse.clear();
   P->LastColours.clear();
   P->Predictor.clear();
-  P->RecentQuality.clear();
-  P->FailedInARow = 0;
+  P->Recovery.reset();
   P->LastGood.clear();
   P->LastFailed = false;
   if (P->Registration)
@@ -348,54 +340,6 @@ void Tracker::orientData(FrameData& frame) const
       sure[i] = static_cast<std::int8_t>(-sure[i]);
   }
   frame.mendOrientation(sure);
-}
-
-namespace
-{
-// Against the take's usual quality: the median of the last frames kept.
-double usual(const std::vector<FrameQuality>& recent, double FrameQuality::*share)
-{
-  std::vector<double> shares;
-  for (const FrameQuality& q : recent)
-    shares.push_back(q.*share);
-  if (shares.empty())
-    return 0.0;
-  std::nth_element(shares.begin(), shares.begin() + static_cast<std::ptrdiff_t>(shares.size() / 2),
-                   shares.end());
-  return shares[shares.size() / 2];
-}
-} // namespace
-
-bool Tracker::beyondUsual(const Attempt& a, double FrameQuality::*share) const
-{
-  return a.quality.*share > usual(P->RecentQuality, share) + Options.recovery.margin;
-}
-
-bool Tracker::failed(const Attempt& a) const
-{
-  // The first frame sets what is usual: with nothing to compare it to, sparse data or parts the
-  // template lacks are not a failure.
-  if (P->RecentQuality.empty())
-    return false;
-  // Data the mesh does not explain (a lost limb's, or a limb put on other data), or mesh the solve
-  // took away from its data (a leg pulled off its data while another leg's mesh covers it). Mesh
-  // without data is no failure by itself: a hole in the data looks just the same (a scanner's,
-  // moving from frame to frame), but there the solve started over the same missing data. A limb
-  // caught by another's data tears a strip that covers almost nothing: none of these sees it, the
-  // edges' growth does.
-  return beyondUsual(a, &FrameQuality::unexplained) || beyondUsual(a, &FrameQuality::departed) ||
-         (Options.recovery.stiffRetry && a.torn());
-}
-
-bool Tracker::doubtful(const Attempt& a) const
-{
-  // Any share beyond the usual is worth other starts: more mesh without data than usual may be a
-  // limb left behind (its data explained by a neighbour's mesh) as well as a hole. Measured, the
-  // retries on mesh without data find such limbs again; only the flag waits for failed().
-  if (P->RecentQuality.empty())
-    return false;
-  return beyondUsual(a, &FrameQuality::unexplained) || beyondUsual(a, &FrameQuality::unsupported) ||
-         (Options.recovery.stiffRetry && a.torn());
 }
 
 void Tracker::startState(Start start, Attempt& a) const
@@ -535,13 +479,13 @@ void Tracker::solveCoarse(Start start, Attempt& a, DistanceTerm& distance, Cover
 {
   if (!P->Graph)
     return;
-  const double stiffer = start == Start::Stiff ? 2.0 : 1.0;
-  P->Registration->setStretchWeight(stiffer * stiffer * Options.graph.stretchWeight);
+  const double stiffer = start == Start::Stiff ? Options.recovery.stiffening : 1.0;
+  const GraphStiffness stiffness{stiffer * Options.graph.rigidity,
+                                 stiffer * stiffer * Options.graph.stretchWeight};
   a.coarseIterations = P->Registration->registerFrame(
-      a.state, distance, coverage, stiffer * Options.graph.rigidity,
-      Options.graph.robustScale * Voxel, Options.graph.iterations,
+      a.state, distance, coverage, stiffness, Options.graph.robustScale * Voxel,
+      Options.graph.iterations,
       colour ? std::vector<EnergyTerm*>{colour} : std::vector<EnergyTerm*>{});
-  P->Registration->setStretchWeight(Options.graph.stretchWeight);
   P->Graph->deform(a.state, x.data());
 }
 
@@ -637,18 +581,19 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   // fails: there the graph may have missed, and the fine level solved on to convergence mends
   // what it can before other starts are tried.
   Attempt best = attempt(frame, Start::Predicted);
-  if (Options.recovery.enabled && doubtful(best) && capsFineLevel())
+  const RecoveryPolicy& policy = P->Recovery;
+  if (Options.recovery.enabled && policy.doubtful(best.quality) && capsFineLevel())
   {
     Attempt converged = attempt(frame, Start::Predicted, &best);
     if (converged.score() < best.score())
       best = std::move(converged);
   }
   int kept = 0;
-  if (Options.recovery.enabled && doubtful(best) && !P->Predictor.empty())
+  if (Options.recovery.enabled && policy.doubtful(best.quality) && !P->Predictor.empty())
   {
     // Held stiffer only where a limb tore: elsewhere (a collapse, a body whose skin stretches)
     // a stiffer coarse level fits the data worse.
-    const bool torn = Options.recovery.stiffRetry && best.torn();
+    const bool torn = policy.torn(best.quality);
     for (Start retry : {Start::Stiff, Start::Still, Start::LastGood, Start::Template})
     {
       if ((!P->Graph && (retry == Start::Template || retry == Start::Stiff)) ||
@@ -657,30 +602,18 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
         continue;
       Attempt other = attempt(frame, retry);
       ++result.retries;
-      // Another start must do clearly better to be kept: the scores of two plausible fits
-      // differ by noise, and a start from elsewhere breaks the motion's continuity.
-      const bool better = other.score() < 0.7 * best.score() &&
-                          other.score() < best.score() - 0.5 * Options.recovery.margin;
-      // Or it mends a tear and explains the data about as well.
-      const bool mends = torn && best.torn() && !other.torn() &&
-                         other.score() < best.score() + 0.5 * Options.recovery.margin;
-      if (better || mends)
+      if (policy.prefers(other.quality, best.quality, torn))
       {
         best = std::move(other);
         kept = retry == Start::Stiff ? 2 : 1;
       }
-      if (!doubtful(best))
+      if (!policy.doubtful(best.quality))
         break;
     }
   }
-  result.failed = Options.recovery.enabled && failed(best);
+  result.failed = Options.recovery.enabled && policy.failed(best.quality);
   result.kept = kept;
-  P->InDoubt = Options.recovery.enabled && doubtful(best);
-  P->FailedInARow = P->InDoubt ? P->FailedInARow + 1 : 0;
-  if (!P->InDoubt || P->FailedInARow >= 3)
-    P->RecentQuality.push_back(best.quality);
-  if (P->RecentQuality.size() > 9)
-    P->RecentQuality.erase(P->RecentQuality.begin());
+  P->Recovery.frameKept(best.quality);
   return best;
 }
 
@@ -719,18 +652,18 @@ void Tracker::remember(const FrameResult& result)
     // A failed frame's shape may be garbage (a frame a thousand times too large): the graph's
     // reference gives way to it only once failures persist, when the take itself has changed
     // (as the quality's baseline does).
-    if (Options.graph.yieldRate > 0 && (!P->InDoubt || P->FailedInARow >= 3))
+    if (Options.graph.yieldRate > 0 && P->Recovery.referencesFollow())
       P->Registration->yield(state, Options.graph.yieldRate, Options.graph.yieldLimit * Voxel);
-    if (!P->InDoubt)
+    if (!P->Recovery.inDoubt())
       P->LastGoodState = state;
   }
   else if (result.kept == 1)
     P->Predictor.restartFrom(result.positions);
   else
     P->Predictor.push(result.positions);
-  if (!P->InDoubt)
+  if (!P->Recovery.inDoubt())
     P->LastGood = result.positions;
-  P->LastFailed = P->InDoubt;
+  P->LastFailed = P->Recovery.inDoubt();
 }
 
 PreparedFrame::PreparedFrame() = default;
@@ -785,7 +718,7 @@ FrameResult Tracker::track(PreparedFrame prepared)
   result.frozen.assign(nv, 0);
   result.rejected.assign(nv, 0);
   result.residual.assign(nv, -1.0);
-  P->InDoubt = false;
+  P->Recovery.frameBegins();
 
   if (Options.restUpdate > 0)
     Cloth.setRestState(P->Predictor.empty()
@@ -799,7 +732,7 @@ FrameResult Tracker::track(PreparedFrame prepared)
   {
     trackEmptyFrame(result);
     result.failed = true;
-    P->InDoubt = true;
+    P->Recovery.frameWithoutData();
     readVertexColours(nullptr, result);
   }
   else

@@ -27,11 +27,11 @@
  * extrapolation, from the last frame that was not in doubt (when the last one was), and from
  * the template re-registered rigidly to the last frame; the best attempt is kept, and the frame
  * is flagged if it still fails: data unexplained, mesh taken off its data or a tear, not mesh
- * over a hole in the data (RecoveryOptions). When a limb tore
- * (an edge grew beyond its template length by more than two mean edge lengths), the first
- * retry keeps the predicted start but holds the coarse level's limbs stiffer (stretch weight
- * x4, rigidity x2): a fast limb that passes another is pulled along with the other's data by
- * stretching, which the default stiffness, tuned for non-rigid takes, allows.
+ * over a hole in the data (RecoveryPolicy, RecoveryOptions). When a limb tore (an edge grew
+ * beyond its template length by more than two mean edge lengths), the first retry keeps the
+ * predicted start but holds the coarse level's limbs stiffer (stretch weight x4, rigidity x2:
+ * RecoveryOptions::stiffening): a fast limb that passes another is pulled along with the
+ * other's data by stretching, which the default stiffness, tuned for non-rigid takes, allows.
  *
  * Solvers of the fine level (Solvers.h): Gauss-Newton (default), L-BFGS, and the paper's
  * steepest descent with h = 1.9 / k_max, motion prediction (MP: the best of the extrapolations
@@ -225,13 +225,6 @@ private:
    *  are closer to it (MotionPredictor, Extrapolation). */
   void preferStraightIfCloser(class DistanceTerm& distance, Attempt& a,
                               std::vector<double>& x) const;
-  /** Whether a.quality's `share` exceeds the last kept frames' median by the margin. */
-  bool beyondUsual(const Attempt& a, double FrameQuality::*share) const;
-  /** Flagged: data left unexplained, mesh taken off its data, or a tear (FrameQuality). */
-  bool failed(const Attempt& a) const;
-  /** Worth other starts (and no baseline for the next frames): any share beyond the usual, mesh
-   *  without data too (a limb left behind looks so, as does a hole), or a tear. */
-  bool doubtful(const Attempt& a) const;
   /** Whether a first try's fine level stops after GraphOptions::fineIterations steps (the graph
    *  is on, the solver Gauss-Newton, and the limit below maxIterations). */
   bool capsFineLevel() const;

@@ -314,6 +314,26 @@ std::vector<Row> scheduleRows()
           "recovery.stiffRetry", "", P::None,
           "a frame with a torn limb is tried again with the coarse level's limbs stiffer",
           [](auto& o) -> auto& { return o.recovery.stiffRetry; }),
+      real(
+          "recovery.tearGrowth", "", P::None, 0, Unbounded, "mean edge lengths",
+          "a stiff edge grown beyond its template length by more than this: a torn limb",
+          [](auto& o) -> auto& { return o.recovery.tearGrowth; }),
+      real(
+          "recovery.stiffening", "", P::None, 1, 100, "",
+          "the stiff retry's factor on the coarse rigidity (its square on the stretch weight)",
+          [](auto& o) -> auto& { return o.recovery.stiffening; }),
+      real(
+          "recovery.retryShare", "", P::None, 0, 1, "",
+          "a retry is kept only with a score below this share of the best attempt's",
+          [](auto& o) -> auto& { return o.recovery.retryShare; }),
+      integer(
+          "recovery.window", "", P::None, 1, 1000,
+          "the last frames kept whose median quality is the take's usual",
+          [](auto& o) -> auto& { return o.recovery.window; }),
+      integer(
+          "recovery.persistentFailures", "", P::None, 1, 1000,
+          "frames in doubt in a row after which their quality becomes the usual",
+          [](auto& o) -> auto& { return o.recovery.persistentFailures; }),
   };
 }
 

@@ -114,6 +114,16 @@ struct RecoveryOptions
   // coarse level's limbs held stiffer, and keeps an attempt without the tear that explains the
   // data about as well. Off: tears are neither failures nor retried stiffer.
   bool stiffRetry = true;
+  double tearGrowth = 2.0; // mean edge lengths a stiff edge may grow before its limb counts torn
+  // The stiff retry's coarse level: its rigidity times `stiffening`, its stretch weight times
+  // the square.
+  double stiffening = 2.0;
+  // A retry replaces the best attempt only with a score below this share of the best's (and
+  // half a margin below it): two plausible fits differ by noise, and a start from elsewhere
+  // breaks the motion's continuity.
+  double retryShare = 0.7;
+  std::size_t window = 9;     // the last frames kept whose median is the take's usual quality
+  int persistentFailures = 3; // frames in doubt in a row after which they are the usual
 };
 
 /** Softer cloth where the shape is thick (LocalThickness): a trunk has data all round it and
