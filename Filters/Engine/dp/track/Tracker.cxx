@@ -46,9 +46,6 @@ constexpr double StartChoiceScale = 3.0;
 // within this many voxels, at most 45 degrees from parallel or antiparallel (cosine).
 constexpr double SureReach = 2.0;
 constexpr double SureCosine = 0.7;
-// The colour term's kernel on the coarse level, in times the fine one (ColourField::kernel): it
-// reaches farther, as the coarse level's data terms do.
-constexpr double CoarseColourKernel = 3.0;
 
 // The cloth's stiffness by region (ThicknessSoftening, CreaseSoftening), from the template's
 // medial balls measured against its thickness (the 90th percentile of the inner radii). Thick
@@ -236,7 +233,8 @@ void Tracker::readColourReference(const FrameData& frame, const std::vector<doub
   const ColourField& field = *frame.colourField();
   const std::size_t nv = Mesh.numberOfVertices();
   P->ColourFine = vertexColours(field, positions.data(), nv, field.kernel());
-  P->ColourCoarse = vertexColours(field, positions.data(), nv, field.kernel(CoarseColourKernel));
+  P->ColourCoarse =
+      vertexColours(field, positions.data(), nv, field.kernel(Options.colourCoarseKernel));
 }
 
 void Tracker::readVertexColours(const FrameData* frame, FrameResult& result)
@@ -405,7 +403,7 @@ Tracker::Attempt Tracker::attempt(const FrameData& frame, Start start, const Att
   if (Options.colourWeight > 0 && frame.colourField() && !P->ColourCoarse.empty())
     colour = std::make_unique<ColourTerm>(*frame.colourField(), Mesh, P->ColourCoarse,
                                           Cloth.vertexMass(), Options.colourWeight, L, Voxel,
-                                          frame.colourField()->kernel(CoarseColourKernel));
+                                          frame.colourField()->kernel(Options.colourCoarseKernel));
   InternalEnergyTerm internal(Cloth);
 
   std::vector<double> x;

@@ -214,6 +214,10 @@ std::vector<Row> energyRows()
           "k_col: where points carry colour, pull each vertex along the surface to its material "
           "point's colour; 0: off",
           [](auto& o) -> auto& { return o.colourWeight; }),
+      real(
+          "colourCoarseKernel", "", P::None, 1, 100, "",
+          "the colour term's kernel on the coarse level, in times the fine level's",
+          [](auto& o) -> auto& { return o.colourCoarseKernel; }),
   };
 }
 

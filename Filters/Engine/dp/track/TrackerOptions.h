@@ -197,6 +197,9 @@ struct TrackerOptions
   // along the surface, to where the frame shows its material point's colour of the first frame
   // (in the coarse and fine levels); 0 switches it off.
   double colourWeight = 50.0;
+  // The colour term's kernel on the coarse level, in times the fine one (ColourField::kernel): it
+  // reaches farther, as the coarse level's data terms do.
+  double colourCoarseKernel = 3.0;
   RecoveryOptions recovery;
 };
 
