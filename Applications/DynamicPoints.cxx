@@ -14,6 +14,7 @@
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
+#include "dp/track/FrameFigures.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
@@ -96,6 +97,8 @@ Options:
                       three.js; Blender 3.4 and ParaView cannot open it)
   --output DIR        where results go (default: dynamicpoints-output)
   --quiet             no per-frame table and no progress bar
+  --describe-report   print the per-frame figures of report.json (and of the track
+                      filter's field data) as a Markdown table, and exit
 )";
 
 const char* const UsageEnd = R"(  -h, --help          show this help
@@ -210,24 +213,35 @@ double fieldValue(vtkDataObject* data, const char* name)
   return a && a->GetNumberOfTuples() > 0 ? a->GetComponent(0, 0) : std::nan("");
 }
 
+// A tracked frame in the table and the report: its distance to the points, and what the track
+// filter said of it (its field data, read back by the table that wrote it: dp::FrameFigures).
 struct FrameRecord
 {
   int frame;
   double time, rmsResidual, maxResidual;
-  double milliseconds;           // the frame's wall time
-  double overlappedMilliseconds; // of its data's preparation, what ran beside the frame before
-  long long points, iterations;
-  double unexplained, unsupported; // shares of the points / of the mesh beyond 3 voxels
-  double largestStretch;           // of a stiff edge, in mean edge lengths (above 2: torn)
-  int retries;
-  bool failed;
-  std::array<double, 6> stageMilliseconds; // in the order of StageNames
+  dp::FrameFigures figures;
+  bool failed() const { return figures.failed > 0; }
+  double milliseconds() const { return 1000 * figures.seconds; }
 };
 
-// Where a frame's time goes (the track filter's field data <Name>Seconds): its data (field,
-// normals, subsample), the kept attempt's stages, and the other attempts.
-constexpr std::array<const char*, 6> StageNames = {"Data", "Prediction", "Coarse",
-                                                   "Fine", "Quality",    "Retry"};
+dp::FrameFigures figuresOf(vtkDataObject* mesh)
+{
+  dp::FrameFigures figures;
+  for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
+    figures.*field.value = fieldValue(mesh, field.name);
+  return figures;
+}
+
+// A figure in report.json: counts as integers, flags as true/false.
+nlohmann::json figureJson(const dp::FrameFigures& figures, const dp::FrameFigures::Field& field)
+{
+  const double v = figures.*field.value;
+  if (field.kind == dp::FrameFigures::Kind::Flag)
+    return v > 0;
+  if (field.kind == dp::FrameFigures::Kind::Count)
+    return static_cast<long long>(v);
+  return v;
+}
 
 // The upper median (0 for none): report.json's per-frame medians.
 double medianOf(std::vector<double> values)
@@ -236,19 +250,6 @@ double medianOf(std::vector<double> values)
     return 0.0;
   std::sort(values.begin(), values.end());
   return values[values.size() / 2];
-}
-
-// {"data": ms, "prediction": ms, ...} in report.json.
-nlohmann::json stagesJson(const std::array<double, 6>& milliseconds)
-{
-  nlohmann::json stages = nlohmann::json::object();
-  for (std::size_t k = 0; k < StageNames.size(); ++k)
-  {
-    std::string key = StageNames[k];
-    key[0] = static_cast<char>(std::tolower(static_cast<unsigned char>(key[0])));
-    stages[key] = milliseconds[k];
-  }
-  return stages;
 }
 
 struct Settings
@@ -262,7 +263,9 @@ struct Settings
   double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
   bool quiet = false;
   bool meshopt = false;
-  std::string printOptions;   // "values" (--print-options), "json" or "markdown" (--describe-)
+  // What to print instead of running: "values" (--print-options), "json" or "markdown"
+  // (--describe-options), "report" (--describe-report).
+  std::string printOptions;
   dp::TrackerOptions tracker; // --set, --options
 };
 
@@ -304,6 +307,8 @@ Settings parse(int argc, char** argv, bool& help)
       s.meshopt = true;
     else if (arg == "--print-options")
       s.printOptions = "values";
+    else if (arg == "--describe-report")
+      s.printOptions = "report";
     else if (arg == "--describe-options")
     {
       s.printOptions = optionValue(argc, argv, i);
@@ -564,7 +569,7 @@ private:
                 << " (" << MeshVertices << " vertices, " << MeshTriangles << " triangles)\n";
     std::string failed;
     for (const FrameRecord& r : Records)
-      if (r.failed)
+      if (r.failed())
         failed += (failed.empty() ? "" : ", ") + std::to_string(r.frame);
     if (!failed.empty())
       std::cerr << "warning: frame(s) " << failed
@@ -584,30 +589,15 @@ private:
       largest = std::max(largest, r);
     }
     const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
-    FrameRecord r{f,
-                  time,
-                  std::sqrt(sum / n),
-                  largest,
-                  1000 * fieldValue(mesh, "Seconds"),
-                  1000 * fieldValue(mesh, "OverlappedSeconds"),
-                  static_cast<long long>(fieldValue(mesh, "Points")),
-                  static_cast<long long>(fieldValue(mesh, "Iterations")),
-                  fieldValue(mesh, "Unexplained"),
-                  fieldValue(mesh, "Unsupported"),
-                  fieldValue(mesh, "LargestStretch"),
-                  static_cast<int>(fieldValue(mesh, "Retries")),
-                  fieldValue(mesh, "Failed") > 0,
-                  {}};
-    for (std::size_t k = 0; k < StageNames.size(); ++k)
-      r.stageMilliseconds[k] =
-          1000 * fieldValue(mesh, (std::string(StageNames[k]) + "Seconds").c_str());
+    const FrameRecord r{f, time, std::sqrt(sum / n), largest, figuresOf(mesh)};
     Records.push_back(r);
     if (!S.quiet)
     {
       Bar.clear();
-      std::printf("%6d %10.4g %9lld %6lld %12.4g %12.4g %9.1f %8.2f %8.2f%s\n", f, time, r.points,
-                  r.iterations, r.rmsResidual, r.maxResidual, r.milliseconds, 100 * r.unexplained,
-                  100 * r.unsupported, r.failed ? "  FAILED" : "");
+      const dp::FrameFigures& g = r.figures;
+      std::printf("%6d %10.4g %9.0f %6.0f %12.4g %12.4g %9.1f %8.2f %8.2f%s\n", f, time, g.points,
+                  g.iterations, r.rmsResidual, r.maxResidual, r.milliseconds(), 100 * g.unexplained,
+                  100 * g.unsupported, r.failed() ? "  FAILED" : "");
       std::fflush(stdout);
     }
   }
@@ -664,7 +654,7 @@ private:
       Compression[name] = fieldValue(result, name);
     double rawBytes = 0;
     for (const FrameRecord& r : Records)
-      rawBytes += 12.0 * static_cast<double>(r.points);
+      rawBytes += 12.0 * r.figures.points;
     Compression["Bytes"] = fs::file_size(Dpz);
     Compression["InputPointBytes"] = rawBytes;
     Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
@@ -751,16 +741,16 @@ private:
     for (const FrameRecord& r : Records)
     {
       perFrame.push_back(frameJson(r));
-      retried += r.retries > 0 ? 1 : 0;
-      if (r.failed)
+      retried += r.figures.retries > 0 ? 1 : 0;
+      if (r.failed())
         failedFrames.push_back(r.frame);
-      ms.push_back(r.milliseconds);
+      ms.push_back(r.milliseconds());
     }
     report["perFrame"] = perFrame;
     report["framesRetried"] = retried;
     report["framesFailed"] = failedFrames;
     report["medianMillisecondsPerFrame"] = medianOf(ms);
-    report["medianStageMillisecondsPerFrame"] = stageMediansJson();
+    report["medianStageSecondsPerFrame"] = stageMediansJson();
     const fs::path plot = Output / "report.png";
     nlohmann::json outputs = {{"tracked", Pvd.string()}, {"plot", plot.string()}};
     if (!Compression.empty())
@@ -777,36 +767,30 @@ private:
     std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
   }
 
+  // A frame in report.json: its distance to the points, then every figure of dp::FrameFigures.
   static nlohmann::json frameJson(const FrameRecord& r)
   {
-    return {{"frame", r.frame},
-            {"time", r.time},
-            {"points", r.points},
-            {"iterations", r.iterations},
-            {"rmsResidual", r.rmsResidual},
-            {"maxResidual", r.maxResidual},
-            {"milliseconds", r.milliseconds},
-            {"overlappedMilliseconds", r.overlappedMilliseconds},
-            {"unexplained", r.unexplained},
-            {"unsupported", r.unsupported},
-            {"largestStretch", r.largestStretch},
-            {"retries", r.retries},
-            {"failed", r.failed},
-            {"stageMilliseconds", stagesJson(r.stageMilliseconds)}};
+    nlohmann::json frame = {{"frame", r.frame},
+                            {"time", r.time},
+                            {"rmsResidual", r.rmsResidual},
+                            {"maxResidual", r.maxResidual}};
+    for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
+      frame[dp::FrameFigures::reportKey(field.name)] = figureJson(r.figures, field);
+    return frame;
   }
 
-  // Each stage's median milliseconds over the frames.
+  // Each stage's median seconds over the frames.
   nlohmann::json stageMediansJson() const
   {
-    std::array<double, 6> stageMedians{};
-    for (std::size_t k = 0; k < StageNames.size(); ++k)
+    nlohmann::json medians = nlohmann::json::object();
+    for (const dp::FrameFigures::Field& stage : dp::FrameFigures::stages())
     {
-      std::vector<double> stage;
+      std::vector<double> seconds;
       for (const FrameRecord& r : Records)
-        stage.push_back(r.stageMilliseconds[k]);
-      stageMedians[k] = medianOf(std::move(stage));
+        seconds.push_back(r.figures.*stage.value);
+      medians[dp::FrameFigures::reportKey(stage.name)] = medianOf(std::move(seconds));
     }
-    return stagesJson(stageMedians);
+    return medians;
   }
 
   // report.png: the distance to the points, the quality, the largest stretch and the time, per
@@ -817,14 +801,14 @@ private:
     std::vector<std::size_t> failed;
     for (const FrameRecord& r : Records)
     {
-      unexplained.push_back(100 * r.unexplained);
-      unsupported.push_back(100 * r.unsupported);
-      stretch.push_back(r.largestStretch);
-      if (r.failed)
+      unexplained.push_back(100 * r.figures.unexplained);
+      unsupported.push_back(100 * r.figures.unsupported);
+      stretch.push_back(r.figures.largestStretch);
+      if (r.failed())
         failed.push_back(static_cast<std::size_t>(r.frame));
       rms.push_back(Diagonal > 0 ? 100 * r.rmsResidual / Diagonal : r.rmsResidual);
       largest.push_back(Diagonal > 0 ? 100 * r.maxResidual / Diagonal : r.maxResidual);
-      ms.push_back(r.milliseconds);
+      ms.push_back(r.milliseconds());
     }
     const dp::cli::PlotPanel residualPanel{
         "distance to the points, % of diagonal",
@@ -1027,9 +1011,10 @@ int run(int argc, char** argv, dp::cli::Ranks& ranks)
   if (!settings.printOptions.empty())
   {
     if (ranks.rank() == 0)
-      std::cout << (settings.printOptions == "values" ? dp::trackerOptionsJson(settings.tracker)
-                    : settings.printOptions == "json" ? dp::trackerOptionTableJson()
-                                                      : dp::trackerOptionTableMarkdown());
+      std::cout << (settings.printOptions == "values"   ? dp::trackerOptionsJson(settings.tracker)
+                    : settings.printOptions == "json"   ? dp::trackerOptionTableJson()
+                    : settings.printOptions == "report" ? dp::FrameFigures::markdown()
+                                                        : dp::trackerOptionTableMarkdown());
     return 0;
   }
   std::signal(SIGINT, onInterrupt);

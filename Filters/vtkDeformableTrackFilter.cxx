@@ -2,6 +2,7 @@
 #include "vtkDeformableTrackFilter.h"
 
 #include "dp/field/TemplateMesh.h"
+#include "dp/track/FrameFigures.h"
 #include "dp/track/Tracker.h"
 #include "dp/track/TrackerOptionTable.h"
 #include "vtkDPPointSetAccess.h"
@@ -237,42 +238,17 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
   pd->AddArray(frozen);
   pd->AddArray(rejected);
 
-  auto addValue = [output](const char* name, double value)
-  { vtkDP::addFieldValue(output, name, value); };
-  addValue("FrameIndex", static_cast<double>(frame));
-  addValue("Points", static_cast<double>(r.pointsGiven));
-  addValue("Iterations", r.iterations);
-  addValue("CoarseIterations", r.coarseIterations);
-  addValue("InternalEnergy", r.internalEnergy);
-  addValue("DistanceEnergy", r.distanceEnergy);
-  // The frame's wall time: its data's preparation ran partly beside the frame before.
-  addValue("Seconds", r.seconds - r.overlapped);
-  addValue("OverlappedSeconds", r.overlapped);
-  // Where the frame's work went: its data, then the kept attempt's stages; the other attempts
-  // (retries) take the rest of the frame's work.
-  const dp::FrameTimings& t = r.timings;
-  const double stages = t.data + t.prediction + t.coarse + t.fine + t.quality;
-  addValue("DataSeconds", t.data);
-  addValue("PredictionSeconds", t.prediction);
-  addValue("CoarseSeconds", t.coarse);
-  addValue("FineSeconds", t.fine);
-  addValue("QualitySeconds", t.quality);
-  addValue("RetrySeconds", r.retries > 0 ? std::max(0.0, r.seconds - stages) : 0.0);
-  addValue("EmptyFrame", r.emptyFrame ? 1 : 0);
-  addValue("Unexplained", r.unexplained);
-  addValue("Unsupported", r.unsupported);
-  addValue("LargestStretch", r.tear);
-  addValue("Retries", r.retries);
-  addValue("Failed", r.failed ? 1 : 0);
-  // The frame's well-spread subsample, and how far from the mesh a point still counts: what a
-  // compressor downstream judges its error by (vtkPCACompressFilter, DISTANCE_TO_DATA).
+  const dp::FrameFigures figures = dp::FrameFigures::of(r, frame, take.reach);
+  for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
+    vtkDP::addFieldValue(output, field.name, figures.*field.value);
+  // The frame's well-spread subsample (and DataReach, above): what a compressor downstream
+  // judges its error by (vtkPCACompressFilter, DISTANCE_TO_DATA).
   vtkNew<vtkFloatArray> samples;
   samples->SetName("DataSamples");
   samples->SetNumberOfComponents(3);
   samples->SetNumberOfTuples(static_cast<vtkIdType>(r.samples.size()));
   std::copy(r.samples.points.begin(), r.samples.points.end(), samples->GetPointer(0));
   output->GetFieldData()->AddArray(samples);
-  addValue("DataReach", take.reach);
   vtkNew<vtkStringArray> made;
   made->SetName("Template");
   made->InsertNextValue(*take.templateMade);

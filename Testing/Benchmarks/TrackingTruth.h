@@ -6,7 +6,7 @@
 #pragma once
 
 #include "dp/field/SurfaceReconstruction.h"
-#include "dp/geometry/NormalEstimation.h"
+#include "dp/field/TemplateMesh.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 
@@ -207,14 +207,15 @@ inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, st
   vtkSmartPointer<vtkPolyData> coarse;
   if (kind == TemplateKind::Reconstructed)
   {
-    const std::vector<float> normals =
-        frame0Samples.hasNormals()
-            ? frame0Samples.normals
-            : dp::estimateNormals(frame0Samples.points.data(), frame0Samples.numberOfPoints());
-    reconstruction.targetVertices = vertices;
-    const dp::ReconstructedMesh r =
-        dp::reconstructSurface(frame0Samples.points.data(), normals.data(),
-                               frame0Samples.numberOfPoints(), reconstruction);
+    // As the main job and the filter make it from frame 0's points (dp::makeTemplate).
+    dp::TemplateOptions options;
+    options.source = dp::TemplateSource::Points;
+    options.targetVertices = vertices;
+    options.reconstruction = reconstruction;
+    const dp::TemplateMesh r =
+        dp::makeTemplate(frame0Samples.points.data(), frame0Samples.numberOfPoints(),
+                         frame0Samples.hasNormals() ? frame0Samples.normals.data() : nullptr, {},
+                         options, "frame 0's points");
     coarse = toPolyData(r.positions, r.triangles);
   }
   else

@@ -60,6 +60,15 @@ class TestCommandLineTools(TempDirTestCase):
             self.assertEqual(result.returncode, 2, args)
             self.assertIn(message, result.stderr)
 
+    def test_the_documentation_lists_the_per_frame_figures_of_the_report(self):
+        table = run_tool("dynamicpoints", "--describe-report").stdout
+        self.assertIn("| `LargestStretch` | `largestStretch` |", table)
+        doc = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
+                           "Documentation", "MainJob.md")
+        with open(doc, encoding="utf-8") as f:
+            self.assertIn(table, f.read(), "MainJob.md's table of per-frame figures is stale: "
+                          "regenerate it with dynamicpoints --describe-report")
+
 
 if __name__ == "__main__":
     unittest.main()

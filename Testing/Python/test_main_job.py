@@ -101,6 +101,8 @@ def rms_distance(points, meshes, triangles):
     return np.sqrt(total / count)
 
 
+STAGES = ("data", "prediction", "coarse", "fine", "quality", "retry")
+
 class TestDefaultRun(TempDirTestCase):
     """One run of the README's main-job command; every output checked by its consumer."""
 
@@ -240,33 +242,41 @@ class TestDefaultRun(TempDirTestCase):
         self.assertGreater(diagonal, 0.5)
         for frame in report["perFrame"]:
             self.assertLess(frame["rmsResidual"], 0.005 * diagonal, frame)
-            self.assertGreater(frame["milliseconds"], 0)
+            self.assertGreater(frame["seconds"], 0)
             self.assertEqual(frame["points"], 20000)
             # The tube is followed whole: hardly a point is left far from the mesh.
             self.assertLess(frame["unexplained"], 0.01, frame)
             self.assertLess(frame["unsupported"], 0.02, frame)
             # Nothing torn, yet the tube bends: its edges do stretch a little.
             self.assertLess(frame["largestStretch"], 2, frame)
-            self.assertFalse(frame["failed"], frame)
+            self.assertIs(frame["failed"], False, frame)
+            self.assertIs(frame["emptyFrame"], False, frame)
+            self.assertEqual(frame["retries"], 0, frame)
+            self.assertGreater(frame["dataReach"], 0, frame)
             # Where the frame's time went: every stage, within its time and what of its data's
             # preparation ran beside the frame before (the pipeline: all of it but the first
             # frame's, on this machine's two or more threads, except what the frame waited for).
-            stages = frame["stageMilliseconds"]
-            self.assertEqual(set(stages), {"data", "prediction", "coarse", "fine", "quality",
-                                           "retry"})
+            stages = {k: frame[k + "Seconds"] for k in STAGES}
             self.assertTrue(all(v >= 0 for v in stages.values()), frame)
-            overlapped = frame["overlappedMilliseconds"]
+            overlapped = frame["overlappedSeconds"]
             self.assertLessEqual(sum(stages.values()),
-                                 (frame["milliseconds"] + overlapped) * (1 + 1e-9), frame)
+                                 (frame["seconds"] + overlapped) * (1 + 1e-9), frame)
             self.assertLessEqual(overlapped, stages["data"] * (1 + 1e-9), frame)
             if (os.cpu_count() or 1) < 2:
                 self.assertEqual(overlapped, 0, frame)
             elif frame["frame"] > 0:
                 self.assertGreater(overlapped, 0, frame)
             self.assertGreater(stages["fine"], 0, frame)
-        medians = report["medianStageMillisecondsPerFrame"]
-        self.assertEqual(set(medians), set(report["perFrame"][0]["stageMilliseconds"]))
-        self.assertLessEqual(medians["fine"], max(f["milliseconds"] for f in report["perFrame"]))
+        # The same figures, by the same names, as the track filter's field data (one table).
+        fields = {"FrameIndex", "Points", "Iterations", "CoarseIterations", "InternalEnergy",
+                  "DistanceEnergy", "Seconds", "OverlappedSeconds", "EmptyFrame", "Unexplained",
+                  "Unsupported", "LargestStretch", "Retries", "Failed", "DataReach"}
+        fields |= {k[0].upper() + k[1:] + "Seconds" for k in STAGES}
+        self.assertEqual({k[0].upper() + k[1:] for k in report["perFrame"][0]}
+                         - {"Frame", "Time", "RmsResidual", "MaxResidual"}, fields)
+        medians = report["medianStageSecondsPerFrame"]
+        self.assertEqual(set(medians), {k + "Seconds" for k in STAGES})
+        self.assertLessEqual(medians["fineSeconds"], max(f["seconds"] for f in report["perFrame"]))
         self.assertGreater(max(f["largestStretch"] for f in report["perFrame"]), 0)
         self.assertEqual(report["framesFailed"], [])
         compression = report["compression"]
