@@ -5,6 +5,8 @@
 #include <cerrno>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <stdexcept>
 #include <string>
 
@@ -51,6 +53,19 @@ inline unsigned long long parseCount(const std::string& option, const std::strin
     throw UsageError("option " + option + ": " + text + " is outside [" + std::to_string(min) +
                      ", " + std::to_string(max) + "]");
   return value;
+}
+
+/** Writes `text` to `path` through a file beside it, so a reader never sees half a file. */
+inline void writeAtomically(const std::filesystem::path& path, const std::string& text)
+{
+  const std::filesystem::path partial = path.string() + ".partial";
+  {
+    std::ofstream out(partial, std::ios::trunc);
+    out << text;
+    if (!out)
+      throw std::runtime_error(path.string() + ": cannot write");
+  }
+  std::filesystem::rename(partial, path);
 }
 
 } // namespace dp::cli

@@ -1,0 +1,549 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The main job on one input. A point sequence in; out: the tracked mesh sequence (.pvd + .vtp,
+// written frame by frame so an interrupted run keeps what it finished), the compressed file
+// (.dpz), the glTF animation (.glb) and a report (JSON + PNG plot). The work is done by the
+// VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkPCACompressFilter;
+// this file only drives it, writes the files and talks to the user.
+#include "MainJob.h"
+
+#include "CommandLine.h"
+#include "Console.h"
+#include "FrameReport.h"
+
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
+#include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceSampler.h"
+#include "dp/io/AnimatedMesh.h"
+#include "dp/track/FrameFigures.h"
+#include "dp/track/TrackerOptionTable.h"
+
+#include "vtkCallbackCommand.h"
+#include "vtkCommand.h"
+#include "vtkDataArray.h"
+#include "vtkDeformableTrackFilter.h"
+#include "vtkExecutive.h"
+#include "vtkFieldData.h"
+#include "vtkNew.h"
+#include "vtkPCACompressFilter.h"
+#include "vtkPointData.h"
+#include "vtkPointSequenceSource.h"
+#include "vtkPolyData.h"
+#include "vtkStringArray.h"
+#include "vtkXMLPolyDataWriter.h"
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <unistd.h>
+#include <utility>
+
+namespace dp::cli
+{
+
+namespace
+{
+namespace fs = std::filesystem;
+
+// The ParaView collection file listing the frames written so far.
+std::string pvdText(const std::vector<std::pair<double, std::string>>& frames)
+{
+  std::ostringstream s;
+  s.precision(17);
+  s << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n  <Collection>\n";
+  for (const auto& [time, file] : frames)
+    s << "    <DataSet timestep=\"" << time << "\" part=\"0\" file=\"" << file << "\"/>\n";
+  s << "  </Collection>\n</VTKFile>\n";
+  return s.str();
+}
+
+// The main job, stage by stage; each stage reports its own errors and leaves what it finished.
+class MainJob
+{
+public:
+  explicit MainJob(Settings settings)
+      : S(std::move(settings)), Output(S.output), Pvd(Output / "tracked.pvd"),
+        Dpz(Output / "tracked.dpz"), Glb(Output / "tracked.glb"), Bar(!S.quiet)
+  {
+    Printer->ProgressShown = Bar.enabled();
+  }
+
+  int run()
+  {
+    if (!openSequence() || !prepareTracker())
+      return 1;
+    track();
+    if (!Failed && !Interrupted)
+      compress();
+    writeReport();
+    return Interrupted ? 130 : Failed ? 1 : 0;
+  }
+
+private:
+  // VTK messages of `a` go to the printer; its executive's "returned failure" (which only
+  // repeats what the algorithm said) is dropped.
+  void watch(vtkAlgorithm* a)
+  {
+    a->AddObserver(vtkCommand::ErrorEvent, Printer);
+    a->AddObserver(vtkCommand::WarningEvent, Printer);
+    a->GetExecutive()->AddObserver(vtkCommand::ErrorEvent, Quiet);
+  }
+
+  bool openSequence()
+  {
+    watch(Source);
+    InputName = S.input;
+    if (S.input.empty())
+    {
+      const std::string folder = (Output / "input").string();
+      std::cout << "No input given: generating the built-in sample sequence in " << folder << "\n";
+      dp::SamplerOptions sampling;
+      sampling.pointsPerFrame = 20000;
+      sampling.seed = 1;
+      InputName = dp::writeSampledSequence(dp::BendingTube(), sampling, folder);
+      Source->SetFileName(InputName.c_str());
+    }
+    else if (fs::is_directory(S.input))
+    {
+      Source->SetDirectoryName(S.input.c_str());
+      Source->SetFilePattern(S.pattern.c_str());
+    }
+    else
+      Source->SetFileName(S.input.c_str());
+    Frames = Source->GetNumberOfFrames();
+    if (Frames < 0)
+      return false; // the printer has said why
+    if (S.frames > 0 && S.frames < Frames)
+    {
+      // Only the first N frames: a .series file listing them with their times, which the
+      // source then reads (and the user can see what was tracked).
+      nlohmann::json files = nlohmann::json::array();
+      for (int f = 0; f < S.frames; ++f)
+        files.push_back({{"name", fs::absolute(Source->GetFramePath(f)).string()},
+                         {"time", Source->GetFrameTime(f)}});
+      fs::create_directories(Output);
+      const fs::path series = Output / "first-frames.series";
+      writeAtomically(series,
+                      nlohmann::json{{"file-series-version", "1.0"}, {"files", files}}.dump(1));
+      Source->SetDirectoryName(nullptr);
+      Source->SetFileName(series.string().c_str());
+      Frames = Source->GetNumberOfFrames();
+      if (Frames < 0)
+        return false;
+    }
+    std::cout << "Sequence: " << Frames << " frame(s) from " << InputName << "\n";
+    return true;
+  }
+
+  bool prepareTracker()
+  {
+    watch(Tracker);
+    Tracker->SetInputConnection(Source->GetOutputPort());
+    for (const dp::TrackerOptionDescription& option : dp::trackerOptionTable())
+      Tracker->SetTrackerOption(option.name.c_str(), option.get(S.tracker));
+    Tracker->SetTemplateVertices(S.vertices);
+    Tracker->SetTemplateSource(S.templateFrom);
+    if (!S.templateFile.empty())
+    {
+      watch(TemplateReader);
+      TemplateReader->SetFileName(S.templateFile.c_str());
+      if (TemplateReader->GetNumberOfFrames() < 0)
+        return false;
+      TemplateReader->Update();
+      if (Printer->Errors)
+        return false;
+      if (TemplateReader->GetOutput()->GetNumberOfPolys() == 0)
+      {
+        std::cerr << "error: " << S.templateFile
+                  << ": has no polygons, so it cannot be the template mesh\n";
+        return false;
+      }
+      Tracker->SetTemplateConnection(TemplateReader->GetOutputPort());
+    }
+    TrackProgress->Bar = &Bar;
+    Tracker->AddObserver(vtkCommand::ProgressEvent, TrackProgress);
+    return true;
+  }
+
+  // Says where tracking stopped and which frames are kept.
+  void stopAt(int f)
+  {
+    Bar.clear();
+    std::cerr << "error: tracking stopped at frame " << f << " (" << Source->GetFramePath(f)
+              << "); ";
+    if (f == 0)
+      std::cerr << "no frame was tracked\n";
+    else
+      std::cerr << "frames 0-" << f - 1 << " are in " << Pvd.string() << "\n";
+    Failed = true;
+  }
+
+  // Tracks frame after frame; each finished frame is written and listed in the .pvd at once.
+  void track()
+  {
+    const fs::path folder = clearedFrameFolder();
+    vtkNew<vtkXMLPolyDataWriter> writer;
+    // Inline data: appended data trips ParaView 5.11's XML readers here
+    // (Documentation/Development.md, platform notes).
+    writer->SetDataModeToBinary();
+    writer->SetCompressorTypeToZLib();
+    watch(writer);
+    if (!S.quiet)
+      std::printf("%6s %10s %9s %6s %12s %12s %9s %8s %8s\n", "frame", "time", "points", "iter",
+                  "rms dist", "max dist", "ms", "far pts%", "bare %");
+    for (int f = 0; f < Frames && !Interrupted; ++f)
+    {
+      const double time = Source->GetFrameTime(f);
+      const int errorsBefore = Printer->Errors;
+      TrackProgress->What =
+          "tracking frame " + std::to_string(f + 1) + "/" + std::to_string(Frames);
+      Tracker->UpdateTimeStep(time);
+      if (Interrupted)
+        break;
+      vtkPolyData* mesh = Tracker->GetOutput();
+      // The track filter reads frame f + 1 before it tracks frame f (so that its data is prepared
+      // beside the solve): an error with frame f tracked is frame f + 1's, and frame f is kept.
+      const bool tracked = mesh->GetNumberOfPoints() > 0 &&
+                           Tracker->GetNumberOfCachedFrames() == f + 1 &&
+                           fieldValue(mesh, "FrameIndex") == f;
+      const bool nextFailed = tracked && Printer->Errors > errorsBefore;
+      if (!tracked || (Printer->Errors > errorsBefore && !nextFailed))
+      {
+        stopAt(f);
+        break;
+      }
+      if (f == 0)
+        describeMesh(mesh);
+      if (!writeFrame(writer, folder, f, time, mesh))
+        break;
+      record(f, time, mesh);
+      if (nextFailed)
+      {
+        stopAt(f + 1);
+        break;
+      }
+    }
+    Bar.clear();
+    summariseTracking();
+  }
+
+  // OUTPUT/tracked, without a previous run's frames.
+  fs::path clearedFrameFolder() const
+  {
+    const fs::path folder = Output / "tracked";
+    fs::create_directories(folder);
+    for (const auto& entry : fs::directory_iterator(folder))
+      if (entry.path().extension() == ".vtp" || entry.path().extension() == ".partial")
+        fs::remove(entry.path());
+    return folder;
+  }
+
+  // The tracked mesh's size, from its first frame, for the summary and the report.
+  void describeMesh(vtkPolyData* mesh)
+  {
+    double b[6];
+    mesh->GetBounds(b);
+    Diagonal = std::sqrt((b[1] - b[0]) * (b[1] - b[0]) + (b[3] - b[2]) * (b[3] - b[2]) +
+                         (b[5] - b[4]) * (b[5] - b[4]));
+    MeshVertices = mesh->GetNumberOfPoints();
+    MeshTriangles = mesh->GetNumberOfPolys();
+    auto* made = vtkStringArray::SafeDownCast(mesh->GetFieldData()->GetAbstractArray("Template"));
+    TemplateMade = made && made->GetNumberOfValues() > 0 ? made->GetValue(0) : std::string();
+    if (!TemplateMade.empty() && !S.quiet)
+    {
+      Bar.clear();
+      std::printf("Template: %s\n", TemplateMade.c_str());
+    }
+  }
+
+  // Writes frame f (beside its name, renamed when complete) and lists it in the .pvd; false,
+  // said on stderr, when it cannot be written.
+  bool writeFrame(vtkXMLPolyDataWriter* writer, const fs::path& folder, int f, double time,
+                  vtkPolyData* mesh)
+  {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%04d.vtp", f);
+    const fs::path file = folder / name;
+    const std::string partial = file.string() + ".partial";
+    // The frame's data samples are for the compressor (DISTANCE_TO_DATA), not the file.
+    vtkNew<vtkPolyData> written;
+    written->ShallowCopy(mesh);
+    vtkNew<vtkFieldData> fields;
+    fields->DeepCopy(mesh->GetFieldData());
+    fields->RemoveArray("DataSamples");
+    fields->RemoveArray("DataReach");
+    written->SetFieldData(fields);
+    writer->SetInputData(written);
+    writer->SetFileName(partial.c_str());
+    if (!writer->Write())
+    {
+      Bar.clear();
+      std::cerr << "error: " << file.string() << ": cannot write\n";
+      Failed = true;
+      return false;
+    }
+    fs::rename(partial, file);
+    Written.emplace_back(time, (fs::path("tracked") / name).string());
+    writeAtomically(Pvd, pvdText(Written));
+    return true;
+  }
+
+  // What was tracked, and a warning naming the frames that failed.
+  void summariseTracking() const
+  {
+    if (Interrupted)
+      std::cerr << "interrupted: " << Written.size() << " of " << Frames << " frame(s) tracked, in "
+                << Pvd.string() << "; nothing compressed\n";
+    else
+      std::cout << Written.size() << " of " << Frames << " frame(s) tracked: " << Pvd.string()
+                << " (" << MeshVertices << " vertices, " << MeshTriangles << " triangles)\n";
+    std::string failed;
+    for (const FrameRecord& r : Records)
+      if (r.failed())
+        failed += (failed.empty() ? "" : ", ") + std::to_string(r.frame);
+    if (!failed.empty())
+      std::cerr << "warning: frame(s) " << failed
+                << " failed after retries (mesh and points do not match there): do not trust "
+                   "them; report.json and report.png mark them\n";
+  }
+
+  // The frame's line of the table and of the report.
+  void record(int f, double time, vtkPolyData* mesh)
+  {
+    vtkDataArray* residual = mesh->GetPointData()->GetArray("Residual");
+    double sum = 0, largest = 0;
+    for (vtkIdType i = 0; residual && i < residual->GetNumberOfTuples(); ++i)
+    {
+      const double r = residual->GetComponent(i, 0);
+      sum += r * r;
+      largest = std::max(largest, r);
+    }
+    const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
+    const FrameRecord r{f, time, std::sqrt(sum / n), largest, figuresOf(mesh)};
+    Records.push_back(r);
+    if (!S.quiet)
+    {
+      Bar.clear();
+      const dp::FrameFigures& g = r.figures;
+      std::printf("%6d %10.4g %9.0f %6.0f %12.4g %12.4g %9.1f %8.2f %8.2f%s\n", f, time, g.points,
+                  g.iterations, r.rmsResidual, r.maxResidual, r.milliseconds(), 100 * g.unexplained,
+                  100 * g.unsupported, r.failed() ? "  FAILED" : "");
+      std::fflush(stdout);
+    }
+  }
+
+  // The codec's target: by default the data's (--fit-growth: the decompressed mesh's distance to
+  // the points may grow by that percent, DISTANCE_TO_DATA), else KG (--error-target); through
+  // vtkPCACompressFilter as any VTK pipeline would.
+  void compress()
+  {
+    const bool againstData = !(S.errorTarget > 0);
+    vtkNew<vtkPCACompressFilter> compressor;
+    watch(compressor);
+    compressor->SetInputConnection(Tracker->GetOutputPort());
+    compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
+    compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
+                                            : vtkPCACompressFilter::KARNI_GOTSMAN);
+    compressor->SetErrorTarget(againstData ? S.fitGrowth : S.errorTarget);
+    vtkNew<ProgressWatcher> progress;
+    progress->Bar = &Bar;
+    progress->What = "compressing";
+    compressor->AddObserver(vtkCommand::ProgressEvent, progress);
+    const int errorsBefore = Printer->Errors;
+    compressor->Update();
+    Bar.clear();
+    if (Interrupted)
+    {
+      std::cerr << "interrupted while compressing: the tracked frames are in " << Pvd.string()
+                << "\n";
+      return;
+    }
+    const dp::CompressedSequence* sequence = compressor->GetCompressedSequence();
+    if (Printer->Errors > errorsBefore || !sequence)
+    {
+      std::cerr << "error: compression failed; the tracked frames are in " << Pvd.string() << "\n";
+      Failed = true;
+      return;
+    }
+    if (!writeCompressed(*sequence))
+      return;
+    recordCompression(compressor->GetOutput());
+    if (againstData)
+      sayDataFit(compressor->GetOutput());
+    else
+      sayMotionFit(*sequence);
+    std::printf("glTF: %s\n", Glb.string().c_str());
+  }
+
+  // The codec's figures in report.json's "compression".
+  void recordCompression(vtkPolyData* result)
+  {
+    for (const char* name : {"Components", "KGError", "RmsError", "MaxError", "MaxErrorRelative",
+                             "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
+                             "PaperD1", "PaperRatio", "ComponentsPerFrame"})
+      Compression[name] = fieldValue(result, name);
+    double rawBytes = 0;
+    for (const FrameRecord& r : Records)
+      rawBytes += 12.0 * r.figures.points;
+    Compression["Bytes"] = fs::file_size(Dpz);
+    Compression["InputPointBytes"] = rawBytes;
+    Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
+  }
+
+  void sayDataFit(vtkPolyData* result)
+  {
+    const double before = fieldValue(result, "DistanceToDataInput");
+    const double after = fieldValue(result, "DistanceToDataDecompressed");
+    const double growth = fieldValue(result, "DistanceToDataGrowth");
+    Compression["Target"] =
+        "the distance to the points grows by at most " + std::to_string(S.fitGrowth) + " %";
+    Compression["FitGrowthAllowedPercent"] = S.fitGrowth;
+    Compression["DistanceToPointsTracked"] = before;
+    Compression["DistanceToPointsDecompressed"] = after;
+    Compression["FitGrowthPercent"] = growth;
+    std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame, %.0fx smaller "
+                "than the input points (float32); the decompressed mesh lies %.3g from the "
+                "points (RMS), the tracked one %.3g (%+.1f %%, at most %g %%)\n",
+                Dpz.string().c_str(), Compression["Components"].get<double>(),
+                Compression["BitsPerVertexFrame"].get<double>(),
+                Compression["InputPointsOverFile"].get<double>(), after, before, growth,
+                S.fitGrowth);
+  }
+
+  void sayMotionFit(const dp::CompressedSequence& sequence)
+  {
+    const bool weak = Written.size() >= 8 && Compression["ComponentsPerFrame"].get<double>() > 0.5;
+    Compression["weak"] = weak;
+    if (weak)
+      Compression["note"] = "most of the frames' worth of components were kept: the motion is "
+                            "not low-rank, the tracking shakes, or the KG target asks for more "
+                            "than the data's noise (the default target is the data's)";
+    Compression["Target"] = "KG " + std::to_string(S.errorTarget) + " %";
+    Compression["ErrorTargetKG"] = S.errorTarget;
+    std::printf("Compressed: %s, %zu components, %.3g bits per vertex per frame (%.1fx "
+                "smaller than float32), KG error %.3g%%\n",
+                Dpz.string().c_str(), sequence.report.components,
+                sequence.report.bitsPerVertexFrame, 96.0 / sequence.report.bitsPerVertexFrame,
+                sequence.report.kgError);
+    if (weak)
+      std::printf("Compression is weak: %zu components for %zu frames (the motion is not "
+                  "low-rank, the tracking shakes, or KG %.3g %% asks for more than the data's "
+                  "noise: without --error-target the target is the data's)\n",
+                  sequence.report.components, Written.size(), S.errorTarget);
+  }
+
+  /** Writes tracked.dpz and tracked.glb (each beside its name, renamed when complete); says
+   *  which failed and why. */
+  bool writeCompressed(const dp::CompressedSequence& sequence)
+  {
+    try
+    {
+      dp::writeCompressedSequence(Dpz.string(), sequence);
+      dp::GlbOptions glb;
+      glb.meshopt = S.meshopt;
+      dp::writeGlb(Glb.string(), sequence, glb);
+      return true;
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "error: " << e.what() << "; the tracked frames are in " << Pvd.string() << "\n";
+      Failed = true;
+      return false;
+    }
+  }
+
+  // report.json and report.png.
+  void writeReport() const
+  {
+    nlohmann::json report;
+    report["input"] = InputName;
+    report["frames"] = Frames;
+    report["framesTracked"] = Written.size();
+    report["interrupted"] = Interrupted != 0;
+    report["template"] = {{"source", S.templateFile.empty() ? "frame 0" : S.templateFile},
+                          {"made", TemplateMade},
+                          {"vertices", MeshVertices},
+                          {"triangles", MeshTriangles}};
+    report["boundingBoxDiagonal"] = Diagonal;
+    nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
+    std::vector<double> ms;
+    int retried = 0;
+    for (const FrameRecord& r : Records)
+    {
+      perFrame.push_back(frameJson(r));
+      retried += r.figures.retries > 0 ? 1 : 0;
+      if (r.failed())
+        failedFrames.push_back(r.frame);
+      ms.push_back(r.milliseconds());
+    }
+    report["perFrame"] = perFrame;
+    report["framesRetried"] = retried;
+    report["framesFailed"] = failedFrames;
+    report["medianMillisecondsPerFrame"] = medianOf(ms);
+    report["medianStageSecondsPerFrame"] = stageMediansJson(Records);
+    const fs::path plot = Output / "report.png";
+    nlohmann::json outputs = {{"tracked", Pvd.string()}, {"plot", plot.string()}};
+    if (!Compression.empty())
+    {
+      report["compression"] = Compression;
+      outputs["compressed"] = Dpz.string();
+      outputs["gltf"] = Glb.string();
+    }
+    report["outputs"] = outputs;
+    report["wallSeconds"] =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - Started).count();
+    writeAtomically(Output / "report.json", report.dump(1) + "\n");
+    writeReportPlot(plot.string(), "DynamicPoints: " + fs::path(InputName).filename().string(),
+                    Records, Diagonal);
+    std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
+  }
+
+  const Settings S;
+  const fs::path Output, Pvd, Dpz, Glb;
+  const std::chrono::steady_clock::time_point Started = std::chrono::steady_clock::now();
+  vtkNew<MessagePrinter> Printer;
+  vtkNew<vtkCallbackCommand> Quiet;
+  ProgressBar Bar;
+  vtkNew<vtkPointSequenceSource> Source;
+  vtkNew<vtkPointSequenceSource> TemplateReader;
+  vtkNew<vtkDeformableTrackFilter> Tracker;
+  vtkNew<ProgressWatcher> TrackProgress;
+
+  std::string InputName;
+  int Frames = 0;
+  bool Failed = false;
+  std::vector<std::pair<double, std::string>> Written; // (time, file) of each frame written
+  std::vector<FrameRecord> Records;
+  double Diagonal = 0;
+  long long MeshVertices = 0, MeshTriangles = 0;
+  std::string TemplateMade; // what the template was made from, and how
+  nlohmann::json Compression;
+};
+
+} // namespace
+
+int runJob(const Settings& settings)
+{
+  try
+  {
+    return MainJob(settings).run();
+  }
+  catch (const std::exception& e)
+  {
+    std::cerr << "dynamicpoints: error: " << (settings.input.empty() ? "" : settings.input + ": ")
+              << e.what() << "\n";
+    return 1;
+  }
+}
+
+} // namespace dp::cli

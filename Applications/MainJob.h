@@ -1,0 +1,36 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The main job on one input: read, track, write frame by frame, compress, report.
+#pragma once
+
+#include "dp/track/TrackerOptions.h"
+
+#include "vtkDeformableTrackFilter.h"
+
+#include <string>
+#include <vector>
+
+namespace dp::cli
+{
+
+struct Settings
+{
+  std::vector<std::string> inputs; // as given; a batch when more than one
+  std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
+  int vertices = 1000;
+  int templateFrom = vtkDeformableTrackFilter::TEMPLATE_AUTO;
+  long long frames = 0;   // 0: all
+  double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)
+  double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
+  bool quiet = false;
+  bool meshopt = false;
+  // What to print instead of running: "values" (--print-options), "json" or "markdown"
+  // (--describe-options), "report" (--describe-report).
+  std::string printOptions;
+  dp::TrackerOptions tracker; // --set, --options
+};
+
+/** One input's whole job; an error it did not foresee is its failure (said on stderr), not the
+ *  batch's. Returns the exit status: 0, 1, or 130 when interrupted. */
+int runJob(const Settings& settings);
+
+} // namespace dp::cli
