@@ -17,7 +17,9 @@
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
+#include "ScalingTable.h"
 #include "TakeFigures.h"
+#include "TakeMeasures.h"
 #include "TrackerOptionFlags.h"
 #include "TrackingTruth.h"
 
@@ -99,71 +101,6 @@ dp::SamplerOptions samplingFor(const Condition& c, std::size_t points)
   return o;
 }
 
-struct Run
-{
-  dp::FrameTimings time; // summed over the frames
-  std::size_t retried = 0, flagged = 0;
-  // The kept attempts' dependent steps, summed: deterministic, unlike the times.
-  std::size_t coarseSteps = 0, fineSteps = 0;
-  double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
-  // --colour: RMS over vertices and frames of the colour a vertex carries (the frame's colour at
-  // it) against its material point's true colour, 0-255; and the same at the true positions.
-  double colourSwim = -1, truthColourSwim = -1;
-  double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
-  std::size_t worstFrame = 0, frames = 0;
-};
-
-// A run's sums over its frames, turned into its figures once the last frame is in.
-class RunSums
-{
-public:
-  void add(std::size_t frame, const dp::FrameResult& r, const std::vector<double>& positions,
-           const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds)
-  {
-    Seconds += cycleSeconds;
-    R.time.data += r.timings.data;
-    R.time.prediction += r.timings.prediction;
-    R.time.coarse += r.timings.coarse;
-    R.time.fine += r.timings.fine;
-    R.time.quality += r.timings.quality;
-    R.retried += r.retries > 0;
-    R.coarseSteps += static_cast<std::size_t>(r.coarseIterations);
-    R.fineSteps += static_cast<std::size_t>(r.iterations);
-    R.flagged += r.failed;
-    JitterSums.add(positions, truth);
-    VertexSum += figures.vertexSquaredSum;
-    NormalSum += figures.normalSquaredSum;
-    SurfaceSum += figures.surfaceSquaredSum;
-    UncoveredSum += figures.uncovered;
-    R.largestVertexError = std::max(R.largestVertexError, figures.largestVertexError);
-    if (figures.uncovered > R.uncoveredWorst || R.frames == 0)
-    {
-      R.uncoveredWorst = figures.uncovered;
-      R.worstFrame = frame;
-    }
-    ++R.frames;
-  }
-
-  Run finish(std::size_t vertices) const
-  {
-    Run run = R;
-    const double tracked = static_cast<double>(run.frames);
-    const double samples = tracked * static_cast<double>(vertices);
-    run.vertexRms = std::sqrt(VertexSum / samples);
-    run.normalRms = std::sqrt(NormalSum / samples);
-    run.surfaceRms = std::sqrt(SurfaceSum / samples);
-    run.uncoveredMean = UncoveredSum / tracked;
-    run.jitter = JitterSums.ratio();
-    run.msPerFrame = 1e3 * Seconds / tracked;
-    return run;
-  }
-
-private:
-  Run R;
-  Jitter JitterSums;
-  double VertexSum = 0, NormalSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
-};
-
 // Feeds a tracker its frames as the main job does (vtkDeformableTrackFilter): frame f + 1's data
 // is prepared on another thread while frame f is tracked, and a frame's time is the wall time of
 // that cycle (tracking it and preparing the next, whichever ends last). --no-pipeline: each frame
@@ -202,41 +139,6 @@ private:
   dp::Tracker& Tracker;
   std::optional<dp::PreparedFrame> Ready;
 };
-
-// The RMS distance (mm) of positions y to the true ones; -1 for none (an attempt not made).
-double rmsAgainst(const std::vector<double>& y, const std::vector<double>& truth)
-{
-  double e = 0;
-  for (std::size_t i = 0; i < y.size(); ++i)
-    e += (y[i] - truth[i]) * (y[i] - truth[i]);
-  return y.empty() ? -1.0 : 1e3 * std::sqrt(e / static_cast<double>(truth.size() / 3));
-}
-
-// The error (mm, RMS) left once the best rigid motion is taken out (Kabsch): local, not global,
-// error.
-double rigidFreeRms(const std::vector<double>& y, const std::vector<double>& truth)
-{
-  const std::size_t n = y.size() / 3;
-  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
-  for (std::size_t v = 0; v < n; ++v)
-  {
-    a += Eigen::Vector3d(&y[3 * v]);
-    b += Eigen::Vector3d(&truth[3 * v]);
-  }
-  a /= static_cast<double>(n);
-  b /= static_cast<double>(n);
-  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
-  for (std::size_t v = 0; v < n; ++v)
-    C += (Eigen::Vector3d(&truth[3 * v]) - b) * (Eigen::Vector3d(&y[3 * v]) - a).transpose();
-  Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
-  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
-  const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
-  double e = 0;
-  for (std::size_t v = 0; v < n; ++v)
-    e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v])).squaredNorm();
-  return 1e3 * std::sqrt(e / static_cast<double>(n));
-}
 
 // --verbose: one line a frame.
 void printFrame(std::size_t f, const dp::FrameResult& r, const std::vector<double>& positions,
@@ -465,68 +367,6 @@ Run track(const dp::AnimatedMesh& mesh, const Template& t, const dp::TrackerOpti
   dp::Tracker tracker(dp::TriangleMesh(t.triangles, t.vertices()), t.positions, options);
   return evaluate(mesh, t, tracker, condition, trackForward(tracker, mesh, t, condition, frames),
                   true, csv, label);
-}
-
-// The paper's Fig. 4: time per frame against the vertex count, on the procedural bending tube
-// at resolutions from 500 to 50k vertices (same shape, same 20k points per frame).
-std::vector<std::size_t> ScalingSizes = {500, 1000, 2000, 5000, 10000, 20000, 50000};
-
-void scalingTable(const dp::TrackerOptions& options, std::size_t frames)
-{
-  std::printf("\n== scaling (bending tube, %zu frames after the first, %zu points per frame)\n",
-              frames, S.points);
-  std::printf("%10s %12s %14s %12s %14s %12s %12s %28s\n", "vertices", "ms/frame", "ms/1k vertices",
-              "iterations", "vertex RMS %", "resident MiB", "KiB/vertex",
-              "data/coarse/fine/other ms");
-  for (std::size_t target : ScalingSizes)
-  {
-    dp::BendingTube::Options shape;
-    shape.segments = static_cast<std::size_t>(std::lround(std::sqrt(target / 1.67)));
-    shape.rings = (target + shape.segments - 1) / shape.segments;
-    const dp::BendingTube tube(shape);
-    // What the tracker holds while it works: resident memory from before it is made to after its
-    // last frame (its mesh, energies, graph and solvers, and the last frame's data).
-    const double residentBefore = dp::bench::residentMiB();
-    dp::Tracker tracker(dp::TriangleMesh(tube.triangles(), tube.numberOfVertices()),
-                        tube.positions(0), options);
-    dp::SamplerOptions sampling;
-    sampling.pointsPerFrame = S.points;
-    sampling.normals = S.givenNormals;
-    std::vector<double> ms, dataMs, coarseMs, fineMs, otherMs;
-    double iterations = 0, sum = 0;
-    const double diagonal = dp::boundingBoxDiagonal(tube.positions(0));
-    for (std::size_t f = 0; f <= frames; ++f)
-    {
-      const dp::PointCloud cloud =
-          dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f);
-      const dp::FrameResult r = tracker.track(cloud.points.data(), cloud.numberOfPoints(),
-                                              cloud.hasNormals() ? cloud.normals.data() : nullptr);
-      if (f == 0)
-        continue; // the first frame starts at the data
-      ms.push_back(1e3 * r.seconds);
-      dataMs.push_back(1e3 * r.timings.data);
-      coarseMs.push_back(1e3 * r.timings.coarse);
-      fineMs.push_back(1e3 * r.timings.fine);
-      otherMs.push_back(1e3 * (r.seconds - r.timings.data - r.timings.coarse - r.timings.fine));
-      iterations += r.iterations;
-      const std::vector<double> truth = tube.positions(f);
-      double e = 0;
-      for (std::size_t i = 0; i < truth.size(); ++i)
-        e += (truth[i] - r.positions[i]) * (truth[i] - r.positions[i]);
-      sum += e / static_cast<double>(truth.size() / 3);
-    }
-    const double median = dp::bench::median(ms);
-    const double resident = dp::bench::residentMiB() - residentBefore;
-    std::printf("%10zu %12.1f %14.2f %12.1f %13.3f%% %12.1f %12.2f %8.0f/%.0f/%.0f/%.0f\n",
-                tube.numberOfVertices(), median,
-                1e3 * median / static_cast<double>(tube.numberOfVertices()),
-                iterations / static_cast<double>(frames),
-                100 * std::sqrt(sum / static_cast<double>(frames)) / diagonal, resident,
-                1024 * resident / static_cast<double>(tube.numberOfVertices()),
-                dp::bench::median(dataMs), dp::bench::median(coarseMs), dp::bench::median(fineMs),
-                dp::bench::median(otherMs));
-    std::fflush(stdout);
-  }
 }
 
 // For a two-valued option: false for `first`, true for `second`, a usage error otherwise.
@@ -840,7 +680,7 @@ int main(int argc, char** argv)
   printMachine(plan.height);
   if (plan.scaling)
   {
-    scalingTable(plan.options, plan.frames ? plan.frames : 4);
+    scalingTable(plan.options, plan.frames ? plan.frames : 4, S.points, S.givenNormals);
     return 0;
   }
   std::unique_ptr<std::ofstream> csv;

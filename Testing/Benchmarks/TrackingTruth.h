@@ -183,6 +183,47 @@ inline vtkSmartPointer<vtkPolyData> decimated(vtkPolyData* input, std::size_t ve
   return decimate->GetOutput();
 }
 
+/** Fills `t` from the template mesh `coarse`: each vertex on the true frame-0 mesh (`frame0`,
+ *  `full`) with the triangle and barycentric coordinates that carry it through the frames, and
+ *  the template's triangles. */
+inline void placeOnTruth(vtkPolyData& coarse, TemplateKind kind, const std::vector<double>& frame0,
+                         const std::vector<std::int64_t>& full, Template& t)
+{
+  SurfaceDistance truth(frame0, full);
+  for (vtkIdType i = 0; i < coarse.GetNumberOfPoints(); ++i)
+  {
+    double p[3], closest[3];
+    coarse.GetPoint(i, p);
+    vtkIdType cellId = -1;
+    truth.squared(p, &cellId, closest);
+    const std::int64_t* v = &full[3 * cellId];
+    double a[3], b[3], c[3], w[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      a[k] = frame0[3 * v[0] + k];
+      b[k] = frame0[3 * v[1] + k];
+      c[k] = frame0[3 * v[2] + k];
+    }
+    barycentricCoordinates(closest, a, b, c, w);
+    // A decimated vertex sits on the surface; a reconstructed one up to half a voxel off it,
+    // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is then
+    // that offset.
+    const double* at = kind == TemplateKind::Reconstructed ? p : closest;
+    t.positions.insert(t.positions.end(), at, at + 3);
+    t.onTriangle.push_back(cellId);
+    t.barycentric.insert(t.barycentric.end(), w, w + 3);
+  }
+  const vtkIdType* ids = nullptr;
+  vtkIdType count = 0;
+  auto polys = vtk::TakeSmartPointer(coarse.GetPolys()->NewIterator());
+  for (polys->GoToFirstCell(); !polys->IsDoneWithTraversal(); polys->GoToNextCell())
+  {
+    polys->GetCurrentCell(count, ids);
+    if (count == 3)
+      t.triangles.insert(t.triangles.end(), {ids[0], ids[1], ids[2]});
+  }
+}
+
 /**
  * A template of about `vertices` vertices of the kind asked for; `frame0Samples` are the points
  * a reconstruction starts from (the data of frame 0, with its noise and holes; their normals
@@ -220,39 +261,7 @@ inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, st
   }
   else
     coarse = decimated(input, vertices);
-  SurfaceDistance truth(frame0, full);
-  for (vtkIdType i = 0; i < coarse->GetNumberOfPoints(); ++i)
-  {
-    double p[3], closest[3];
-    coarse->GetPoint(i, p);
-    vtkIdType cellId = -1;
-    truth.squared(p, &cellId, closest);
-    const std::int64_t* v = &full[3 * cellId];
-    double a[3], b[3], c[3], w[3];
-    for (int k = 0; k < 3; ++k)
-    {
-      a[k] = frame0[3 * v[0] + k];
-      b[k] = frame0[3 * v[1] + k];
-      c[k] = frame0[3 * v[2] + k];
-    }
-    barycentricCoordinates(closest, a, b, c, w);
-    // A decimated vertex sits on the surface; a reconstructed one up to half a voxel off it,
-    // where it stays (projecting it could fold thin triangles flat): its error at frame 0 is then
-    // that offset.
-    const double* at = kind == TemplateKind::Reconstructed ? p : closest;
-    t.positions.insert(t.positions.end(), at, at + 3);
-    t.onTriangle.push_back(cellId);
-    t.barycentric.insert(t.barycentric.end(), w, w + 3);
-  }
-  const vtkIdType* ids = nullptr;
-  vtkIdType count = 0;
-  auto polys = vtk::TakeSmartPointer(coarse->GetPolys()->NewIterator());
-  for (polys->GoToFirstCell(); !polys->IsDoneWithTraversal(); polys->GoToNextCell())
-  {
-    polys->GetCurrentCell(count, ids);
-    if (count == 3)
-      t.triangles.insert(t.triangles.end(), {ids[0], ids[1], ids[2]});
-  }
+  placeOnTruth(*coarse, kind, frame0, full, t);
   return t;
 }
 

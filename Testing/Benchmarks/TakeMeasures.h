@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// BenchmarkTracker's figures of a run (a take tracked with one template under one condition):
+// its sums over the frames and the figures they make, and a frame's error against its truth.
+#pragma once
+
+#include "TrackingTruth.h"
+
+#include "dp/track/Tracker.h"
+
+#include <Eigen/Dense>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace dp::bench
+{
+
+/** A run's figures, over its frames. */
+struct Run
+{
+  dp::FrameTimings time; // summed over the frames
+  std::size_t retried = 0, flagged = 0;
+  // The kept attempts' dependent steps, summed: deterministic, unlike the times.
+  std::size_t coarseSteps = 0, fineSteps = 0;
+  double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
+  // --colour: RMS over vertices and frames of the colour a vertex carries (the frame's colour at
+  // it) against its material point's true colour, 0-255; and the same at the true positions.
+  double colourSwim = -1, truthColourSwim = -1;
+  double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
+  std::size_t worstFrame = 0, frames = 0;
+};
+
+// A run's sums over its frames, turned into its figures once the last frame is in.
+class RunSums
+{
+public:
+  void add(std::size_t frame, const dp::FrameResult& r, const std::vector<double>& positions,
+           const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds)
+  {
+    Seconds += cycleSeconds;
+    R.time.data += r.timings.data;
+    R.time.prediction += r.timings.prediction;
+    R.time.coarse += r.timings.coarse;
+    R.time.fine += r.timings.fine;
+    R.time.quality += r.timings.quality;
+    R.retried += r.retries > 0;
+    R.coarseSteps += static_cast<std::size_t>(r.coarseIterations);
+    R.fineSteps += static_cast<std::size_t>(r.iterations);
+    R.flagged += r.failed;
+    JitterSums.add(positions, truth);
+    VertexSum += figures.vertexSquaredSum;
+    NormalSum += figures.normalSquaredSum;
+    SurfaceSum += figures.surfaceSquaredSum;
+    UncoveredSum += figures.uncovered;
+    R.largestVertexError = std::max(R.largestVertexError, figures.largestVertexError);
+    if (figures.uncovered > R.uncoveredWorst || R.frames == 0)
+    {
+      R.uncoveredWorst = figures.uncovered;
+      R.worstFrame = frame;
+    }
+    ++R.frames;
+  }
+
+  Run finish(std::size_t vertices) const
+  {
+    Run run = R;
+    const double tracked = static_cast<double>(run.frames);
+    const double samples = tracked * static_cast<double>(vertices);
+    run.vertexRms = std::sqrt(VertexSum / samples);
+    run.normalRms = std::sqrt(NormalSum / samples);
+    run.surfaceRms = std::sqrt(SurfaceSum / samples);
+    run.uncoveredMean = UncoveredSum / tracked;
+    run.jitter = JitterSums.ratio();
+    run.msPerFrame = 1e3 * Seconds / tracked;
+    return run;
+  }
+
+private:
+  Run R;
+  Jitter JitterSums;
+  double VertexSum = 0, NormalSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
+};
+
+// The RMS distance (mm) of positions y to the true ones; -1 for none (an attempt not made).
+inline double rmsAgainst(const std::vector<double>& y, const std::vector<double>& truth)
+{
+  double e = 0;
+  for (std::size_t i = 0; i < y.size(); ++i)
+    e += (y[i] - truth[i]) * (y[i] - truth[i]);
+  return y.empty() ? -1.0 : 1e3 * std::sqrt(e / static_cast<double>(truth.size() / 3));
+}
+
+// The error (mm, RMS) left once the best rigid motion is taken out (Kabsch): local, not global,
+// error.
+inline double rigidFreeRms(const std::vector<double>& y, const std::vector<double>& truth)
+{
+  const std::size_t n = y.size() / 3;
+  Eigen::Vector3d a = Eigen::Vector3d::Zero(), b = Eigen::Vector3d::Zero();
+  for (std::size_t v = 0; v < n; ++v)
+  {
+    a += Eigen::Vector3d(&y[3 * v]);
+    b += Eigen::Vector3d(&truth[3 * v]);
+  }
+  a /= static_cast<double>(n);
+  b /= static_cast<double>(n);
+  Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+  for (std::size_t v = 0; v < n; ++v)
+    C += (Eigen::Vector3d(&truth[3 * v]) - b) * (Eigen::Vector3d(&y[3 * v]) - a).transpose();
+  Eigen::JacobiSVD<Eigen::Matrix3d> svd(C, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+  D(2, 2) = (svd.matrixU() * svd.matrixV().transpose()).determinant() < 0 ? -1 : 1;
+  const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
+  double e = 0;
+  for (std::size_t v = 0; v < n; ++v)
+    e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v])).squaredNorm();
+  return 1e3 * std::sqrt(e / static_cast<double>(n));
+}
+
+} // namespace dp::bench
