@@ -112,7 +112,7 @@ Row measureRow()
   return row;
 }
 
-std::vector<Row> energyRows()
+std::vector<Row> clothRows()
 {
   using P = OptionPanel;
   return {
@@ -155,6 +155,13 @@ std::vector<Row> energyRows()
           "restUpdate", "RestUpdate", P::Advanced, 0, 1, "",
           "share of the last frame in the cloth's rest state (0: the template, the paper)",
           [](auto& o) -> auto& { return o.restUpdate; }),
+  };
+}
+
+std::vector<Row> distanceRows()
+{
+  using P = OptionPanel;
+  return {
       real(
           "distance.weight", "DistanceWeight", P::Shown, 0, Unbounded, "",
           "k_dis: the weight of the mesh -> points term",
@@ -177,6 +184,13 @@ std::vector<Row> energyRows()
           "distance.robustScale", "", P::None, 0, Unbounded, "world units",
           "Geman-McClure scale of the distance term; 0: plain least squares",
           [](auto& o) -> auto& { return o.distance.robustScale; }),
+  };
+}
+
+std::vector<Row> coverageRows()
+{
+  using P = OptionPanel;
+  return {
       real(
           "coverage.weight", "CoverageWeight", P::Shown, 0, Unbounded, "",
           "k_cov: the weight of the points -> mesh term (0: the paper's energy alone)",
@@ -221,7 +235,7 @@ std::vector<Row> energyRows()
   };
 }
 
-std::vector<Row> scheduleRows()
+std::vector<Row> startRows()
 {
   using P = OptionPanel;
   return {
@@ -258,6 +272,13 @@ std::vector<Row> scheduleRows()
           "tolerance", "Tolerance", P::Advanced, 1e-15, 1, "",
           "relative energy decrease that ends a solve",
           [](auto& o) -> auto& { return o.tolerance; }),
+  };
+}
+
+std::vector<Row> graphRows()
+{
+  using P = OptionPanel;
+  return {
       flag(
           "graph.enabled", "CoarseLevel", P::Shown,
           "register an embedded deformation graph first: fast motion caught as whole limbs",
@@ -301,6 +322,13 @@ std::vector<Row> scheduleRows()
           "graph.acceleration", "", P::None, 0, 20,
           "earlier steps Anderson acceleration combines; 0: plain steps",
           [](auto& o) -> auto& { return o.graph.acceleration; }),
+  };
+}
+
+std::vector<Row> recoveryRows()
+{
+  using P = OptionPanel;
+  return {
       flag(
           "recovery.enabled", "Recovery", P::Shown,
           "try a frame that failed again from other starts, keep the best, flag it if it fails",
@@ -343,9 +371,10 @@ std::vector<Row> scheduleRows()
 
 std::vector<Row> makeTable()
 {
-  std::vector<Row> rows = energyRows();
-  for (Row& row : scheduleRows())
-    rows.push_back(std::move(row));
+  std::vector<Row> rows;
+  for (auto group : {clothRows, distanceRows, coverageRows, startRows, graphRows, recoveryRows})
+    for (Row& row : group())
+      rows.push_back(std::move(row));
   return rows;
 }
 
