@@ -6,6 +6,7 @@
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
+#include "dp/track/FineSolver.h"
 #include "dp/track/FrameData.h"
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
@@ -103,16 +104,6 @@ double elapsed(std::chrono::steady_clock::time_point since)
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
 }
 
-// Every vertex pair a term of the fine level may couple: the cloth's (edges, hinges) include the
-// points -> mesh term's (edges).
-std::vector<std::array<std::int64_t, 2>> finePairs(const TriangleMesh& mesh)
-{
-  std::vector<std::array<std::int64_t, 2>> pairs(mesh.edges().begin(), mesh.edges().end());
-  for (const auto& h : mesh.hinges())
-    pairs.push_back({h[2], h[3]});
-  return pairs;
-}
-
 // The rigid motion (R, t) that moves `from` closest to `to` (Kabsch, weights `mass`).
 void rigidFit(const std::vector<double>& from, const std::vector<double>& to,
               const std::vector<double>& mass, Eigen::Matrix3d& R, Eigen::Vector3d& t)
@@ -146,7 +137,7 @@ struct Tracker::Parts
   explicit Parts(const RecoveryOptions& recovery) : Recovery(recovery) {}
   std::unique_ptr<DeformationGraph> Graph;
   std::unique_ptr<GraphRegistration> Registration;
-  std::unique_ptr<GaussNewtonSolver> Newton;
+  std::unique_ptr<FineSolver> Fine;
   MotionPredictor Predictor;
   // The take's usual quality and whether the last frame is in doubt: a frame in doubt sets no
   // baseline, no reference and no retry's start, whether or not it was flagged.
@@ -206,7 +197,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
   TemplateRest = Cloth.restState();
   setRegionStiffness(Cloth, Mesh, Template.data(), options.softening, options.creases);
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
-  P->Newton = std::make_unique<GaussNewtonSolver>(Mesh.numberOfVertices(), finePairs(Mesh));
+  P->Fine = FineSolver::make(options, Mesh, Cloth.lengthScale());
   if (options.graph.enabled)
   {
     const std::size_t nodes = options.graph.nodes > 0
@@ -526,13 +517,7 @@ void Tracker::solveFine(Attempt& a, DistanceTerm& distance, CoverageTerm* covera
   settings.tolerance = Options.tolerance;
   settings.settledStep = SettledStep * Voxel;
   a.frozen.assign(Mesh.numberOfVertices(), 0);
-  if (Options.solver == TrackerSolver::GaussNewton)
-    a.iterations = P->Newton->solve(x, terms, &distance, settings);
-  else if (Options.solver == TrackerSolver::LBFGS)
-    a.iterations = solveLbfgs(x, terms, settings);
-  else
-    a.iterations = solveSteepestDescent(x, terms, Mesh, Cloth.lengthScale(), settings,
-                                        Options.provisionalDetermination ? &a.frozen : nullptr);
+  a.iterations = P->Fine->solve(x, terms, &distance, settings, a.frozen);
   a.internalEnergy = internal.evaluate(x.data(), nullptr);
   a.distanceEnergy = distance.evaluate(x.data(), nullptr);
   a.rejected.resize(Mesh.numberOfVertices());
@@ -555,21 +540,14 @@ void Tracker::trackEmptyFrame(FrameResult& result)
   settings.maxIterations = Options.maxIterations;
   settings.tolerance = Options.tolerance;
   settings.settledStep = SettledStep * Voxel;
-  if (Options.solver == TrackerSolver::GaussNewton)
-    result.iterations = P->Newton->solve(x, terms, nullptr, settings);
-  else if (Options.solver == TrackerSolver::LBFGS)
-    result.iterations = solveLbfgs(x, terms, settings);
-  else
-    result.iterations =
-        solveSteepestDescent(x, terms, Mesh, Cloth.lengthScale(), settings,
-                             Options.provisionalDetermination ? &result.frozen : nullptr);
+  result.iterations = P->Fine->solve(x, terms, nullptr, settings, result.frozen);
   result.internalEnergy = internal.evaluate(x.data(), nullptr);
   result.positions = std::move(x);
 }
 
 bool Tracker::capsFineLevel() const
 {
-  return P->Graph && Options.solver == TrackerSolver::GaussNewton &&
+  return P->Graph && P->Fine->takesFewStepsAfterCoarseLevel() &&
          Options.graph.fineIterations < Options.maxIterations;
 }
 
