@@ -1,5 +1,5 @@
 """Wall time of the main job on a batch of takes: one process against `mpirun -np N`, runs
-interleaved, medians printed with the speed-up (issue 17).
+interleaved, medians printed with the speed-up.
 
     /usr/bin/python3 Testing/Benchmarks/BenchmarkBatch.py --bin build/bin [--processes 2]
         [--takes 4] [--frames 30] [--points 20000] [--vertices 1000] [--repeats 3]

@@ -2,7 +2,7 @@
 // Benchmark: reading a point sequence through vtkPointSequenceSource, against parsing the same
 // files directly with the engine, and the process memory as the sequence plays.
 //
-// Default settings are the foundation issue's: 200 frames of 20k points (binary PLY with
+// Default settings: 200 frames of 20k points (binary PLY with
 // normals, made by the sampler on the built-in bending tube). Prints medians of --repeats runs.
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"

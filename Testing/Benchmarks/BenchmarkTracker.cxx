@@ -67,7 +67,7 @@ struct Settings
       oracle; // "previous": start each frame at the true previous frame; "same": at the truth
   std::string dumpFolder; // write the tracked frames (PLY) here
   // The first frame tracked: the template (frame 0's shape) registered straight to it, as a
-  // chunk of a long sequence tracked on its own would start (issue 17's design measurement).
+  // chunk of a long sequence tracked on its own would start (Documentation/MainJob.md).
   std::size_t startFrame = 0;
   std::string csvFile; // per-frame figures
   bool colour = false; // the samples carry a colour fixed to the material (the tracker gets it)
