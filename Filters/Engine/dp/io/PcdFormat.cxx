@@ -497,9 +497,12 @@ PointCloud readPCD(const std::string& path)
   return assemble(header, layout, values);
 }
 
-void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
+namespace
 {
-  cloud.validate();
+// The header for the fields the cloud has: x y z, the normal's, and the packed colour, 4-byte
+// floats each.
+std::string writtenHeader(const PointCloud& cloud, bool binary)
+{
   const std::size_t n = cloud.numberOfPoints();
   std::string fieldsLine = "x y z", sizeLine = "4 4 4", typeLine = "F F F", countLine = "1 1 1";
   if (cloud.hasNormals())
@@ -516,42 +519,54 @@ void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
     typeLine += " F";
     countLine += " 1";
   }
-  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " +
-                    fieldsLine + "\nSIZE " + sizeLine + "\nTYPE " + typeLine + "\nCOUNT " +
-                    countLine + "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\n" +
-                    "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
-                    (binary ? "binary" : "ascii") + "\n";
-  auto put = [&](float v)
+  return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " + fieldsLine +
+         "\nSIZE " + sizeLine + "\nTYPE " + typeLine + "\nCOUNT " + countLine + "\nWIDTH " +
+         std::to_string(n) + "\nHEIGHT 1\n" + "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS " +
+         std::to_string(n) + "\nDATA " + (binary ? "binary" : "ascii") + "\n";
+}
+
+// One value: its 4 bytes in binary, its shortest decimal form and a space in ASCII.
+void appendValue(std::string& out, float v, bool binary)
+{
+  if (binary)
   {
-    if (binary)
-    {
-      char b[4];
-      std::memcpy(b, &v, 4);
-      out.append(b, 4);
-    }
-    else
-    {
-      char buffer[32];
-      const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
-      out.append(buffer, r.ptr);
-      out += ' ';
-    }
-  };
+    char b[4];
+    std::memcpy(b, &v, 4);
+    out.append(b, 4);
+  }
+  else
+  {
+    char buffer[32];
+    const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
+    out.append(buffer, r.ptr);
+    out += ' ';
+  }
+}
+
+// An RGB colour as PCL packs it: 0x00RRGGBB in the bytes of a float.
+float packedColour(const std::uint8_t* c)
+{
+  const std::uint32_t packed = (std::uint32_t(c[0]) << 16) | (std::uint32_t(c[1]) << 8) | c[2];
+  float asFloat;
+  std::memcpy(&asFloat, &packed, 4);
+  return asFloat;
+}
+} // namespace
+
+void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
+{
+  cloud.validate();
+  const std::size_t n = cloud.numberOfPoints();
+  std::string out = writtenHeader(cloud, binary);
   for (std::size_t i = 0; i < n; ++i)
   {
     for (int c = 0; c < 3; ++c)
-      put(static_cast<float>(cloud.points[3 * i + c]));
+      appendValue(out, static_cast<float>(cloud.points[3 * i + c]), binary);
     if (cloud.hasNormals())
       for (int c = 0; c < 3; ++c)
-        put(cloud.normals[3 * i + c]);
+        appendValue(out, cloud.normals[3 * i + c], binary);
     if (cloud.hasColors())
-    {
-      const std::uint8_t* c = &cloud.colors[cloud.colorComponents * i];
-      const std::uint32_t packed = (std::uint32_t(c[0]) << 16) | (std::uint32_t(c[1]) << 8) | c[2];
-      float asFloat;
-      std::memcpy(&asFloat, &packed, 4);
-      put(asFloat);
-    }
+      appendValue(out, packedColour(&cloud.colors[cloud.colorComponents * i]), binary);
     if (!binary)
       out.back() = '\n';
   }
