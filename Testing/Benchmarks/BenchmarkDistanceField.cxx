@@ -319,6 +319,37 @@ Errors vtkTrilinearErrors(vtkImageData* image, const DenseBox& box, const dp::Di
   return e;
 }
 
+// Our field's errors at the voxel centres (3 coordinates each) against the exact nearest-point
+// distance.
+Errors errorsAtCentres(const dp::DistanceField& field, const std::vector<double>& centres)
+{
+  Errors e;
+  for (std::size_t c = 0; c < centres.size(); c += 3)
+  {
+    double d2 = 0;
+    field.nearestPoint(&centres[c], &d2);
+    accumulate(e, field.sample(&centres[c]).distance - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
+// The errors of the first 20000 samples (taken at q, 3 coordinates each) against the exact
+// nearest-point distance.
+Errors errorsOfSamples(const dp::DistanceField& field, const std::vector<double>& q,
+                       const std::vector<dp::DistanceSample>& samples)
+{
+  Errors e;
+  for (std::size_t i = 0; i < 20000; ++i)
+  {
+    double d2 = 0;
+    field.nearestPoint(&q[3 * i], &d2);
+    accumulate(e, samples[i].distance - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
 // The sparse field against vtkUnsignedDistance on the dense box: build times, memory, sampling
 // throughput and accuracy against exact nearest-point distances.
 void runCase(const Figure& figure, std::size_t pointCount, double voxel, double band, int boxVoxels,
@@ -339,24 +370,10 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
 
   // Accuracy at the grid's voxel centres within the band, against the exact nearest point.
   const std::vector<double> centres = centresInBand(field, box, band);
-  Errors oursGrid;
-  for (std::size_t c = 0; c < centres.size(); c += 3)
-  {
-    double d2 = 0;
-    field.nearestPoint(&centres[c], &d2);
-    accumulate(oursGrid, field.sample(&centres[c]).distance - std::sqrt(d2));
-  }
-  finish(oursGrid);
+  const Errors oursGrid = errorsAtCentres(field, centres);
   std::vector<dp::DistanceSample> samples;
   const std::vector<double> q = timeSampling(field, points, band, samples);
-  Errors oursRandom;
-  for (std::size_t i = 0; i < 20000; ++i)
-  {
-    double d2 = 0;
-    field.nearestPoint(&q[3 * i], &d2);
-    accumulate(oursRandom, samples[i].distance - std::sqrt(d2));
-  }
-  finish(oursRandom);
+  const Errors oursRandom = errorsOfSamples(field, q, samples);
 
   if (!withVTK)
   {

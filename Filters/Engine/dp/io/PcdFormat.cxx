@@ -23,46 +23,35 @@ struct PcdField
   std::size_t offset = 0; // byte offset inside a binary record
 };
 
+// The value of type T whose bytes start at p (unaligned).
+template <typename T>
+T load(const char* p)
+{
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
 double decodeField(const char* p, const PcdField& f)
 {
   switch (f.type)
   {
   case 'F':
     if (f.size == 4)
-    {
-      float v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<float>(p);
     else
-    {
-      double v;
-      std::memcpy(&v, p, 8);
-      return v;
-    }
+      return load<double>(p);
   case 'I':
     switch (f.size)
     {
     case 1:
       return static_cast<std::int8_t>(*p);
     case 2:
-    {
-      std::int16_t v;
-      std::memcpy(&v, p, 2);
-      return v;
-    }
+      return load<std::int16_t>(p);
     case 4:
-    {
-      std::int32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<std::int32_t>(p);
     default:
-    {
-      std::int64_t v;
-      std::memcpy(&v, p, 8);
-      return static_cast<double>(v);
-    }
+      return static_cast<double>(load<std::int64_t>(p));
     }
   default:
     switch (f.size)
@@ -70,23 +59,11 @@ double decodeField(const char* p, const PcdField& f)
     case 1:
       return static_cast<std::uint8_t>(*p);
     case 2:
-    {
-      std::uint16_t v;
-      std::memcpy(&v, p, 2);
-      return v;
-    }
+      return load<std::uint16_t>(p);
     case 4:
-    {
-      std::uint32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<std::uint32_t>(p);
     default:
-    {
-      std::uint64_t v;
-      std::memcpy(&v, p, 8);
-      return static_cast<double>(v);
-    }
+      return static_cast<double>(load<std::uint64_t>(p));
     }
   }
 }
@@ -188,6 +165,40 @@ std::size_t parseCountValue(const std::vector<std::string_view>& values, std::st
   return static_cast<std::size_t>(v);
 }
 
+// A FIELDS, SIZE, TYPE or COUNT line (its keyword in lower case, as `written`, and its values)
+// into `fields`; false for any other keyword.
+bool parseFieldLine(const std::string& keyword, const std::vector<std::string_view>& values,
+                    std::string_view written, std::vector<PcdField>& fields,
+                    const HeaderFailure& fail)
+{
+  if (keyword == "fields")
+  {
+    for (auto v : values)
+      fields.push_back({std::string(v), 4, 'F', 1, 0});
+  }
+  else if (keyword == "size")
+  {
+    const std::vector<int> sizes = perFieldNumbers(values, fields.size(), written, fail);
+    for (std::size_t k = 0; k < fields.size(); ++k)
+    {
+      fields[k].size = sizes[k];
+      if (sizes[k] != 1 && sizes[k] != 2 && sizes[k] != 4 && sizes[k] != 8)
+        fail("unsupported field size " + std::to_string(sizes[k]));
+    }
+  }
+  else if (keyword == "type")
+    parseTypes(values, fields, fail);
+  else if (keyword == "count")
+  {
+    const std::vector<int> counts = perFieldNumbers(values, fields.size(), written, fail);
+    for (std::size_t k = 0; k < fields.size(); ++k)
+      fields[k].count = counts[k];
+  }
+  else
+    return false;
+  return true;
+}
+
 // Reads the header lines off the front of `text`, which is left at the data.
 PcdHeader parseHeader(const std::string& path, std::string_view& text)
 {
@@ -215,30 +226,9 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
     std::vector<std::string_view> values;
     for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
       values.push_back(t);
-    if (keyword == "fields")
-    {
-      for (auto v : values)
-        fields.push_back({std::string(v), 4, 'F', 1, 0});
-    }
-    else if (keyword == "size")
-    {
-      const std::vector<int> sizes = perFieldNumbers(values, fields.size(), written, fail);
-      for (std::size_t k = 0; k < fields.size(); ++k)
-      {
-        fields[k].size = sizes[k];
-        if (sizes[k] != 1 && sizes[k] != 2 && sizes[k] != 4 && sizes[k] != 8)
-          fail("unsupported field size " + std::to_string(sizes[k]));
-      }
-    }
-    else if (keyword == "type")
-      parseTypes(values, fields, fail);
-    else if (keyword == "count")
-    {
-      const std::vector<int> counts = perFieldNumbers(values, fields.size(), written, fail);
-      for (std::size_t k = 0; k < fields.size(); ++k)
-        fields[k].count = counts[k];
-    }
-    else if (keyword == "width")
+    if (parseFieldLine(keyword, values, written, fields, fail))
+      continue;
+    if (keyword == "width")
       width = parseCountValue(values, written, fail), haveWidth = true;
     else if (keyword == "height")
       height = parseCountValue(values, written, fail);

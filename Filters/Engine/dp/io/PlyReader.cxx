@@ -295,6 +295,23 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
     cloud.colorComponents = 0;
 }
 
+// A face's vertex index as read: from 0 to below the cloud's vertex count, else an error naming
+// the face.
+std::int64_t vertexIndex(const std::string& path, std::size_t face, double value,
+                         const PointCloud& cloud)
+{
+  const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
+  if (!(value >= 0 && value < numberOfPoints)) // NaN included
+  {
+    const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
+    throw FileError(
+        path, "PLY face " + std::to_string(face) + " uses vertex " +
+                  (whole ? std::to_string(static_cast<long long>(value)) : std::to_string(value)) +
+                  ", but there are only " + std::to_string(cloud.numberOfPoints()) + " vertices");
+  }
+  return static_cast<std::int64_t>(value);
+}
+
 void readFaces(const std::string& path, const PlyElement& element, BodyReader& reader,
                PointCloud& cloud)
 {
@@ -312,7 +329,6 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
   cloud.faceOffsets.reserve(element.count + 1);
   cloud.faceOffsets.push_back(0);
   cloud.faceConnectivity.reserve(3 * element.count);
-  const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
   for (std::size_t f = 0; f < element.count; ++f)
   {
     for (std::size_t p = 0; p < element.properties.size(); ++p)
@@ -333,18 +349,7 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
         if (!reader.read(prop.type, value))
           truncated(path, element, f);
         if (static_cast<int>(p) == indexProperty)
-        {
-          if (!(value >= 0 && value < numberOfPoints)) // NaN included
-          {
-            const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
-            throw FileError(path, "PLY face " + std::to_string(f) + " uses vertex " +
-                                      (whole ? std::to_string(static_cast<long long>(value))
-                                             : std::to_string(value)) +
-                                      ", but there are only " +
-                                      std::to_string(cloud.numberOfPoints()) + " vertices");
-          }
-          cloud.faceConnectivity.push_back(static_cast<std::int64_t>(value));
-        }
+          cloud.faceConnectivity.push_back(vertexIndex(path, f, value, cloud));
       }
     }
     cloud.faceOffsets.push_back(static_cast<std::int64_t>(cloud.faceConnectivity.size()));
