@@ -136,7 +136,7 @@ private:
 };
 
 // ---------------------------------------------------------------------------------------------
-// Isotropic remeshing (Botsch & Kobbelt 2004) on a corner table (CornerTable.h).
+// The remeshing passes, over the corner table and its local operations (CornerTable.h).
 
 /**
  * Isotropic remeshing (Botsch & Kobbelt 2004) of a triangle mesh held in a corner table, with

@@ -18,6 +18,7 @@ constexpr double Pi = 3.14159265358979323846;
 // part may be nearer (horse-gallop's passing legs, seed 3: 16.0 and 23.9 mm vertex RMS,
 // decimated/noisy, with this limit and without it).
 constexpr double TrustedFollow = 1.0;
+
 // The largest change of a coordinate between a and b (n coordinates each).
 double largestChange(const double* a, const std::vector<double>& b, std::size_t n)
 {

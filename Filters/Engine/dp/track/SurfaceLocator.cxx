@@ -15,6 +15,7 @@ inline double dot3(const double* a, const double* b)
 {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
+
 // The answer of closestPointOnTriangle for weights (u, v, s) of a, b, c: the weights into w, the
 // point into closest; returns its squared distance to p.
 struct WeightedCorners
