@@ -192,6 +192,73 @@ void addFieldValue(vtkImageData* output, const char* name, double value)
   a->InsertNextValue(value);
   output->GetFieldData()->AddArray(a);
 }
+
+// The input's finite points (a warning for any dropped); false, with the error reported for
+// `filter`, for a negative or non-finite band width or no point left.
+bool targetPoints(vtkAlgorithm* filter, vtkPointSet* input, double bandWidth,
+                  vtkDP::TargetPoints& target)
+{
+  if (bandWidth < 0 || !std::isfinite(bandWidth))
+  {
+    vtkErrorWithObjectMacro(filter,
+                            "BandWidth must be positive, or 0 for 3 voxels; got " << bandWidth);
+    return false;
+  }
+  target = vtkDP::finitePoints(input);
+  if (target.dropped > 0)
+  {
+    vtkWarningWithObjectMacro(
+        filter, "dropped " << target.dropped << " input point(s) with NaN or infinite coordinates");
+  }
+  if (target.ids.empty())
+  {
+    vtkErrorWithObjectMacro(filter, "the input has no points: a distance field needs at least one");
+    return false;
+  }
+  return true;
+}
+
+// The engine's distance image of the points over `grid` into `field` (a band of `bandWidth`, or
+// 0 for 3 of the largest spacing); false, with the error reported for `filter`, if it failed.
+bool computeImage(vtkAlgorithm* filter, const vtkDP::TargetPoints& target,
+                  const dp::ImageGrid& grid, double bandWidth, OutputArrays& field,
+                  dp::DistanceImageBand& band)
+{
+  const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
+  try
+  {
+    band = dp::computeDistanceImage(target.xyz.data(), target.ids.size(), grid,
+                                    bandWidth > 0 ? bandWidth : 3 * largestSpacing, field.view());
+  }
+  catch (const std::exception& e)
+  {
+    vtkErrorWithObjectMacro(filter, << e.what());
+    return false;
+  }
+  return true;
+}
+
+// The points' normals: the input's, else estimated when `compute` (else none).
+std::vector<float> normalsOf(const vtkDP::TargetPoints& target, bool compute)
+{
+  std::vector<float> normals = target.normals;
+  if (normals.empty() && compute)
+    normals = dp::estimateNormals(target.xyz.data(), target.ids.size());
+  return normals;
+}
+
+// The output image: its geometry, the point arrays and the band's figures in the field data.
+void fillOutput(vtkImageData* output, int extent[6], const dp::ImageGrid& grid,
+                const std::vector<vtkIdType>& ids, const std::vector<float>& normals,
+                OutputArrays& field, const dp::DistanceImageBand& band)
+{
+  output->SetExtent(extent);
+  output->SetOrigin(grid.origin.data());
+  output->SetSpacing(grid.spacing.data());
+  fillArrays(output, ids, normals, field);
+  addFieldValue(output, "BandWidth", band.bandWidth);
+  addFieldValue(output, "BandVoxels", static_cast<double>(band.bandVoxels));
+}
 } // namespace
 
 int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
@@ -203,22 +270,9 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   if (!input || !output)
     return 0;
 
-  if (this->BandWidth < 0 || !std::isfinite(this->BandWidth))
-  {
-    vtkErrorMacro("BandWidth must be positive, or 0 for 3 voxels; got " << this->BandWidth);
+  vtkDP::TargetPoints target;
+  if (!targetPoints(this, input, this->BandWidth, target))
     return 0;
-  }
-  const vtkDP::TargetPoints target = vtkDP::finitePoints(input);
-  if (target.dropped > 0)
-  {
-    vtkWarningMacro("dropped " << target.dropped
-                               << " input point(s) with NaN or infinite coordinates");
-  }
-  if (target.ids.empty())
-  {
-    vtkErrorMacro("the input has no points: a distance field needs at least one");
-    return 0;
-  }
 
   int extent[6];
   outInfo->Get(vtkStreamingDemandDrivenPipeline::WHOLE_EXTENT(), extent);
@@ -236,37 +290,20 @@ int vtkDistanceFieldFilter::RequestData(vtkInformation*, vtkInformationVector** 
   const double diagonal =
       imageBounds(target.xyz, this->Bounds, this->AdjustBounds, this->AdjustDistance, bounds);
   const dp::ImageGrid grid = gridOver(extent, bounds, diagonal);
-  const double largestSpacing = std::max({grid.spacing[0], grid.spacing[1], grid.spacing[2]});
   this->SetProgressText("Point Distance Field");
   this->UpdateProgress(0.05);
   OutputArrays field(samples);
   dp::DistanceImageBand band;
-  try
-  {
-    band = dp::computeDistanceImage(target.xyz.data(), target.ids.size(), grid,
-                                    this->BandWidth > 0 ? this->BandWidth : 3 * largestSpacing,
-                                    field.view());
-  }
-  catch (const std::exception& e)
-  {
-    vtkErrorMacro(<< e.what());
+  if (!computeImage(this, target, grid, this->BandWidth, field, band))
     return 0;
-  }
   this->UpdateProgress(0.6);
   if (this->GetAbortExecute())
     return 1;
 
-  std::vector<float> normals = target.normals;
-  if (normals.empty() && this->ComputeNormals)
-    normals = dp::estimateNormals(target.xyz.data(), target.ids.size());
+  const std::vector<float> normals = normalsOf(target, this->ComputeNormals);
   this->UpdateProgress(0.8);
 
-  output->SetExtent(extent);
-  output->SetOrigin(grid.origin.data());
-  output->SetSpacing(grid.spacing.data());
-  fillArrays(output, target.ids, normals, field);
-  addFieldValue(output, "BandWidth", band.bandWidth);
-  addFieldValue(output, "BandVoxels", static_cast<double>(band.bandVoxels));
+  fillOutput(output, extent, grid, target.ids, normals, field, band);
   this->UpdateProgress(1.0);
   return 1;
 }

@@ -273,6 +273,37 @@ dp::FrameSequence sequenceFromOneFile(const std::string& name, double frameInter
                             : dp::FrameSequence::fromFiles({name}, frameInterval);
 }
 
+// Reads a frame's file into output, with the engine's readers or VTK's by its extension; returns
+// the points dropped for non-finite coordinates. Throws for an unknown extension or an
+// unreadable file.
+vtkIdType readFrame(const std::string& path, vtkPolyData* output)
+{
+  const dp::PointFileFormat format = dp::formatFromFileName(path);
+  if (dp::isEngineFormat(format))
+  {
+    dp::ReadReport report;
+    const dp::PointCloud cloud = dp::readPointCloud(path, &report);
+    cloudToPolyData(cloud, output);
+    return static_cast<vtkIdType>(report.droppedNonFinite);
+  }
+  if (format != dp::PointFileFormat::Unknown)
+    return readVTKFile(path, format, output);
+  throw dp::FileError(path, "unknown file extension; readable: .ply .pcd .xyz .pts "
+                            ".csv .txt .obj .vtp .vtu .vtk");
+}
+
+// The field data naming the frame: FrameIndex and FileName.
+void addFrameIdentity(vtkPolyData* output, std::size_t index, const std::string& path)
+{
+  vtkNew<vtkIntArray> frameIndex;
+  frameIndex->SetName("FrameIndex");
+  frameIndex->InsertNextValue(static_cast<int>(index));
+  output->GetFieldData()->AddArray(frameIndex);
+  vtkNew<vtkStringArray> fileName;
+  fileName->SetName("FileName");
+  fileName->InsertNextValue(path);
+  output->GetFieldData()->AddArray(fileName);
+}
 } // namespace
 
 vtkPointSequenceSource::vtkPointSequenceSource() : Internal(new Internals)
@@ -432,25 +463,9 @@ int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
                                " of " + std::to_string(sequence.size());
   this->SetProgressText(progress.c_str());
 
-  const dp::PointFileFormat format = dp::formatFromFileName(frame.path);
   try
   {
-    if (dp::isEngineFormat(format))
-    {
-      dp::ReadReport report;
-      const dp::PointCloud cloud = dp::readPointCloud(frame.path, &report);
-      cloudToPolyData(cloud, output);
-      this->NumberOfDroppedPoints = static_cast<vtkIdType>(report.droppedNonFinite);
-    }
-    else if (format != dp::PointFileFormat::Unknown)
-    {
-      this->NumberOfDroppedPoints = readVTKFile(frame.path, format, output);
-    }
-    else
-    {
-      throw dp::FileError(frame.path, "unknown file extension; readable: .ply .pcd .xyz .pts "
-                                      ".csv .txt .obj .vtp .vtu .vtk");
-    }
+    this->NumberOfDroppedPoints = readFrame(frame.path, output);
   }
   catch (const std::exception& e)
   {
@@ -475,14 +490,7 @@ int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
     vtkWarningMacro(<< frame.path << ": empty frame (no points), frame " << index);
   }
 
-  vtkNew<vtkIntArray> frameIndex;
-  frameIndex->SetName("FrameIndex");
-  frameIndex->InsertNextValue(static_cast<int>(index));
-  output->GetFieldData()->AddArray(frameIndex);
-  vtkNew<vtkStringArray> fileName;
-  fileName->SetName("FileName");
-  fileName->InsertNextValue(frame.path);
-  output->GetFieldData()->AddArray(fileName);
+  addFrameIdentity(output, index, frame.path);
   this->UpdateProgress(1.0);
   return 1;
 }

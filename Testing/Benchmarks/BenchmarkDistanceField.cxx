@@ -319,6 +319,37 @@ Errors vtkTrilinearErrors(vtkImageData* image, const DenseBox& box, const dp::Di
   return e;
 }
 
+// Our field's errors at the voxel centres (3 coordinates each) against the exact nearest-point
+// distance.
+Errors errorsAtCentres(const dp::DistanceField& field, const std::vector<double>& centres)
+{
+  Errors e;
+  for (std::size_t c = 0; c < centres.size(); c += 3)
+  {
+    double d2 = 0;
+    field.nearestPoint(&centres[c], &d2);
+    accumulate(e, field.sample(&centres[c]).distance - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
+// The errors of the first 20000 samples (taken at q, 3 coordinates each) against the exact
+// nearest-point distance.
+Errors errorsOfSamples(const dp::DistanceField& field, const std::vector<double>& q,
+                       const std::vector<dp::DistanceSample>& samples)
+{
+  Errors e;
+  for (std::size_t i = 0; i < 20000; ++i)
+  {
+    double d2 = 0;
+    field.nearestPoint(&q[3 * i], &d2);
+    accumulate(e, samples[i].distance - std::sqrt(d2));
+  }
+  finish(e);
+  return e;
+}
+
 // The sparse field against vtkUnsignedDistance on the dense box: build times, memory, sampling
 // throughput and accuracy against exact nearest-point distances.
 void runCase(const Figure& figure, std::size_t pointCount, double voxel, double band, int boxVoxels,
@@ -339,24 +370,10 @@ void runCase(const Figure& figure, std::size_t pointCount, double voxel, double 
 
   // Accuracy at the grid's voxel centres within the band, against the exact nearest point.
   const std::vector<double> centres = centresInBand(field, box, band);
-  Errors oursGrid;
-  for (std::size_t c = 0; c < centres.size(); c += 3)
-  {
-    double d2 = 0;
-    field.nearestPoint(&centres[c], &d2);
-    accumulate(oursGrid, field.sample(&centres[c]).distance - std::sqrt(d2));
-  }
-  finish(oursGrid);
+  const Errors oursGrid = errorsAtCentres(field, centres);
   std::vector<dp::DistanceSample> samples;
   const std::vector<double> q = timeSampling(field, points, band, samples);
-  Errors oursRandom;
-  for (std::size_t i = 0; i < 20000; ++i)
-  {
-    double d2 = 0;
-    field.nearestPoint(&q[3 * i], &d2);
-    accumulate(oursRandom, samples[i].distance - std::sqrt(d2));
-  }
-  finish(oursRandom);
+  const Errors oursRandom = errorsOfSamples(field, q, samples);
 
   if (!withVTK)
   {
@@ -494,37 +511,41 @@ void runImageCase(std::size_t pointCount, int size, std::size_t repeats, bool wi
               inBand.max / voxel, beyond.max / voxel, beyond.rms / voxel, below / voxel);
 }
 
-} // namespace
-
-int main(int argc, char** argv)
+// The command line's settings.
+struct Settings
 {
-  using namespace dp::cli;
-  std::setvbuf(stdout, nullptr, _IOLBF, 0); // figures as they come, also through a pipe
-  std::size_t repeats = 5, small = 20000, large = 1000000;
+  std::size_t repeats = 5, points = 20000, largePoints = 1000000;
   std::string data = "../shared/data";
   bool vtkLarge = true;
   std::vector<int> imageSizes{100, 200};
+};
+
+// Reads the command line into `settings`; returns -1 to go on, else the exit code (after the
+// usage or the error is printed).
+int parseArguments(int argc, char** argv, Settings& settings)
+{
+  using namespace dp::cli;
   try
   {
     for (int i = 1; i < argc; ++i)
     {
       const std::string arg = argv[i];
       if (arg == "--repeats")
-        repeats = parseCount(arg, optionValue(argc, argv, i), 1, 100);
+        settings.repeats = parseCount(arg, optionValue(argc, argv, i), 1, 100);
       else if (arg == "--points")
-        small = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+        settings.points = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
       else if (arg == "--large-points")
-        large = parseCount(arg, optionValue(argc, argv, i), 0, 100000000);
+        settings.largePoints = parseCount(arg, optionValue(argc, argv, i), 0, 100000000);
       else if (arg == "--data")
-        data = optionValue(argc, argv, i);
+        settings.data = optionValue(argc, argv, i);
       else if (arg == "--image-sizes")
       {
-        imageSizes.clear();
+        settings.imageSizes.clear();
         for (const std::string& v : splitList(optionValue(argc, argv, i)))
-          imageSizes.push_back(static_cast<int>(parseCount(arg, v, 2, 2000)));
+          settings.imageSizes.push_back(static_cast<int>(parseCount(arg, v, 2, 2000)));
       }
       else if (arg == "--no-vtk-large")
-        vtkLarge = false;
+        settings.vtkLarge = false;
       else
       {
         std::cout << "Usage: BenchmarkDistanceField [--repeats N] [--points N] [--large-points N]"
@@ -539,23 +560,37 @@ int main(int argc, char** argv)
     std::cerr << e.what() << "\n";
     return 2;
   }
+  return -1;
+}
+
+} // namespace
+
+int main(int argc, char** argv)
+{
+  std::setvbuf(stdout, nullptr, _IOLBF, 0); // figures as they come, also through a pipe
+  Settings settings;
+  if (const int exitCode = parseArguments(argc, argv, settings); exitCode >= 0)
+    return exitCode;
+  const std::size_t repeats = settings.repeats, small = settings.points,
+                    large = settings.largePoints;
   std::printf("machine: %s, %u hardware threads; Release build\n", cpuModel().c_str(),
               std::thread::hardware_concurrency());
   std::printf("vtkDistanceFieldFilter against vtkUnsignedDistance on the same image "
               "(sphere, radius 0.5; image [-0.6, 0.6]^3; band = radius = 3 voxels; medians of %zu; "
               "%d SMP thread(s)):\n",
               repeats, vtkSMPTools::GetEstimatedNumberOfThreads());
-  for (int size : imageSizes)
+  for (int size : settings.imageSizes)
   {
     runImageCase(small, size, repeats, true);
     if (large > 0)
-      runImageCase(large, size, std::max<std::size_t>(1, repeats / 2), vtkLarge);
+      runImageCase(large, size, std::max<std::size_t>(1, repeats / 2), settings.vtkLarge);
   }
-  const Figure figure = loadFigure(data, 1.7);
+  const Figure figure = loadFigure(settings.data, 1.7);
   const double voxel = 0.012, band = 3 * voxel;
   const int boxVoxels = 200;
   runCase(figure, small, voxel, band, boxVoxels, repeats, true);
   if (large > 0)
-    runCase(figure, large, voxel, band, boxVoxels, std::max<std::size_t>(1, repeats / 2), vtkLarge);
+    runCase(figure, large, voxel, band, boxVoxels, std::max<std::size_t>(1, repeats / 2),
+            settings.vtkLarge);
   return 0;
 }

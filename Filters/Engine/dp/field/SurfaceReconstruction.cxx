@@ -3,6 +3,7 @@
 
 #include "dp/detail/KdTree.h"
 #include "dp/detail/Vec3.h"
+#include "dp/field/OutsideBand.h"
 #include "dp/field/PointBand.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/IsotropicRemesher.h"
@@ -76,8 +77,10 @@ constexpr double VoxelPerSpacing = 1.5; // the fine voxel, in median point spaci
 
 using detail::voxelOf;
 
-// The value of hole voxels until interpolateHoles gives them one.
-constexpr float Unknown = 1e6f;
+// The signs outside the band and the values across holes: OutsideBand.h.
+using detail::interpolateHoles;
+using detail::OutsideBand;
+using detail::UnknownHoleValue;
 
 // The plane distance in voxels, clamped to the band, at every active voxel of `grid` but those
 // of holes.
@@ -93,7 +96,7 @@ void evaluate(const Input& in, openvdb::FloatGrid& grid, double h, std::size_t k
         for (std::size_t l = range.begin(); l != range.end(); ++l)
           for (auto it = leaves.leaf(l).beginValueOn(); it; ++it)
           {
-            if (*it == Unknown)
+            if (*it == UnknownHoleValue)
               continue;
             const openvdb::Coord c = it.getCoord();
             const double x[3] = {h * c.x(), h * c.y(), h * c.z()};
@@ -102,352 +105,6 @@ void evaluate(const Input& in, openvdb::FloatGrid& grid, double h, std::size_t k
           }
       });
 }
-
-// The voxels of holes get the harmonic interpolation (successive over-relaxation of the mean of
-// the six neighbours) of the values around them: the band's, and the pieces' outside it. Across
-// a hole, between the inside (band voxels or hole voxels themselves, when the closing filled a
-// thin part) and the outside, that is a membrane from rim to rim. A connected part of hole
-// voxels that meets pieces of one sign only and whose band neighbours mostly have that sign
-// too (a concave corner of the outside, the hollow of a cupped ear) is no hole: it takes that
-// sign, so no surface appears there where a few band voxels next to it have the other one (a
-// part too thin for the voxels).
-// What each hole voxel's six neighbours are: other hole voxels (their index in `around`, else
-// -1), and of the others the sum of their values (`fixed`), whether they are pieces outside the
-// band of either sign (`meets`: bit 0 an inside piece, bit 1 an outside piece), and their signs
-// in the band (`band`: positive ones less negative ones).
-struct HoleNeighbours
-{
-  std::vector<std::array<int, 6>> around;
-  std::vector<float> fixed;
-  std::vector<std::uint8_t> meets;
-  std::vector<int> band;
-};
-
-HoleNeighbours holeNeighbours(const openvdb::FloatGrid& grid,
-                              const std::vector<openvdb::Coord>& holes)
-{
-  openvdb::Int32Grid::Ptr index = openvdb::Int32Grid::create(-1);
-  {
-    auto acc = index->getAccessor();
-    for (std::size_t i = 0; i < holes.size(); ++i)
-      acc.setValueOn(holes[i], static_cast<int>(i));
-  }
-  const std::size_t n = holes.size();
-  HoleNeighbours h{std::vector<std::array<int, 6>>(n), std::vector<float>(n, 0.0f),
-                   std::vector<std::uint8_t>(n, 0), std::vector<int>(n, 0)};
-  auto acc = index->getConstAccessor();
-  auto values = grid.getConstAccessor();
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    int e = 0;
-    for (int axis = 0; axis < 3; ++axis)
-      for (int side = -1; side <= 1; side += 2)
-      {
-        openvdb::Coord v = holes[i];
-        v[axis] += side;
-        const int j = acc.getValue(v);
-        h.around[i][e++] = j;
-        if (j >= 0)
-          continue;
-        const float neighbour = values.getValue(v);
-        h.fixed[i] += neighbour;
-        if (!values.isValueOn(v))
-          h.meets[i] |= neighbour < 0 ? 1 : 2;
-        else
-          h.band[i] += neighbour < 0 ? -1 : 1;
-      }
-  }
-  return h;
-}
-
-// Which hole voxels are free to take the interpolation: not those of a connected part that
-// meets pieces of one sign only and whose band neighbours mostly have that sign too; those get
-// that sign's background value in `value`.
-std::vector<char> freeHoleVoxels(const HoleNeighbours& h, float background,
-                                 std::vector<float>& value)
-{
-  const std::size_t n = h.around.size();
-  std::vector<int> part(n, -1);
-  std::vector<std::uint8_t> partMeets;
-  std::vector<long> partBand;
-  std::vector<std::size_t> stack;
-  for (std::size_t seed = 0; seed < n; ++seed)
-  {
-    if (part[seed] >= 0)
-      continue;
-    const int p = static_cast<int>(partMeets.size());
-    partMeets.push_back(0);
-    partBand.push_back(0);
-    part[seed] = p;
-    stack.push_back(seed);
-    while (!stack.empty())
-    {
-      const std::size_t i = stack.back();
-      stack.pop_back();
-      partMeets[p] |= h.meets[i];
-      partBand[p] += h.band[i];
-      for (int j : h.around[i])
-        if (j >= 0 && part[j] < 0)
-        {
-          part[j] = p;
-          stack.push_back(static_cast<std::size_t>(j));
-        }
-    }
-  }
-  std::vector<char> free(n);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    const std::uint8_t m = partMeets[part[i]];
-    const long b = partBand[part[i]];
-    free[i] = !((m == 1 && b < 0) || (m == 2 && b > 0));
-    if (!free[i])
-      value[i] = m == 1 ? -background : background;
-  }
-  return free;
-}
-
-void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord>& holes,
-                      float background)
-{
-  if (holes.empty())
-    return;
-  const HoleNeighbours h = holeNeighbours(grid, holes);
-  std::vector<float> value(holes.size(), 0.0f);
-  const std::vector<char> free = freeHoleVoxels(h, background, value);
-  const int rounds = 200;
-  const float omega = 1.9f;
-  for (int round = 0; round < rounds; ++round)
-    for (std::size_t i = 0; i < holes.size(); ++i)
-    {
-      if (!free[i])
-        continue;
-      float sum = h.fixed[i];
-      for (int j : h.around[i])
-        if (j >= 0)
-          sum += value[j];
-      value[i] += omega * (sum / 6 - value[i]);
-    }
-  auto acc = grid.getAccessor();
-  for (std::size_t i = 0; i < holes.size(); ++i)
-    acc.setValue(holes[i], value[i]);
-}
-
-// The space outside the band, in cells of Ratio^3 voxels. Its connected pieces (the outside,
-// the inside of each closed part) each take the sign that most of the band's voxels along their
-// border have; settle() sets the border voxels that disagree to it and gives every value
-// outside the band its piece's sign. A patch of wrong normals then makes at worst a blister at
-// the patch, where openvdb's signedFloodFill (which takes the sign of whichever band voxel its
-// scan meets first) would carry the wrong sign far from the data, and a surface with it.
-class OutsideBand
-{
-public:
-  static constexpr int Ratio = 2;
-
-  /** Cells over the band's bounding box and one more around it; every voxel of a cell that
-   *  the band touches is made active, so that what lies outside the band is whole cells. */
-  explicit OutsideBand(openvdb::FloatGrid& grid)
-  {
-    const openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
-    for (int c = 0; c < 3; ++c)
-    {
-      Low[c] = floorDiv(box.min()[c]) - 1;
-      Size[c] = floorDiv(box.max()[c]) + 2 - Low[c];
-    }
-    Label.assign(static_cast<std::size_t>(Size[0]) * Size[1] * Size[2], Free);
-    std::vector<openvdb::Coord> cells;
-    for (auto it = grid.cbeginValueOn(); it; ++it)
-    {
-      const openvdb::Coord c = cellOf(it.getCoord());
-      if (Label[index(c)] == Free)
-      {
-        Label[index(c)] = Band;
-        cells.push_back(c);
-      }
-    }
-    auto acc = grid.getAccessor();
-    for (const openvdb::Coord& c : cells)
-      for (int i = 0; i < Ratio; ++i)
-        for (int j = 0; j < Ratio; ++j)
-          for (int l = 0; l < Ratio; ++l)
-            acc.setActiveState(openvdb::Coord(Ratio * (c.x() + Low[0]) + i,
-                                              Ratio * (c.y() + Low[1]) + j,
-                                              Ratio * (c.z() + Low[2]) + l),
-                               true);
-  }
-
-  /** The connected pieces of free cells (sharing faces) and their signs, from the band's
-   *  values. */
-  void findPieces(const openvdb::FloatGrid& grid)
-  {
-    for (int& l : Label)
-      if (l != Band)
-        l = Free;
-    Inside.clear();
-    std::vector<std::int64_t> votes, count;
-    std::vector<std::size_t> stack;
-    for (std::size_t seed = 0; seed < Label.size(); ++seed)
-    {
-      if (Label[seed] != Free)
-        continue;
-      const int piece = static_cast<int>(votes.size());
-      votes.push_back(0);
-      count.push_back(0);
-      Label[seed] = piece;
-      stack.push_back(seed);
-      while (!stack.empty())
-      {
-        const std::size_t i = stack.back();
-        stack.pop_back();
-        forFaces(i,
-                 [&](std::size_t j, int, int)
-                 {
-                   if (Label[j] == Free)
-                   {
-                     Label[j] = piece;
-                     stack.push_back(j);
-                   }
-                 });
-      }
-    }
-    auto acc = grid.getConstAccessor();
-    border(
-        [&](int piece, const openvdb::Coord& v)
-        {
-          const float value = acc.getValue(v);
-          if (value != Unknown)
-          {
-            votes[piece] += value < 0 ? -1 : 1;
-            ++count[piece];
-          }
-        });
-    Mixed.clear();
-    for (std::size_t p = 0; p < votes.size(); ++p)
-    {
-      Inside.push_back(votes[p] < 0);
-      // Minority = (count - |votes|) / 2; a quarter of the border or more: open data.
-      Mixed.push_back(count[p] >= 64 && count[p] - std::abs(votes[p]) >= count[p] / 2);
-    }
-  }
-
-  /** Whether a piece's border has both signs in large parts: the data are open there (a sheet,
-   *  a scan from one side) rather than closed with a few wrong normals. */
-  bool open() const { return std::find(Mixed.begin(), Mixed.end(), true) != Mixed.end(); }
-
-  /** -1 inside, +1 outside, 0 in the band, for a voxel. */
-  int side(const openvdb::Coord& voxel) const
-  {
-    const openvdb::Coord c = cellOf(voxel);
-    for (int axis = 0; axis < 3; ++axis)
-      if (c[axis] < 0 || c[axis] >= Size[axis])
-        return Inside[Label[0]] ? -1 : 1;
-    const int l = Label[index(c)];
-    return l < 0 ? 0 : (Inside[l] ? -1 : 1);
-  }
-
-  /** The border voxels of the pieces whose border mostly agrees, and whether their piece is
-   *  inside. */
-  void borderOfSettledPieces(std::vector<std::pair<openvdb::Coord, bool>>& out) const
-  {
-    border(
-        [&](int piece, const openvdb::Coord& v)
-        {
-          if (!Mixed[piece])
-            out.push_back({v, Inside[piece]});
-        });
-  }
-
-  /** Border voxels to their piece's sign; every value outside the band (voxels of partly active
-   *  leaves, tiles, the background) to its piece's sign. */
-  void settle(openvdb::FloatGrid& grid, float background) const
-  {
-    auto acc = grid.getAccessor();
-    border(
-        [&](int piece, const openvdb::Coord& v)
-        {
-          const float value = acc.getValue(v);
-          if (value != Unknown && !Mixed[piece] && (value < 0) != Inside[piece])
-            acc.setValue(v, Inside[piece] ? -background : background);
-        });
-    for (auto it = grid.tree().beginValueOff(); it; ++it)
-    {
-      const openvdb::CoordBBox box = it.getBoundingBox();
-      it.setValue(side((box.min() + box.max()) >> 1) < 0 ? -background : background);
-    }
-    // Outside the cells is the outermost piece (cell 0 is in it).
-    grid.tree().root().setBackground(Inside[Label[0]] ? -background : background, false);
-  }
-
-private:
-  static constexpr int Free = -2, Band = -1;
-  int Low[3] = {0, 0, 0}, Size[3] = {0, 0, 0};
-  std::vector<int> Label;   // per cell: Free, Band, or its piece
-  std::vector<bool> Inside; // per piece
-  std::vector<bool> Mixed;  // per piece: its border is of both signs in large parts
-
-  static int floorDiv(int i) { return i >= 0 ? i / Ratio : -((-i + Ratio - 1) / Ratio); }
-  openvdb::Coord cellOf(const openvdb::Coord& v) const
-  {
-    return openvdb::Coord(floorDiv(v.x()) - Low[0], floorDiv(v.y()) - Low[1],
-                          floorDiv(v.z()) - Low[2]);
-  }
-  std::size_t index(const openvdb::Coord& c) const
-  {
-    return static_cast<std::size_t>(c.x()) +
-           static_cast<std::size_t>(Size[0]) *
-               (static_cast<std::size_t>(c.y()) + static_cast<std::size_t>(Size[1]) * c.z());
-  }
-  openvdb::Coord coordOf(std::size_t i) const
-  {
-    const auto nx = static_cast<std::size_t>(Size[0]), ny = static_cast<std::size_t>(Size[1]);
-    return openvdb::Coord(static_cast<int>(i % nx), static_cast<int>((i / nx) % ny),
-                          static_cast<int>(i / (nx * ny)));
-  }
-  // visit(j, axis, side) for each cell j sharing a face with cell i.
-  template <typename Visit>
-  void forFaces(std::size_t i, Visit visit) const
-  {
-    const openvdb::Coord c = coordOf(i);
-    const std::int64_t stride[3] = {1, Size[0], static_cast<std::int64_t>(Size[0]) * Size[1]};
-    for (int axis = 0; axis < 3; ++axis)
-      for (int side = -1; side <= 1; side += 2)
-      {
-        const int n = c[axis] + side;
-        if (n >= 0 && n < Size[axis])
-          visit(static_cast<std::size_t>(static_cast<std::int64_t>(i) + side * stride[axis]), axis,
-                side);
-      }
-  }
-  // visit(piece, voxel) for each band voxel that shares a face with a free cell.
-  template <typename Visit>
-  void border(Visit visit) const
-  {
-    for (std::size_t i = 0; i < Label.size(); ++i)
-    {
-      if (Label[i] < 0)
-        continue;
-      const openvdb::Coord c = coordOf(i);
-      forFaces(i,
-               [&](std::size_t j, int axis, int side)
-               {
-                 if (Label[j] != Band)
-                   return;
-                 // The layer of the band cell's voxels next to cell i.
-                 openvdb::Coord first(Ratio * (c.x() + Low[0]), Ratio * (c.y() + Low[1]),
-                                      Ratio * (c.z() + Low[2]));
-                 first[axis] += side > 0 ? Ratio : -1;
-                 const int u = (axis + 1) % 3, w = (axis + 2) % 3;
-                 for (int a = 0; a < Ratio; ++a)
-                   for (int b = 0; b < Ratio; ++b)
-                   {
-                     openvdb::Coord v = first;
-                     v[u] += a;
-                     v[w] += b;
-                     visit(Label[i], v);
-                   }
-               });
-    }
-  }
-};
 
 // Throws when the grid at voxel size h would hold more voxels than the options allow.
 void checkGridSize(double voxels, double h, const ReconstructionOptions& options)
@@ -472,10 +129,10 @@ openvdb::FloatGrid::Ptr pointBand(const Input& in, double h, const Reconstructio
 
 // Holes: on a coarse grid, the cells that a morphological closing of the points' cells adds
 // (gaps in the data narrower than about twice `reach`, and concave corners). Their voxels
-// outside the band are made active with the value Unknown and returned: the plane distance far
-// from the data is unreliable (a wrongly oriented patch, or data passing through itself, would
-// grow sheets there), so they are interpolated later, harmonically, between the band and the
-// pieces outside it.
+// outside the band are made active with the value UnknownHoleValue and returned: the plane
+// distance far from the data is unreliable (a wrongly oriented patch, or data passing through
+// itself, would grow sheets there), so they are interpolated later, harmonically, between the
+// band and the pieces outside it.
 std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input& in, double h,
                                           double reach, const ReconstructionOptions& options)
 {
@@ -508,7 +165,7 @@ std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input&
                                  CoarseRatio * c.z() + l);
           if (!acc.isValueOn(v))
           {
-            acc.setValueOn(v, Unknown);
+            acc.setValueOn(v, UnknownHoleValue);
             holes.push_back(v);
           }
         }
@@ -576,7 +233,7 @@ void reevaluateAround(openvdb::FloatGrid& grid, const Input& corrected,
   for (auto it = touched->cbeginValueOn(); it; ++it)
   {
     const openvdb::Coord c = it.getCoord();
-    if (!acc.isValueOn(c) || acc.getValue(c) == Unknown)
+    if (!acc.isValueOn(c) || acc.getValue(c) == UnknownHoleValue)
       continue;
     const double x[3] = {h * c.x(), h * c.y(), h * c.z()};
     const double distance = planeDistance(corrected, x, k, sigma2, ids.data(), d2.data()) / h;

@@ -220,6 +220,57 @@ std::vector<double> holeCentres(const std::vector<double>& positions,
   return out;
 }
 
+namespace
+{
+// The rest positions the colours are drawn from (null: no colours); throws when colours are
+// asked for without them, or with another vertex count than the mesh's.
+const std::vector<double>* colourRestOf(const std::vector<double>& positions,
+                                        const SamplerOptions& options)
+{
+  const std::vector<double>* rest = options.colours ? options.colourRest : nullptr;
+  if (options.colours && !rest)
+    throw std::invalid_argument("colours asked for without the mesh's rest positions");
+  if (rest && rest->size() != positions.size())
+    throw std::invalid_argument("the colour's rest positions have " +
+                                std::to_string(rest->size() / 3) + " vertices; the mesh has " +
+                                std::to_string(positions.size() / 3));
+  return rest;
+}
+
+bool inAnyHole(const Vec3& p, const std::vector<Vec3>& holes, double r2)
+{
+  return std::any_of(holes.begin(), holes.end(),
+                     [&](const Vec3& c)
+                     {
+                       const Vec3 d = p - c;
+                       return d.x * d.x + d.y * d.y + d.z * d.z < r2;
+                     });
+}
+
+// The unit normal at s (the vertex normals interpolated), appended to the cloud's normals.
+void appendNormal(const std::vector<double>& normals, const std::vector<std::int64_t>& triangles,
+                  const SurfacePoint& s, PointCloud& cloud)
+{
+  Vec3 n = evaluate(normals, triangles, s);
+  const double length = norm(n);
+  if (length > 0)
+    n = {n.x / length, n.y / length, n.z / length};
+  cloud.normals.insert(cloud.normals.end(),
+                       {static_cast<float>(n.x), static_cast<float>(n.y), static_cast<float>(n.z)});
+}
+
+// The material's colour at s (from its rest position), appended to the cloud's colours.
+void appendColour(const std::vector<double>& rest, const std::vector<std::int64_t>& triangles,
+                  const SurfacePoint& s, double diagonal, PointCloud& cloud)
+{
+  const Vec3 r = evaluate(rest, triangles, s);
+  const double at[3] = {r.x, r.y, r.z};
+  double rgb[3];
+  materialColour(at, diagonal, rgb);
+  cloud.colors.insert(cloud.colors.end(), {toByte(rgb[0]), toByte(rgb[1]), toByte(rgb[2])});
+}
+} // namespace
+
 PointCloud sampleSurface(const std::vector<double>& positions,
                          const std::vector<std::int64_t>& triangles, const SamplerOptions& options,
                          std::size_t frame)
@@ -235,13 +286,7 @@ PointCloud sampleSurface(const std::vector<double>& positions,
 
   const std::vector<double> normals =
       options.normals ? vertexNormals(positions, triangles) : std::vector<double>{};
-  const std::vector<double>* rest = options.colours ? options.colourRest : nullptr;
-  if (options.colours && !rest)
-    throw std::invalid_argument("colours asked for without the mesh's rest positions");
-  if (rest && rest->size() != positions.size())
-    throw std::invalid_argument("the colour's rest positions have " +
-                                std::to_string(rest->size() / 3) + " vertices; the mesh has " +
-                                std::to_string(positions.size() / 3));
+  const std::vector<double>* rest = colourRestOf(positions, options);
   const double diagonal = rest ? restDiagonal(*rest) : 0;
   PointCloud cloud;
   cloud.colorComponents = rest ? 3 : 0;
@@ -252,35 +297,16 @@ PointCloud sampleSurface(const std::vector<double>& positions,
     Vec3 p = evaluate(positions, triangles, s);
     // Draw the noise even for points dropped later, so the stream does not depend on holes.
     const Vec3 noise{random.gaussian(), random.gaussian(), random.gaussian()};
-    const bool inHole = std::any_of(holes.begin(), holes.end(),
-                                    [&](const Vec3& c)
-                                    {
-                                      const Vec3 d = p - c;
-                                      return d.x * d.x + d.y * d.y + d.z * d.z < r2;
-                                    });
-    if (inHole)
+    if (inAnyHole(p, holes, r2))
       continue;
     p.x += options.noiseStdDev * noise.x;
     p.y += options.noiseStdDev * noise.y;
     p.z += options.noiseStdDev * noise.z;
     cloud.points.insert(cloud.points.end(), {p.x, p.y, p.z});
     if (options.normals)
-    {
-      Vec3 n = evaluate(normals, triangles, s);
-      const double length = norm(n);
-      if (length > 0)
-        n = {n.x / length, n.y / length, n.z / length};
-      cloud.normals.insert(cloud.normals.end(), {static_cast<float>(n.x), static_cast<float>(n.y),
-                                                 static_cast<float>(n.z)});
-    }
+      appendNormal(normals, triangles, s, cloud);
     if (rest)
-    {
-      const Vec3 r = evaluate(*rest, triangles, s);
-      const double at[3] = {r.x, r.y, r.z};
-      double rgb[3];
-      materialColour(at, diagonal, rgb);
-      cloud.colors.insert(cloud.colors.end(), {toByte(rgb[0]), toByte(rgb[1]), toByte(rgb[2])});
-    }
+      appendColour(*rest, triangles, s, diagonal, cloud);
   }
   return cloud;
 }

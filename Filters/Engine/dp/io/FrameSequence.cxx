@@ -57,36 +57,41 @@ bool naturalLess(const std::string& a, const std::string& b)
   return a.size() - i < b.size() - j;
 }
 
+namespace
+{
+// Whether c is in the character class ([abc], [a-z], [!a-z] or [^a-z]) that starts at
+// pattern[p] == '['; advances p past the class.
+bool classMatches(const std::string& pattern, std::size_t& p, char c)
+{
+  std::size_t q = p + 1;
+  bool negate = q < pattern.size() && (pattern[q] == '!' || pattern[q] == '^');
+  if (negate)
+    ++q;
+  bool matched = false;
+  bool first = true;
+  while (q < pattern.size() && (first || pattern[q] != ']'))
+  {
+    first = false;
+    if (q + 2 < pattern.size() && pattern[q + 1] == '-' && pattern[q + 2] != ']')
+    {
+      matched = matched || (c >= pattern[q] && c <= pattern[q + 2]);
+      q += 3;
+    }
+    else
+    {
+      matched = matched || c == pattern[q];
+      ++q;
+    }
+  }
+  p = q + 1;
+  return matched != negate;
+}
+} // namespace
+
 bool globMatch(const std::string& pattern, const std::string& name)
 {
   // Iterative matcher with single-star backtracking; O(|pattern| * |name|) worst case.
   std::size_t p = 0, n = 0, starP = std::string::npos, starN = 0;
-  auto classMatches = [&](std::size_t& pp, char c) -> bool
-  {
-    // pattern[pp] == '['; advances pp past the class.
-    std::size_t q = pp + 1;
-    bool negate = q < pattern.size() && (pattern[q] == '!' || pattern[q] == '^');
-    if (negate)
-      ++q;
-    bool matched = false;
-    bool first = true;
-    while (q < pattern.size() && (first || pattern[q] != ']'))
-    {
-      first = false;
-      if (q + 2 < pattern.size() && pattern[q + 1] == '-' && pattern[q + 2] != ']')
-      {
-        matched = matched || (c >= pattern[q] && c <= pattern[q + 2]);
-        q += 3;
-      }
-      else
-      {
-        matched = matched || c == pattern[q];
-        ++q;
-      }
-    }
-    pp = q + 1;
-    return matched != negate;
-  };
   while (n < name.size())
   {
     if (p < pattern.size() && pattern[p] == '*')
@@ -98,7 +103,7 @@ bool globMatch(const std::string& pattern, const std::string& name)
     if (p < pattern.size() && pattern[p] == '[' && pattern.find(']', p + 2) != std::string::npos)
     {
       std::size_t next = p;
-      if (classMatches(next, name[n]))
+      if (classMatches(pattern, next, name[n]))
       {
         p = next;
         ++n;

@@ -23,46 +23,35 @@ struct PcdField
   std::size_t offset = 0; // byte offset inside a binary record
 };
 
+// The value of type T whose bytes start at p (unaligned).
+template <typename T>
+T load(const char* p)
+{
+  T v;
+  std::memcpy(&v, p, sizeof(T));
+  return v;
+}
+
 double decodeField(const char* p, const PcdField& f)
 {
   switch (f.type)
   {
   case 'F':
     if (f.size == 4)
-    {
-      float v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<float>(p);
     else
-    {
-      double v;
-      std::memcpy(&v, p, 8);
-      return v;
-    }
+      return load<double>(p);
   case 'I':
     switch (f.size)
     {
     case 1:
       return static_cast<std::int8_t>(*p);
     case 2:
-    {
-      std::int16_t v;
-      std::memcpy(&v, p, 2);
-      return v;
-    }
+      return load<std::int16_t>(p);
     case 4:
-    {
-      std::int32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<std::int32_t>(p);
     default:
-    {
-      std::int64_t v;
-      std::memcpy(&v, p, 8);
-      return static_cast<double>(v);
-    }
+      return static_cast<double>(load<std::int64_t>(p));
     }
   default:
     switch (f.size)
@@ -70,23 +59,11 @@ double decodeField(const char* p, const PcdField& f)
     case 1:
       return static_cast<std::uint8_t>(*p);
     case 2:
-    {
-      std::uint16_t v;
-      std::memcpy(&v, p, 2);
-      return v;
-    }
+      return load<std::uint16_t>(p);
     case 4:
-    {
-      std::uint32_t v;
-      std::memcpy(&v, p, 4);
-      return v;
-    }
+      return load<std::uint32_t>(p);
     default:
-    {
-      std::uint64_t v;
-      std::memcpy(&v, p, 8);
-      return static_cast<double>(v);
-    }
+      return static_cast<double>(load<std::uint64_t>(p));
     }
   }
 }
@@ -188,6 +165,40 @@ std::size_t parseCountValue(const std::vector<std::string_view>& values, std::st
   return static_cast<std::size_t>(v);
 }
 
+// A FIELDS, SIZE, TYPE or COUNT line (its keyword in lower case, as `written`, and its values)
+// into `fields`; false for any other keyword.
+bool parseFieldLine(const std::string& keyword, const std::vector<std::string_view>& values,
+                    std::string_view written, std::vector<PcdField>& fields,
+                    const HeaderFailure& fail)
+{
+  if (keyword == "fields")
+  {
+    for (auto v : values)
+      fields.push_back({std::string(v), 4, 'F', 1, 0});
+  }
+  else if (keyword == "size")
+  {
+    const std::vector<int> sizes = perFieldNumbers(values, fields.size(), written, fail);
+    for (std::size_t k = 0; k < fields.size(); ++k)
+    {
+      fields[k].size = sizes[k];
+      if (sizes[k] != 1 && sizes[k] != 2 && sizes[k] != 4 && sizes[k] != 8)
+        fail("unsupported field size " + std::to_string(sizes[k]));
+    }
+  }
+  else if (keyword == "type")
+    parseTypes(values, fields, fail);
+  else if (keyword == "count")
+  {
+    const std::vector<int> counts = perFieldNumbers(values, fields.size(), written, fail);
+    for (std::size_t k = 0; k < fields.size(); ++k)
+      fields[k].count = counts[k];
+  }
+  else
+    return false;
+  return true;
+}
+
 // Reads the header lines off the front of `text`, which is left at the data.
 PcdHeader parseHeader(const std::string& path, std::string_view& text)
 {
@@ -215,30 +226,9 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
     std::vector<std::string_view> values;
     for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
       values.push_back(t);
-    if (keyword == "fields")
-    {
-      for (auto v : values)
-        fields.push_back({std::string(v), 4, 'F', 1, 0});
-    }
-    else if (keyword == "size")
-    {
-      const std::vector<int> sizes = perFieldNumbers(values, fields.size(), written, fail);
-      for (std::size_t k = 0; k < fields.size(); ++k)
-      {
-        fields[k].size = sizes[k];
-        if (sizes[k] != 1 && sizes[k] != 2 && sizes[k] != 4 && sizes[k] != 8)
-          fail("unsupported field size " + std::to_string(sizes[k]));
-      }
-    }
-    else if (keyword == "type")
-      parseTypes(values, fields, fail);
-    else if (keyword == "count")
-    {
-      const std::vector<int> counts = perFieldNumbers(values, fields.size(), written, fail);
-      for (std::size_t k = 0; k < fields.size(); ++k)
-        fields[k].count = counts[k];
-    }
-    else if (keyword == "width")
+    if (parseFieldLine(keyword, values, written, fields, fail))
+      continue;
+    if (keyword == "width")
       width = parseCountValue(values, written, fail), haveWidth = true;
     else if (keyword == "height")
       height = parseCountValue(values, written, fail);
@@ -497,9 +487,12 @@ PointCloud readPCD(const std::string& path)
   return assemble(header, layout, values);
 }
 
-void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
+namespace
 {
-  cloud.validate();
+// The header for the fields the cloud has: x y z, the normal's, and the packed colour, 4-byte
+// floats each.
+std::string writtenHeader(const PointCloud& cloud, bool binary)
+{
   const std::size_t n = cloud.numberOfPoints();
   std::string fieldsLine = "x y z", sizeLine = "4 4 4", typeLine = "F F F", countLine = "1 1 1";
   if (cloud.hasNormals())
@@ -516,42 +509,54 @@ void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
     typeLine += " F";
     countLine += " 1";
   }
-  std::string out = "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " +
-                    fieldsLine + "\nSIZE " + sizeLine + "\nTYPE " + typeLine + "\nCOUNT " +
-                    countLine + "\nWIDTH " + std::to_string(n) + "\nHEIGHT 1\n" +
-                    "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
-                    (binary ? "binary" : "ascii") + "\n";
-  auto put = [&](float v)
+  return "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS " + fieldsLine +
+         "\nSIZE " + sizeLine + "\nTYPE " + typeLine + "\nCOUNT " + countLine + "\nWIDTH " +
+         std::to_string(n) + "\nHEIGHT 1\n" + "VIEWPOINT 0 0 0 1 0 0 0\nPOINTS " +
+         std::to_string(n) + "\nDATA " + (binary ? "binary" : "ascii") + "\n";
+}
+
+// One value: its 4 bytes in binary, its shortest decimal form and a space in ASCII.
+void appendValue(std::string& out, float v, bool binary)
+{
+  if (binary)
   {
-    if (binary)
-    {
-      char b[4];
-      std::memcpy(b, &v, 4);
-      out.append(b, 4);
-    }
-    else
-    {
-      char buffer[32];
-      const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
-      out.append(buffer, r.ptr);
-      out += ' ';
-    }
-  };
+    char b[4];
+    std::memcpy(b, &v, 4);
+    out.append(b, 4);
+  }
+  else
+  {
+    char buffer[32];
+    const auto r = std::to_chars(buffer, buffer + sizeof(buffer), v);
+    out.append(buffer, r.ptr);
+    out += ' ';
+  }
+}
+
+// An RGB colour as PCL packs it: 0x00RRGGBB in the bytes of a float.
+float packedColour(const std::uint8_t* c)
+{
+  const std::uint32_t packed = (std::uint32_t(c[0]) << 16) | (std::uint32_t(c[1]) << 8) | c[2];
+  float asFloat;
+  std::memcpy(&asFloat, &packed, 4);
+  return asFloat;
+}
+} // namespace
+
+void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
+{
+  cloud.validate();
+  const std::size_t n = cloud.numberOfPoints();
+  std::string out = writtenHeader(cloud, binary);
   for (std::size_t i = 0; i < n; ++i)
   {
     for (int c = 0; c < 3; ++c)
-      put(static_cast<float>(cloud.points[3 * i + c]));
+      appendValue(out, static_cast<float>(cloud.points[3 * i + c]), binary);
     if (cloud.hasNormals())
       for (int c = 0; c < 3; ++c)
-        put(cloud.normals[3 * i + c]);
+        appendValue(out, cloud.normals[3 * i + c], binary);
     if (cloud.hasColors())
-    {
-      const std::uint8_t* c = &cloud.colors[cloud.colorComponents * i];
-      const std::uint32_t packed = (std::uint32_t(c[0]) << 16) | (std::uint32_t(c[1]) << 8) | c[2];
-      float asFloat;
-      std::memcpy(&asFloat, &packed, 4);
-      put(asFloat);
-    }
+      appendValue(out, packedColour(&cloud.colors[cloud.colorComponents * i]), binary);
     if (!binary)
       out.back() = '\n';
   }

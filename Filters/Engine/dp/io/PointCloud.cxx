@@ -54,6 +54,54 @@ void PointCloud::validate() const
   }
 }
 
+namespace
+{
+
+// Compacts an interleaved array in place (comps values per point), keeping the tuples of the
+// points that survive: point i moves to newIndex[i], or is dropped when that is -1.
+template <typename Values>
+void compactTuples(Values& values, std::size_t comps, const std::vector<std::int64_t>& newIndex,
+                   std::size_t kept)
+{
+  if (values.empty())
+  {
+    return;
+  }
+  for (std::size_t i = 0; i < newIndex.size(); ++i)
+  {
+    if (newIndex[i] >= 0)
+    {
+      std::copy_n(values.begin() + i * comps, comps, values.begin() + newIndex[i] * comps);
+    }
+  }
+  values.resize(kept * comps);
+}
+
+// Keeps the faces all of whose points survive, renumbered by newIndex; no faces left: none.
+void keepFacesOfSurvivors(PointCloud& cloud, const std::vector<std::int64_t>& newIndex)
+{
+  std::vector<std::int64_t> offsets{0};
+  std::vector<std::int64_t> conn;
+  conn.reserve(cloud.faceConnectivity.size());
+  for (std::size_t f = 0; f + 1 < cloud.faceOffsets.size(); ++f)
+  {
+    const auto begin = cloud.faceConnectivity.begin() + cloud.faceOffsets[f];
+    const auto end = cloud.faceConnectivity.begin() + cloud.faceOffsets[f + 1];
+    if (std::all_of(begin, end, [&](std::int64_t id) { return newIndex[id] >= 0; }))
+    {
+      for (auto it = begin; it != end; ++it)
+      {
+        conn.push_back(newIndex[*it]);
+      }
+      offsets.push_back(static_cast<std::int64_t>(conn.size()));
+    }
+  }
+  cloud.faceOffsets = offsets.size() > 1 ? std::move(offsets) : std::vector<std::int64_t>{};
+  cloud.faceConnectivity = std::move(conn);
+}
+
+} // namespace
+
 std::size_t dropNonFinitePoints(PointCloud& cloud)
 {
   const std::size_t n = cloud.numberOfPoints();
@@ -71,51 +119,16 @@ std::size_t dropNonFinitePoints(PointCloud& cloud)
   {
     return 0;
   }
-
-  // Compacts an interleaved array in place, keeping the tuples of surviving points.
-  auto compact = [&](auto& values, std::size_t comps)
-  {
-    if (values.empty())
-    {
-      return;
-    }
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      if (newIndex[i] >= 0)
-      {
-        std::copy_n(values.begin() + i * comps, comps, values.begin() + newIndex[i] * comps);
-      }
-    }
-    values.resize(kept * comps);
-  };
-  compact(cloud.points, 3);
-  compact(cloud.normals, 3);
-  compact(cloud.colors, static_cast<std::size_t>(cloud.colorComponents));
+  compactTuples(cloud.points, 3, newIndex, kept);
+  compactTuples(cloud.normals, 3, newIndex, kept);
+  compactTuples(cloud.colors, static_cast<std::size_t>(cloud.colorComponents), newIndex, kept);
   for (auto& a : cloud.attributes)
   {
-    compact(a.values, static_cast<std::size_t>(a.components));
+    compactTuples(a.values, static_cast<std::size_t>(a.components), newIndex, kept);
   }
-
   if (!cloud.faceOffsets.empty())
   {
-    std::vector<std::int64_t> offsets{0};
-    std::vector<std::int64_t> conn;
-    conn.reserve(cloud.faceConnectivity.size());
-    for (std::size_t f = 0; f + 1 < cloud.faceOffsets.size(); ++f)
-    {
-      const auto begin = cloud.faceConnectivity.begin() + cloud.faceOffsets[f];
-      const auto end = cloud.faceConnectivity.begin() + cloud.faceOffsets[f + 1];
-      if (std::all_of(begin, end, [&](std::int64_t id) { return newIndex[id] >= 0; }))
-      {
-        for (auto it = begin; it != end; ++it)
-        {
-          conn.push_back(newIndex[*it]);
-        }
-        offsets.push_back(static_cast<std::int64_t>(conn.size()));
-      }
-    }
-    cloud.faceOffsets = offsets.size() > 1 ? std::move(offsets) : std::vector<std::int64_t>{};
-    cloud.faceConnectivity = std::move(conn);
+    keepFacesOfSurvivors(cloud, newIndex);
   }
   return n - kept;
 }

@@ -99,6 +99,95 @@ bool hingeCos(V3 a, V3 b, V3 c, V3 d, double& cosine, V3* g)
   g[3] = gf2;                        // d
   return true;
 }
+
+// Fills one term after another (a single ClothTerm, reused) and hands each to the visitor.
+struct TermVisitor
+{
+  const std::function<void(const ClothTerm&)>& visit;
+  ClothTerm term;
+
+  // Vertex k of the term and the residual's gradient with respect to it.
+  void put(int k, std::int64_t vertex, V3 gradient)
+  {
+    term.vertex[k] = vertex;
+    term.gradient[k][0] = gradient.x;
+    term.gradient[k][1] = gradient.y;
+    term.gradient[k][2] = gradient.z;
+  }
+  // The term with stiffness k (its residual set) is complete: visit it.
+  void finish(double k)
+  {
+    term.weight = k;
+    term.energy = 0.5 * k * term.residual * term.residual;
+    visit(term);
+  }
+};
+
+// Stretch: r = (l - l0) / L per edge, stiffness k times the edge's scale (if any).
+void visitStretchTerms(const double* x, const TriangleMesh& mesh,
+                       const std::vector<double>& restLength, double L, double k,
+                       const std::vector<double>& scale, TermVisitor& out)
+{
+  out.term.count = 2;
+  const auto& edges = mesh.edges();
+  for (std::size_t e = 0; e < edges.size(); ++e)
+  {
+    const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
+    const double l = norm(d);
+    out.term.residual = (l - restLength[e]) / L;
+    const V3 u = l > 0 ? (1.0 / (l * L)) * d : V3{0, 0, 0};
+    out.put(0, edges[e][1], u);
+    out.put(1, edges[e][0], -1.0 * u);
+    out.finish(scale.empty() ? k : k * scale[e]);
+  }
+}
+
+// Shear: r = theta - theta0 at each triangle corner, stiffness k.
+void visitShearTerms(const double* x, const TriangleMesh& mesh,
+                     const std::vector<double>& restAngle, double k, TermVisitor& out)
+{
+  out.term.count = 3;
+  const auto& tris = mesh.triangles();
+  for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::int64_t ia = tris[3 * t + c], ib = tris[3 * t + (c + 1) % 3],
+                         ic = tris[3 * t + (c + 2) % 3];
+      double angle = 0;
+      V3 gb{0, 0, 0}, gc{0, 0, 0};
+      if (!cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, &gb, &gc))
+        gb = gc = V3{0, 0, 0};
+      out.term.residual = angle - restAngle[3 * t + c];
+      out.put(0, ib, gb);
+      out.put(1, ic, gc);
+      out.put(2, ia, -1.0 * (gb + gc));
+      out.finish(k);
+    }
+}
+
+// Bend: r = cos(phi) - cos(phi0) at each hinge, stiffness k times its area share (hingeWeight)
+// and its scale (if any).
+void visitBendTerms(const double* x, const TriangleMesh& mesh,
+                    const std::vector<double>& restCosine, double k,
+                    const std::vector<double>& hingeWeight, const std::vector<double>& scale,
+                    TermVisitor& out)
+{
+  out.term.count = 4;
+  const auto& hinges = mesh.hinges();
+  for (std::size_t h = 0; h < hinges.size(); ++h)
+  {
+    const auto& v = hinges[h];
+    double cosine = 1;
+    V3 gh[4] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    if (!hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, gh))
+      for (V3& gv : gh)
+        gv = V3{0, 0, 0};
+    out.term.residual = cosine - restCosine[h];
+    for (int j = 0; j < 4; ++j)
+      out.put(j, v[j], gh[j]);
+    out.finish(k * hingeWeight[h] * (scale.empty() ? 1.0 : scale[h]));
+  }
+}
 } // namespace
 
 ClothEnergy::ClothEnergy(const TriangleMesh& mesh, const double* rest, const ClothParameters& k)
@@ -232,71 +321,13 @@ double ClothEnergy::addGradient(const double* x, double* g) const
 void ClothEnergy::forEachTerm(const double* x,
                               const std::function<void(const ClothTerm&)>& visit) const
 {
-  const TriangleMesh& mesh = *Mesh;
-  ClothTerm term;
-  auto put = [&term](int k, std::int64_t vertex, V3 gradient)
-  {
-    term.vertex[k] = vertex;
-    term.gradient[k][0] = gradient.x;
-    term.gradient[k][1] = gradient.y;
-    term.gradient[k][2] = gradient.z;
-  };
-  auto finish = [&](double k)
-  {
-    term.weight = k;
-    term.energy = 0.5 * k * term.residual * term.residual;
-    visit(term);
-  };
-  // Stretch: r = (l - l0) / L.
-  term.count = 2;
-  const auto& edges = mesh.edges();
+  TermVisitor out{visit, ClothTerm{}};
   if (K.stretch > 0)
-    for (std::size_t e = 0; e < edges.size(); ++e)
-    {
-      const V3 d = at(x, edges[e][1]) - at(x, edges[e][0]);
-      const double l = norm(d);
-      term.residual = (l - Rest.length[e]) / L;
-      const V3 u = l > 0 ? (1.0 / (l * L)) * d : V3{0, 0, 0};
-      put(0, edges[e][1], u);
-      put(1, edges[e][0], -1.0 * u);
-      finish(StretchScale.empty() ? K.stretch : K.stretch * StretchScale[e]);
-    }
-  // Shear: r = theta - theta0 at each triangle corner.
-  term.count = 3;
-  const auto& tris = mesh.triangles();
+    visitStretchTerms(x, *Mesh, Rest.length, L, K.stretch, StretchScale, out);
   if (K.shear > 0)
-    for (std::size_t t = 0; t < mesh.numberOfTriangles(); ++t)
-      for (int c = 0; c < 3; ++c)
-      {
-        const std::int64_t ia = tris[3 * t + c], ib = tris[3 * t + (c + 1) % 3],
-                           ic = tris[3 * t + (c + 2) % 3];
-        double angle = 0;
-        V3 gb{0, 0, 0}, gc{0, 0, 0};
-        if (!cornerAngle(at(x, ia), at(x, ib), at(x, ic), angle, &gb, &gc))
-          gb = gc = V3{0, 0, 0};
-        term.residual = angle - Rest.angle[3 * t + c];
-        put(0, ib, gb);
-        put(1, ic, gc);
-        put(2, ia, -1.0 * (gb + gc));
-        finish(K.shear);
-      }
-  // Bend: r = cos(phi) - cos(phi0) at each hinge, weighted by its area share.
-  term.count = 4;
-  const auto& hinges = mesh.hinges();
+    visitShearTerms(x, *Mesh, Rest.angle, K.shear, out);
   if (K.bend > 0)
-    for (std::size_t h = 0; h < hinges.size(); ++h)
-    {
-      const auto& v = hinges[h];
-      double cosine = 1;
-      V3 gh[4] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-      if (!hingeCos(at(x, v[0]), at(x, v[1]), at(x, v[2]), at(x, v[3]), cosine, gh))
-        for (V3& gv : gh)
-          gv = V3{0, 0, 0};
-      term.residual = cosine - Rest.cosine[h];
-      for (int k = 0; k < 4; ++k)
-        put(k, v[k], gh[k]);
-      finish(K.bend * HingeWeight[h] * (BendScale.empty() ? 1.0 : BendScale[h]));
-    }
+    visitBendTerms(x, *Mesh, Rest.cosine, K.bend, HingeWeight, BendScale, out);
 }
 
 } // namespace dp

@@ -3,7 +3,9 @@
 
 #include "dp/track/Parallel.h"
 
+#include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace dp
 {
@@ -16,6 +18,43 @@ constexpr double Pi = 3.14159265358979323846;
 // part may be nearer (horse-gallop's passing legs, seed 3: 16.0 and 23.9 mm vertex RMS,
 // decimated/noisy, with this limit and without it).
 constexpr double TrustedFollow = 1.0;
+
+// The largest change of a coordinate between a and b (n coordinates each).
+double largestChange(const double* a, const std::vector<double>& b, std::size_t n)
+{
+  double largest = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    largest = std::max(largest, std::abs(a[i] - b[i]));
+  return largest;
+}
+
+// The closest point of the surface to p: walked to from the last match (`hint`) when `follow`,
+// searched for over the whole surface when that finds nothing or lies farther than `trusted`.
+// The hint becomes the triangle found, if any.
+SurfaceLocator::Hit closestHit(const SurfaceLocator& locator, const double* p, std::int64_t& hint,
+                               bool follow, double reach, double trusted)
+{
+  SurfaceLocator::Hit hit;
+  if (follow && hint >= 0)
+    hit = locator.follow(p, hint, reach);
+  if (hit.triangle < 0 || hit.squaredDistance > trusted * trusted)
+    hit = locator.closest(p, reach, hint);
+  hint = hit.triangle >= 0 ? hit.triangle : hint;
+  return hit;
+}
+
+// Whether the mesh's normal at the hit (its vertices' normals interpolated) is within the normal
+// test's angle (cosLimit) of the point's normal np.
+bool facesLikeThePoint(const SurfaceLocator::Hit& hit, const std::vector<std::int64_t>& tri,
+                       const std::vector<double>& normals, const float* np, double cosLimit)
+{
+  double n[3] = {0, 0, 0};
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k)
+      n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
+  const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  return length > 0 && (n[0] * np[0] + n[1] * np[1] + n[2] * np[2]) >= cosLimit * length;
+}
 } // namespace
 
 CoverageTerm::CoverageTerm(const SampleView& samples, const TriangleMesh& mesh, double lengthScale,
@@ -41,10 +80,7 @@ void CoverageTerm::linearise(const double* x)
   if (LinearisedAt.size() == 3 * nv)
   {
     const double still = 0.2 * Samples.voxel;
-    double largest = 0;
-    for (std::size_t i = 0; i < 3 * nv; ++i)
-      largest = std::max(largest, std::abs(x[i] - LinearisedAt[i]));
-    if (largest < still && LinearisedScale == Options.robustScale &&
+    if (largestChange(x, LinearisedAt, 3 * nv) < still && LinearisedScale == Options.robustScale &&
         LinearisedReach == Options.maxDistance && !WholeSurface)
       return;
   }
@@ -64,41 +100,30 @@ void CoverageTerm::linearise(const double* x)
   WholeSurface = false;
   const double reach = Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL;
   const double trusted = TrustedFollow * Samples.voxel;
-  forEachIndex(
-      Matches.size(),
-      [&](std::size_t i)
-      {
-        Match& m = Matches[i];
-        m.triangle = -1;
-        m.weight = 0;
-        const double* p = Samples.point(m.point);
-        SurfaceLocator::Hit hit;
-        if (follow && Hints[i] >= 0)
-          hit = Locator.follow(p, Hints[i], reach);
-        if (hit.triangle < 0 || hit.squaredDistance > trusted * trusted)
-          hit = Locator.closest(p, reach, Hints[i]);
-        Hints[i] = hit.triangle >= 0 ? hit.triangle : Hints[i];
-        if (hit.triangle < 0)
-          return;
-        // The mesh's normal at the closest point: its vertices' normals interpolated.
-        double n[3] = {0, 0, 0};
-        for (int c = 0; c < 3; ++c)
-          for (int k = 0; k < 3; ++k)
-            n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
-        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        const float* np = Samples.normal(m.point);
-        if (Options.normalTestDegrees < 180 &&
-            !(length > 0 && (n[0] * np[0] + n[1] * np[1] + n[2] * np[2]) >= cosLimit * length))
-          return;
-        m.triangle = hit.triangle;
-        std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
-        m.weight = 1;
-        if (Options.robustScale > 0)
-        {
-          const double u2 = hit.squaredDistance / (Options.robustScale * Options.robustScale);
-          m.weight = 1.0 / ((1 + u2) * (1 + u2));
-        }
-      });
+  forEachIndex(Matches.size(),
+               [&](std::size_t i)
+               {
+                 Match& m = Matches[i];
+                 m.triangle = -1;
+                 m.weight = 0;
+                 const double* p = Samples.point(m.point);
+                 const SurfaceLocator::Hit hit =
+                     closestHit(Locator, p, Hints[i], follow, reach, trusted);
+                 if (hit.triangle < 0)
+                   return;
+                 if (Options.normalTestDegrees < 180 &&
+                     !facesLikeThePoint(hit, tri, normals, Samples.normal(m.point), cosLimit))
+                   return;
+                 m.triangle = hit.triangle;
+                 std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
+                 m.weight = 1;
+                 if (Options.robustScale > 0)
+                 {
+                   const double u2 =
+                       hit.squaredDistance / (Options.robustScale * Options.robustScale);
+                   m.weight = 1.0 / ((1 + u2) * (1 + u2));
+                 }
+               });
 }
 
 double CoverageTerm::pull(const double* x, const Match& m, Pull& p) const

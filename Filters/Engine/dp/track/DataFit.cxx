@@ -69,31 +69,33 @@ DataFit measureDataFit(const TriangleMesh& mesh, const double* positions,
   return fit;
 }
 
-DataFitCompression compressAgainstData(const TriangleMesh& mesh, const double* positions,
-                                       std::size_t frames,
-                                       const std::vector<const FrameSamples*>& samples,
-                                       double reach, double growth, PcaOptions options,
-                                       const std::vector<double>& times,
-                                       const std::function<bool(double)>& progress)
+namespace
 {
-  if (!(growth > 0) || !std::isfinite(growth))
-    throw std::invalid_argument("the allowed growth of the distance to the data (" +
-                                std::to_string(growth) + ") must be > 0");
-  const std::size_t nv = mesh.numberOfVertices();
-  std::vector<std::vector<bool>> within;
-  DataFitCompression out;
-  out.tracked = measureDataFit(mesh, positions, samples, reach, &within);
-  const std::vector<std::int64_t>& triangles = mesh.triangles();
-  if (out.tracked.samples == 0 || !(out.tracked.rms > 0))
-  {
-    options.measure = PcaErrorMeasure::KarniGotsman;
-    options.target = DefaultKG;
-    out.sequence = compressSequence(positions, nv, frames, options, triangles, times, progress);
-    out.rounds = 1;
-    return out;
-  }
-  options.measure = PcaErrorMeasure::RmsDeviation;
-  const double allowed = (1 + growth) * out.tracked.rms;
+// The tracked take every coding of compressAgainstData codes and measures against.
+struct Take
+{
+  const TriangleMesh& mesh;
+  const double* positions;
+  std::size_t frames;
+  const std::vector<const FrameSamples*>& samples;
+  double reach;
+  const std::vector<double>& times;
+  const std::function<bool(double)>& progress;
+};
+
+// The take coded with `options`.
+CompressedSequence codeTake(const Take& take, const PcaOptions& options)
+{
+  return compressSequence(take.positions, take.mesh.numberOfVertices(), take.frames, options,
+                          take.mesh.triangles(), take.times, take.progress);
+}
+
+// The rounds of coding that look for the fewest bits keeping the fit within `allowed`, into
+// `out` (its tracked fit measured; `within`: the samples that fit counts).
+void codeInRounds(const Take& take, PcaOptions options, double allowed,
+                  std::vector<std::vector<bool>>& within, DataFitCompression& out)
+{
+  const std::size_t nv = take.mesh.numberOfVertices();
   // A deviation d of the vertices grows f^2 by about c d^2, c about 1/3 (deviations spread
   // evenly over the three directions, only the normal one counting). Each round measures c on
   // its coding and asks for the deviation that would give the allowed growth, a little less
@@ -101,17 +103,17 @@ DataFitCompression compressAgainstData(const TriangleMesh& mesh, const double* p
   const double f2 = out.tracked.rms * out.tracked.rms;
   const double grown2 = allowed * allowed - f2;
   double c = 1.0 / 3.0;
-  std::vector<double> decoded(3 * nv * frames);
+  std::vector<double> decoded(3 * nv * take.frames);
   bool kept = false;
   for (int round = 0; round < MaxRounds; ++round)
   {
     options.target = std::sqrt(grown2 / c) * (round == 0 ? 1.0 : Margin);
-    CompressedSequence coded =
-        compressSequence(positions, nv, frames, options, triangles, times, progress);
+    CompressedSequence coded = codeTake(take, options);
     ++out.rounds;
-    for (std::size_t t = 0; t < frames; ++t)
+    for (std::size_t t = 0; t < take.frames; ++t)
       coded.pca.model.frame(t, &decoded[3 * nv * t]);
-    const DataFit fit = measureDataFit(mesh, decoded.data(), samples, reach, &within);
+    const DataFit fit =
+        measureDataFit(take.mesh, decoded.data(), take.samples, take.reach, &within);
     const bool keeps = fit.rms <= allowed;
     const double deviation = coded.report.rmsError;
     const bool better =
@@ -130,6 +132,33 @@ DataFitCompression compressAgainstData(const TriangleMesh& mesh, const double* p
     // No growth at all: the deviation costs the fit nothing yet, ask for twice as much.
     c = measured > 0 && deviation > 0 ? measured / (deviation * deviation) : c / 4;
   }
+}
+} // namespace
+
+DataFitCompression compressAgainstData(const TriangleMesh& mesh, const double* positions,
+                                       std::size_t frames,
+                                       const std::vector<const FrameSamples*>& samples,
+                                       double reach, double growth, PcaOptions options,
+                                       const std::vector<double>& times,
+                                       const std::function<bool(double)>& progress)
+{
+  if (!(growth > 0) || !std::isfinite(growth))
+    throw std::invalid_argument("the allowed growth of the distance to the data (" +
+                                std::to_string(growth) + ") must be > 0");
+  std::vector<std::vector<bool>> within;
+  DataFitCompression out;
+  out.tracked = measureDataFit(mesh, positions, samples, reach, &within);
+  const Take take{mesh, positions, frames, samples, reach, times, progress};
+  if (out.tracked.samples == 0 || !(out.tracked.rms > 0))
+  {
+    options.measure = PcaErrorMeasure::KarniGotsman;
+    options.target = DefaultKG;
+    out.sequence = codeTake(take, options);
+    out.rounds = 1;
+    return out;
+  }
+  options.measure = PcaErrorMeasure::RmsDeviation;
+  codeInRounds(take, options, (1 + growth) * out.tracked.rms, within, out);
   out.growth = out.decompressed.rms / out.tracked.rms - 1;
   return out;
 }

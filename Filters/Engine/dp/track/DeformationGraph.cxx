@@ -27,6 +27,86 @@ double edgeLength(const double* x, std::int64_t a, std::int64_t b)
     d2 += (x[3 * a + k] - x[3 * b + k]) * (x[3 * a + k] - x[3 * b + k]);
   return std::sqrt(d2);
 }
+
+// The nodes a vertex reaches, as (geodesic distance, node index).
+using NodeDistances = std::vector<std::pair<double, std::int32_t>>;
+
+// For every vertex, the nodes within geodesic distance `radius` of it: one Dijkstra from each
+// node, stopped at the radius (the distances it touched reset after each).
+std::vector<NodeDistances> nodesWithinRadius(const TriangleMesh& mesh, const double* rest,
+                                             const std::vector<std::int64_t>& nodeVertex,
+                                             double radius)
+{
+  const std::size_t nv = mesh.numberOfVertices();
+  std::vector<NodeDistances> found(nv);
+  std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
+  std::vector<std::int64_t> touched;
+  for (std::size_t j = 0; j < nodeVertex.size(); ++j)
+  {
+    Queue queue;
+    distance[nodeVertex[j]] = 0;
+    touched.push_back(nodeVertex[j]);
+    queue.push({0.0, nodeVertex[j]});
+    while (!queue.empty())
+    {
+      const auto [d, v] = queue.top();
+      queue.pop();
+      if (d > distance[v])
+        continue;
+      found[v].push_back({d, static_cast<std::int32_t>(j)});
+      for (std::int64_t u : mesh.neighbours(static_cast<std::size_t>(v)))
+      {
+        const double du = d + edgeLength(rest, v, u);
+        if (du < distance[u] && du <= radius)
+        {
+          if (distance[u] == std::numeric_limits<double>::infinity())
+            touched.push_back(u);
+          distance[u] = du;
+          queue.push({du, u});
+        }
+      }
+    }
+    for (std::int64_t v : touched)
+      distance[v] = std::numeric_limits<double>::infinity();
+    touched.clear();
+  }
+  return found;
+}
+
+// A vertex's influences, appended to `out`: its `influences` nearest nodes (`nodes`, sorted
+// here) weighted (1 - d / d_max)^2 and normalised; the pairs of nodes it blends appended to
+// `pairs` (they become the graph's edges).
+void appendVertexInfluences(NodeDistances& nodes, std::size_t influences, double radius,
+                            std::vector<DeformationGraph::Influence>& out,
+                            std::vector<std::array<std::int64_t, 2>>& pairs)
+{
+  std::sort(nodes.begin(), nodes.end());
+  const std::size_t kept = std::min(influences, nodes.size());
+  // d_max: the next nearest node's distance, or the search radius when there is none.
+  const double dMax = nodes.size() > kept ? nodes[kept].first : radius;
+  double total = 0;
+  const std::size_t first = out.size();
+  for (std::size_t i = 0; i < kept; ++i)
+  {
+    const double u = 1 - nodes[i].first / std::max(dMax, 1e-300);
+    const double w = std::max(u, 0.0) * std::max(u, 0.0);
+    if (w <= 0)
+      continue;
+    out.push_back({nodes[i].second, w});
+    total += w;
+  }
+  if (total <= 0 && !nodes.empty()) // all at d_max: the nearest alone
+  {
+    out.push_back({nodes[0].second, 1.0});
+    total = 1;
+  }
+  for (std::size_t i = first; i < out.size(); ++i)
+  {
+    out[i].weight /= total;
+    for (std::size_t k = first; k < i; ++k)
+      pairs.push_back({std::min(out[i].node, out[k].node), std::max(out[i].node, out[k].node)});
+  }
+}
 } // namespace
 
 DeformationGraph::DeformationGraph(const TriangleMesh& mesh, const double* rest,
@@ -83,70 +163,12 @@ void DeformationGraph::blend(std::size_t influences)
   // every vertex (each vertex has a node within Spacing, so 2.5 Spacing holds several).
   const std::size_t nv = Mesh.numberOfVertices();
   const double radius = 2.5 * std::max(Spacing, 1e-300);
-  std::vector<std::vector<std::pair<double, std::int32_t>>> found(nv);
-  std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
-  std::vector<std::int64_t> touched;
-  for (std::size_t j = 0; j < NodeVertex.size(); ++j)
-  {
-    Queue queue;
-    distance[NodeVertex[j]] = 0;
-    touched.push_back(NodeVertex[j]);
-    queue.push({0.0, NodeVertex[j]});
-    while (!queue.empty())
-    {
-      const auto [d, v] = queue.top();
-      queue.pop();
-      if (d > distance[v])
-        continue;
-      found[v].push_back({d, static_cast<std::int32_t>(j)});
-      for (std::int64_t u : Mesh.neighbours(static_cast<std::size_t>(v)))
-      {
-        const double du = d + edgeLength(Rest, v, u);
-        if (du < distance[u] && du <= radius)
-        {
-          if (distance[u] == std::numeric_limits<double>::infinity())
-            touched.push_back(u);
-          distance[u] = du;
-          queue.push({du, u});
-        }
-      }
-    }
-    for (std::int64_t v : touched)
-      distance[v] = std::numeric_limits<double>::infinity();
-    touched.clear();
-  }
+  std::vector<NodeDistances> found = nodesWithinRadius(Mesh, Rest, NodeVertex, radius);
   Offsets.assign(nv + 1, 0);
   std::vector<std::array<std::int64_t, 2>> pairs;
   for (std::size_t v = 0; v < nv; ++v)
   {
-    auto& nodes = found[v];
-    std::sort(nodes.begin(), nodes.end());
-    const std::size_t kept = std::min(influences, nodes.size());
-    // d_max: the next nearest node's distance, or the search radius when there is none.
-    const double dMax = nodes.size() > kept ? nodes[kept].first : radius;
-    double total = 0;
-    const std::size_t first = Influences.size();
-    for (std::size_t i = 0; i < kept; ++i)
-    {
-      const double u = 1 - nodes[i].first / std::max(dMax, 1e-300);
-      const double w = std::max(u, 0.0) * std::max(u, 0.0);
-      if (w <= 0)
-        continue;
-      Influences.push_back({nodes[i].second, w});
-      total += w;
-    }
-    if (total <= 0 && !nodes.empty()) // all at d_max: the nearest alone
-    {
-      Influences.push_back({nodes[0].second, 1.0});
-      total = 1;
-    }
-    for (std::size_t i = first; i < Influences.size(); ++i)
-    {
-      Influences[i].weight /= total;
-      for (std::size_t k = first; k < i; ++k)
-        pairs.push_back({std::min(Influences[i].node, Influences[k].node),
-                         std::max(Influences[i].node, Influences[k].node)});
-    }
+    appendVertexInfluences(found[v], influences, radius, Influences, pairs);
     Offsets[v + 1] = Influences.size();
   }
   std::sort(pairs.begin(), pairs.end());

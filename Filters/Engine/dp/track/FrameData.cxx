@@ -119,6 +119,39 @@ std::vector<std::size_t> thinnedFrame(const double* points, std::size_t count, d
     i *= stride;
   return indices;
 }
+
+// The indices of the points kept (all, or an evenly thinned share when there are more than
+// options.maxPoints), in space-filling-curve order.
+std::vector<std::size_t> pointsKept(const double* points, std::size_t count,
+                                    const FrameDataOptions& options)
+{
+  std::vector<std::size_t> kept;
+  if (options.maxPoints > 0 && count > options.maxPoints)
+  {
+    const double area = options.surfaceArea > 0 ? options.surfaceArea
+                                                : std::pow(boundingBoxDiagonal(points, count), 2);
+    kept = thinnedFrame(points, count, area, options.maxPoints);
+  }
+  else
+  {
+    kept.resize(count);
+    std::iota(kept.begin(), kept.end(), std::size_t{0});
+  }
+  sortAlongCurve(points, kept);
+  return kept;
+}
+
+// The RGB of the kept points (of `components` bytes each: RGB or RGBA) as floats in [0, 1].
+std::vector<float> coloursInZeroOne(const std::uint8_t* colours, int components,
+                                    const std::vector<std::size_t>& kept)
+{
+  std::vector<float> out(3 * kept.size());
+  for (std::size_t j = 0; j < kept.size(); ++j)
+    for (int k = 0; k < 3; ++k)
+      out[3 * j + k] =
+          static_cast<float>(colours[static_cast<std::size_t>(components) * kept[j] + k]) / 255.0f;
+  return out;
+}
 } // namespace
 
 FrameData::FrameData(const double* points, std::size_t count, const float* normals,
@@ -135,19 +168,7 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
   // The points kept (all, or an evenly thinned share), in space-filling-curve order: points
   // near one another in space are then near in memory too, so the searches below and the energy
   // terms' per-point loops stay in cache (a scanner's or a sampler's order can be anything).
-  std::vector<std::size_t> kept;
-  if (options.maxPoints > 0 && count > options.maxPoints)
-  {
-    const double area = options.surfaceArea > 0 ? options.surfaceArea
-                                                : std::pow(boundingBoxDiagonal(points, count), 2);
-    kept = thinnedFrame(points, count, area, options.maxPoints);
-  }
-  else
-  {
-    kept.resize(count);
-    std::iota(kept.begin(), kept.end(), std::size_t{0});
-  }
-  sortAlongCurve(points, kept);
+  const std::vector<std::size_t> kept = pointsKept(points, count, options);
   std::vector<double> keptPoints(3 * kept.size());
   std::vector<float> keptNormals(normals ? 3 * kept.size() : 0);
   for (std::size_t j = 0; j < kept.size(); ++j)
@@ -158,14 +179,7 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
         keptNormals[3 * j + k] = normals[3 * kept[j] + k];
     }
   if (colours)
-  {
-    Colours.resize(3 * kept.size());
-    for (std::size_t j = 0; j < kept.size(); ++j)
-      for (int k = 0; k < 3; ++k)
-        Colours[3 * j + k] =
-            static_cast<float>(colours[static_cast<std::size_t>(colourComponents) * kept[j] + k]) /
-            255.0f;
-  }
+    Colours = coloursInZeroOne(colours, colourComponents, kept);
   points = keptPoints.data();
   normals = normals ? keptNormals.data() : nullptr;
   count = Count = kept.size();

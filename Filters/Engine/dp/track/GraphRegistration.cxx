@@ -405,11 +405,6 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
       energy = linearise(state, terms, rigidity, x);
     }
     accelerated = false;
-    if (!Analysed)
-    {
-      Solver.analyse(NodeModel);
-      Analysed = true;
-    }
     const DeformationGraph::State start = anderson ? state : DeformationGraph::State();
     double decrease = 0;
     const bool accepted = dampedStep(state, terms, rigidity, energy, damping, decrease, y);
@@ -463,6 +458,13 @@ bool GraphRegistration::dampedStep(DeformationGraph::State& state,
                                    double energy, double& damping, double& decrease,
                                    std::vector<double>& trial)
 {
+  // The factorisation's pattern (the graph's edges) is analysed at the first step of the first
+  // solve; every factorisation after reuses it.
+  if (!Analysed)
+  {
+    Solver.analyse(NodeModel);
+    Analysed = true;
+  }
   // Levenberg-Marquardt on the model just built: a step is kept when E falls by at least a tenth
   // of what the model promised; otherwise the damping grows tenfold, to at least RetryDamping
   // (each try costs a factorisation), at most eight tries. A rejected step whose model promised

@@ -111,6 +111,47 @@ bool blameVertices(const DistanceTerm* distance, const Eigen::VectorXd& step,
   }
   return blamed;
 }
+
+// The damping of the steps: global (Levenberg, relative to the mean diagonal) plus per vertex
+// (where the distance term keeps breaking the model's promise).
+struct StepDamping
+{
+  double global = 1e-4;
+  std::vector<double> vertex;
+
+  // The shift of the Hessian's diagonal, 3 entries per vertex.
+  Eigen::VectorXd shift(double meanDiagonal) const
+  {
+    Eigen::VectorXd out(static_cast<Eigen::Index>(3 * vertex.size()));
+    for (std::size_t v = 0; v < vertex.size(); ++v)
+      out.segment<3>(static_cast<Eigen::Index>(3 * v))
+          .setConstant(global * meanDiagonal + vertex[v]);
+    return out;
+  }
+  // After an accepted step (`good`: it kept most of its promise): less damping.
+  void relax(bool good)
+  {
+    if (good)
+      global = std::max(global * 0.3, 1e-9);
+    for (double& d : vertex)
+      d *= 0.3;
+  }
+  // After a rejected step: the blamed vertices damped, or if none, more global damping.
+  void raise(const DistanceTerm* distance, const Eigen::VectorXd& step,
+             const std::vector<double>& dataAtTrial, double shortfall)
+  {
+    if (!blameVertices(distance, step, dataAtTrial, shortfall, vertex))
+      global = std::max(global * 10, RetryDamping);
+  }
+};
+
+// The decrease the quadratic model (gradient, lower-stored Hessian H) promises for a step:
+// -(gradient.step + step.H.step / 2).
+double predictedDecrease(const Eigen::VectorXd& gradient, const Eigen::VectorXd& step,
+                         const detail::BlockSparseMatrix::Matrix& H)
+{
+  return -(gradient.dot(step) + 0.5 * step.dot(H.selfadjointView<Eigen::Lower>() * step));
+}
 } // namespace
 
 double GaussNewtonSolver::buildModel(const std::vector<double>& x,
@@ -149,10 +190,10 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
 {
   const std::size_t nv = Hessian.blockCount();
   const auto n = static_cast<Eigen::Index>(3 * nv);
-  std::vector<double> trial(x.size()), dataAtTrial(nv, 0.0), vertexDamping(nv, 0.0);
+  std::vector<double> trial(x.size()), dataAtTrial(nv, 0.0);
+  StepDamping damping{1e-4, std::vector<double>(nv, 0.0)};
   Eigen::VectorXd gradient(n);
   int decisions = 0;
-  double damping = 1e-4; // Levenberg damping, relative to the mean diagonal
   int iteration = 0;
   for (; iteration < settings.maxIterations; ++iteration)
   {
@@ -168,32 +209,21 @@ int GaussNewtonSolver::solve(std::vector<double>& x, const std::vector<EnergyTer
     bool accepted = false, converged = false;
     for (int attempt = 0; attempt < 12 && !accepted; ++attempt)
     {
-      Eigen::VectorXd shift(n);
-      for (std::size_t v = 0; v < nv; ++v)
-        shift.segment<3>(static_cast<Eigen::Index>(3 * v))
-            .setConstant(damping * meanDiagonal + vertexDamping[v]);
-      const Eigen::VectorXd step = dampedStep(gradient, shift, attempt == 0);
+      const Eigen::VectorXd step = dampedStep(gradient, damping.shift(meanDiagonal), attempt == 0);
       for (std::size_t i = 0; i < x.size(); ++i)
         trial[i] = x[i] + step[static_cast<Eigen::Index>(i)];
-      // The decrease the quadratic model promises: -(gradient.step + step.H.step / 2).
-      const double predicted =
-          -(gradient.dot(step) +
-            0.5 * step.dot(Hessian.matrix().selfadjointView<Eigen::Lower>() * step));
+      const double predicted = predictedDecrease(gradient, step, Hessian.matrix());
       const double actual = energyAtX - energyAt(trial, terms, distance, dataAtTrial);
       if (predicted > 0 && actual > 0.1 * predicted)
       {
         accepted = true;
         x.swap(trial);
-        if (actual > 0.75 * predicted)
-          damping = std::max(damping * 0.3, 1e-9);
-        for (double& d : vertexDamping)
-          d *= 0.3;
+        damping.relax(actual > 0.75 * predicted);
         converged = actual <= settings.tolerance * std::abs(energyAtX) ||
                     step.cwiseAbs().maxCoeff() <= settings.settledStep;
         continue;
       }
-      if (!blameVertices(distance, step, dataAtTrial, predicted - actual, vertexDamping))
-        damping = std::max(damping * 10, RetryDamping);
+      damping.raise(distance, step, dataAtTrial, predicted - actual);
     }
     // Settled: decide the terms' choices again at the new shape (at most `decisions` times); go
     // on only if that changed something.
@@ -364,6 +394,26 @@ bool stalled(std::vector<double>& recent, double energy, double tolerance)
   return recent.size() > 10 &&
          recent[recent.size() - 11] - energy <= 0.1 * tolerance * std::abs(energy);
 }
+
+// A step of h times the gradient down for each of the nv vertices but the frozen ones (when
+// `freezing`); each vertex's step length is handed to the provisional determination.
+void stepDown(std::vector<double>& x, const std::vector<double>& gradient, double h, std::size_t nv,
+              bool freezing, ProvisionalDetermination& pd)
+{
+  for (std::size_t v = 0; v < nv; ++v)
+  {
+    if (freezing && pd.frozen(v))
+      continue;
+    double step2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      const double d = h * gradient[3 * v + k];
+      x[3 * v + k] -= d;
+      step2 += d * d;
+    }
+    pd.stepped(v, std::sqrt(step2));
+  }
+}
 } // namespace
 
 int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>& terms,
@@ -397,19 +447,7 @@ int solveSteepestDescent(std::vector<double>& x, const std::vector<EnergyTerm*>&
     before = x;
     if (stalled(recent, e, settings.tolerance))
       break;
-    for (std::size_t v = 0; v < nv; ++v)
-    {
-      if (frozen && pd.frozen(v))
-        continue;
-      double step2 = 0;
-      for (int k = 0; k < 3; ++k)
-      {
-        const double d = h * gradient[3 * v + k];
-        x[3 * v + k] -= d;
-        step2 += d * d;
-      }
-      pd.stepped(v, std::sqrt(step2));
-    }
+    stepDown(x, gradient, h, nv, frozen != nullptr, pd);
     if (frozen &&
         iteration % ProvisionalDetermination::Window == ProvisionalDetermination::Window - 1)
       pd.endWindow(x);

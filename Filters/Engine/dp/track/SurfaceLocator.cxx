@@ -15,6 +15,88 @@ inline double dot3(const double* a, const double* b)
 {
   return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
 }
+
+// The answer of closestPointOnTriangle for weights (u, v, s) of a, b, c: the weights into w, the
+// point into closest; returns its squared distance to p.
+struct WeightedCorners
+{
+  const double *p, *a, *b, *c;
+  double* w;
+  double* closest;
+
+  double operator()(double u, double v, double s) const
+  {
+    w[0] = u;
+    w[1] = v;
+    w[2] = s;
+    double d2 = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      closest[k] = u * a[k] + v * b[k] + s * c[k];
+      d2 += (p[k] - closest[k]) * (p[k] - closest[k]);
+    }
+    return d2;
+  }
+};
+
+// The centre (mean of the corners) of each triangle, 3 per triangle.
+std::vector<double> triangleCentres(const std::vector<std::int64_t>& triangles,
+                                    const double* positions)
+{
+  const std::size_t nt = triangles.size() / 3;
+  std::vector<double> centres(3 * nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k)
+      centres[3 * t + k] =
+          (positions[3 * triangles[3 * t] + k] + positions[3 * triangles[3 * t + 1] + k] +
+           positions[3 * triangles[3 * t + 2] + k]) /
+          3.0;
+  return centres;
+}
+
+// The triangles around each of nv vertices: those of vertex v are
+// around[aroundStart[v], aroundStart[v + 1]), ascending (ties go to the lower index).
+void trianglesAroundVertices(const std::vector<std::int64_t>& tri, std::size_t nv,
+                             std::vector<std::int32_t>& aroundStart,
+                             std::vector<std::int32_t>& around)
+{
+  const std::size_t nt = tri.size() / 3;
+  aroundStart.assign(nv + 1, 0);
+  for (const std::int64_t v : tri)
+    ++aroundStart[static_cast<std::size_t>(v) + 1];
+  for (std::size_t v = 0; v < nv; ++v)
+    aroundStart[v + 1] += aroundStart[v];
+  around.resize(tri.size());
+  std::vector<std::int32_t> next(aroundStart.begin(), aroundStart.end() - 1);
+  for (std::size_t t = 0; t < nt; ++t) // ascending within a vertex: ties go to the lower index
+    for (int c = 0; c < 3; ++c)
+      around[static_cast<std::size_t>(next[static_cast<std::size_t>(tri[3 * t + c])]++)] =
+          static_cast<std::int32_t>(t);
+}
+
+// Across each edge: per triangle and corner c, the triangle sharing the edge opposite c (the
+// first found, for an edge of more than two; -1: none).
+std::vector<std::int64_t> trianglesAcross(const std::vector<std::int64_t>& tri,
+                                          const std::vector<std::int32_t>& aroundStart,
+                                          const std::vector<std::int32_t>& around)
+{
+  const std::size_t nt = tri.size() / 3;
+  std::vector<std::int64_t> across(3 * nt, -1);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::int64_t a = tri[3 * t + (c + 1) % 3], b = tri[3 * t + (c + 2) % 3];
+      const auto v = static_cast<std::size_t>(a);
+      for (std::int32_t i = aroundStart[v]; i < aroundStart[v + 1] && across[3 * t + c] < 0; ++i)
+      {
+        const auto other = static_cast<std::size_t>(around[static_cast<std::size_t>(i)]);
+        if (other != t &&
+            (tri[3 * other] == b || tri[3 * other + 1] == b || tri[3 * other + 2] == b))
+          across[3 * t + c] = static_cast<std::int64_t>(other);
+      }
+    }
+  return across;
+}
 } // namespace
 
 double closestPointOnTriangle(const double p[3], const double a[3], const double b[3],
@@ -28,19 +110,7 @@ double closestPointOnTriangle(const double p[3], const double a[3], const double
     ac[k] = c[k] - a[k];
     ap[k] = p[k] - a[k];
   }
-  auto finish = [&](double u, double v, double s)
-  {
-    w[0] = u;
-    w[1] = v;
-    w[2] = s;
-    double d2 = 0;
-    for (int k = 0; k < 3; ++k)
-    {
-      closest[k] = u * a[k] + v * b[k] + s * c[k];
-      d2 += (p[k] - closest[k]) * (p[k] - closest[k]);
-    }
-    return d2;
-  };
+  const WeightedCorners finish{p, a, b, c, w, closest};
   const double d1 = dot3(ab, ap), d2 = dot3(ac, ap);
   if (d1 <= 0 && d2 <= 0)
     return finish(1, 0, 0);
@@ -92,14 +162,7 @@ void SurfaceLocator::build(const double* positions)
   const std::size_t nv = Mesh->numberOfVertices();
   Copy.assign(positions, positions + 3 * nv);
   Positions = Copy.data();
-  const auto& triangles = Mesh->triangles();
-  std::vector<double> centres(3 * nt);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k)
-      centres[3 * t + k] =
-          (Positions[3 * triangles[3 * t] + k] + Positions[3 * triangles[3 * t + 1] + k] +
-           Positions[3 * triangles[3 * t + 2] + k]) /
-          3.0;
+  std::vector<double> centres = triangleCentres(Mesh->triangles(), Positions);
   Order.resize(nt);
   std::iota(Order.begin(), Order.end(), 0);
   Nodes.clear();
@@ -119,32 +182,8 @@ void SurfaceLocator::build(const double* positions)
             static_cast<std::int32_t>(n);
   }
   const auto& tri = Mesh->triangles();
-  AroundStart.assign(nv + 1, 0);
-  for (const std::int64_t v : tri)
-    ++AroundStart[static_cast<std::size_t>(v) + 1];
-  for (std::size_t v = 0; v < nv; ++v)
-    AroundStart[v + 1] += AroundStart[v];
-  Around.resize(tri.size());
-  std::vector<std::int32_t> next(AroundStart.begin(), AroundStart.end() - 1);
-  for (std::size_t t = 0; t < nt; ++t) // ascending within a vertex: ties go to the lower index
-    for (int c = 0; c < 3; ++c)
-      Around[static_cast<std::size_t>(next[static_cast<std::size_t>(tri[3 * t + c])]++)] =
-          static_cast<std::int32_t>(t);
-  // Across each edge: the triangle sharing it (the first found, for an edge of more than two).
-  Across.assign(3 * nt, -1);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int c = 0; c < 3; ++c)
-    {
-      const std::int64_t a = tri[3 * t + (c + 1) % 3], b = tri[3 * t + (c + 2) % 3];
-      const auto v = static_cast<std::size_t>(a);
-      for (std::int32_t i = AroundStart[v]; i < AroundStart[v + 1] && Across[3 * t + c] < 0; ++i)
-      {
-        const auto other = static_cast<std::size_t>(Around[static_cast<std::size_t>(i)]);
-        if (other != t &&
-            (tri[3 * other] == b || tri[3 * other + 1] == b || tri[3 * other + 2] == b))
-          Across[3 * t + c] = static_cast<std::int64_t>(other);
-      }
-    }
+  trianglesAroundVertices(tri, nv, AroundStart, Around);
+  Across = trianglesAcross(tri, AroundStart, Around);
   Wide.reserve(Nodes.size() / 3 + 1);
   collapse(0);
   WideParent.assign(Wide.size(), Place{});

@@ -1,71 +1,25 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// PLY reader and writer (Turk's format: ASCII, binary little and big endian).
+// PLY reader (Turk's format: ASCII, binary little and big endian): the body the header
+// (PlyHeader.cxx) describes, its vertices and faces into a PointCloud.
 #include "dp/detail/FileText.h"
+#include "dp/io/PlyHeader.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <functional>
-#include <optional>
 
 namespace dp
 {
 namespace
 {
 
-enum class PlyType
-{
-  Int8,
-  UInt8,
-  Int16,
-  UInt16,
-  Int32,
-  UInt32,
-  Float32,
-  Float64
-};
-
-std::optional<PlyType> parsePlyType(std::string_view name)
-{
-  if (name == "char" || name == "int8")
-    return PlyType::Int8;
-  if (name == "uchar" || name == "uint8")
-    return PlyType::UInt8;
-  if (name == "short" || name == "int16")
-    return PlyType::Int16;
-  if (name == "ushort" || name == "uint16")
-    return PlyType::UInt16;
-  if (name == "int" || name == "int32")
-    return PlyType::Int32;
-  if (name == "uint" || name == "uint32")
-    return PlyType::UInt32;
-  if (name == "float" || name == "float32")
-    return PlyType::Float32;
-  if (name == "double" || name == "float64")
-    return PlyType::Float64;
-  return std::nullopt;
-}
-
-std::size_t sizeOf(PlyType t)
-{
-  switch (t)
-  {
-  case PlyType::Int8:
-  case PlyType::UInt8:
-    return 1;
-  case PlyType::Int16:
-  case PlyType::UInt16:
-    return 2;
-  case PlyType::Int32:
-  case PlyType::UInt32:
-  case PlyType::Float32:
-    return 4;
-  case PlyType::Float64:
-    return 8;
-  }
-  return 0;
-}
+using detail::PlyBodyEncoding;
+using detail::PlyElement;
+using detail::PlyHeader;
+using detail::PlyProperty;
+using detail::PlyType;
+using detail::sizeOf;
 
 template <typename T>
 T loadSwapped(const char* p, bool swap)
@@ -104,21 +58,6 @@ double decode(const char* p, PlyType t, bool swap)
   }
   return 0.0;
 }
-
-struct PlyProperty
-{
-  std::string name;
-  PlyType type = PlyType::Float32;
-  bool isList = false;
-  PlyType countType = PlyType::UInt8;
-};
-
-struct PlyElement
-{
-  std::string name;
-  std::size_t count = 0;
-  std::vector<PlyProperty> properties;
-};
 
 // Where a vertex property goes in the PointCloud.
 enum class Slot
@@ -165,141 +104,6 @@ Slot slotFor(const std::string& name)
   return Slot::Attribute;
 }
 
-enum class Encoding
-{
-  Ascii,
-  Little,
-  Big
-};
-
-struct PlyHeader
-{
-  Encoding encoding = Encoding::Ascii;
-  std::vector<PlyElement> elements;
-  std::size_t bodyOffset = 0;
-};
-
-// A header line's failure, naming the file and the line.
-using HeaderFailure = std::function<void(const std::string& why)>;
-
-// "format <kind> <version>" (after the keyword).
-Encoding parseFormatLine(std::string_view rest, const HeaderFailure& fail)
-{
-  const std::string_view kind = detail::nextToken(rest);
-  if (kind == "ascii")
-    return Encoding::Ascii;
-  if (kind == "binary_little_endian")
-    return Encoding::Little;
-  if (kind == "binary_big_endian")
-    return Encoding::Big;
-  fail("unknown format '" + std::string(kind) + "'");
-  return Encoding::Ascii; // not reached: fail throws
-}
-
-// "element <name> <count>" (after the keyword).
-PlyElement parseElementLine(std::string_view rest, std::string_view line, const HeaderFailure& fail)
-{
-  PlyElement element;
-  element.name = std::string(detail::nextToken(rest));
-  double count = -1;
-  if (element.name.empty() || !detail::parseNumber(detail::nextToken(rest), count) || count < 0 ||
-      !detail::wholeNumberWithin(count, detail::LargestCount))
-  {
-    fail("malformed element line '" + std::string(line) + "'");
-  }
-  element.count = static_cast<std::size_t>(count);
-  return element;
-}
-
-// "property <type> <name>" or "property list <count type> <type> <name>" (after the keyword).
-PlyProperty parsePropertyLine(std::string_view rest, std::string_view line,
-                              const HeaderFailure& fail)
-{
-  PlyProperty property;
-  std::string_view typeName = detail::nextToken(rest);
-  if (typeName == "list")
-  {
-    property.isList = true;
-    const auto countType = parsePlyType(detail::nextToken(rest));
-    typeName = detail::nextToken(rest);
-    if (!countType)
-    {
-      fail("unknown list count type in '" + std::string(line) + "'");
-    }
-    property.countType = *countType;
-  }
-  const auto type = parsePlyType(typeName);
-  if (!type)
-  {
-    fail("unknown property type '" + std::string(typeName) + "'");
-  }
-  property.type = *type;
-  property.name = std::string(detail::nextToken(rest));
-  if (property.name.empty())
-  {
-    fail("property without a name");
-  }
-  return property;
-}
-
-PlyHeader parseHeader(const std::string& path, const std::string& bytes)
-{
-  PlyHeader header;
-  std::string_view text(bytes);
-  std::string_view line;
-  if (!detail::nextLine(text, line) || line.substr(0, 3) != "ply")
-  {
-    throw FileError(path, "not a PLY file (it does not start with 'ply')");
-  }
-  bool sawFormat = false;
-  int lineNumber = 1;
-  const HeaderFailure fail = [&](const std::string& why)
-  { throw FileError(path, "PLY header line " + std::to_string(lineNumber) + ": " + why); };
-  while (true)
-  {
-    if (!detail::nextLine(text, line))
-    {
-      throw FileError(path, "PLY header has no 'end_header' line (file truncated?)");
-    }
-    ++lineNumber;
-    std::string_view rest = line;
-    const std::string_view keyword = detail::nextToken(rest);
-    if (keyword == "end_header")
-    {
-      break;
-    }
-    if (keyword.empty() || keyword == "comment" || keyword == "obj_info")
-    {
-      continue;
-    }
-    if (keyword == "format")
-    {
-      header.encoding = parseFormatLine(rest, fail);
-      sawFormat = true;
-    }
-    else if (keyword == "element")
-      header.elements.push_back(parseElementLine(rest, line, fail));
-    else if (keyword == "property")
-    {
-      if (header.elements.empty())
-      {
-        fail("property before any element");
-      }
-      header.elements.back().properties.push_back(parsePropertyLine(rest, line, fail));
-    }
-    else
-    {
-      fail("unknown keyword '" + std::string(keyword) + "'");
-    }
-  }
-  if (!sawFormat)
-  {
-    throw FileError(path, "PLY header has no 'format' line");
-  }
-  header.bodyOffset = bytes.size() - text.size();
-  return header;
-}
-
 // Reads values one at a time from either encoding, reporting truncation with context.
 class BodyReader
 {
@@ -312,7 +116,7 @@ public:
   // Returns false when the data ran out (truncated file).
   bool read(PlyType type, double& value)
   {
-    if (Mode == Encoding::Ascii)
+    if (Mode == PlyBodyEncoding::Ascii)
     {
       const std::string_view token = detail::nextToken(Body);
       if (token.empty())
@@ -330,12 +134,12 @@ public:
     {
       return false;
     }
-    value = decode(Body.data(), type, Mode == Encoding::Big);
+    value = decode(Body.data(), type, Mode == PlyBodyEncoding::Big);
     Body.remove_prefix(size);
     return true;
   }
 
-  bool isBinary() const { return Mode != Encoding::Ascii; }
+  bool isBinary() const { return Mode != PlyBodyEncoding::Ascii; }
   std::size_t remaining() const { return Body.size(); }
   const char* cursor() const { return Body.data(); }
   void advance(std::size_t n) { Body.remove_prefix(n); }
@@ -343,7 +147,7 @@ public:
 private:
   std::string Path;
   std::string_view Body;
-  Encoding Mode;
+  PlyBodyEncoding Mode;
 };
 
 [[noreturn]] void truncated(const std::string& path, const PlyElement& element, std::size_t item)
@@ -491,6 +295,23 @@ void readVertices(const std::string& path, const PlyElement& element, BodyReader
     cloud.colorComponents = 0;
 }
 
+// A face's vertex index as read: from 0 to below the cloud's vertex count, else an error naming
+// the face.
+std::int64_t vertexIndex(const std::string& path, std::size_t face, double value,
+                         const PointCloud& cloud)
+{
+  const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
+  if (!(value >= 0 && value < numberOfPoints)) // NaN included
+  {
+    const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
+    throw FileError(
+        path, "PLY face " + std::to_string(face) + " uses vertex " +
+                  (whole ? std::to_string(static_cast<long long>(value)) : std::to_string(value)) +
+                  ", but there are only " + std::to_string(cloud.numberOfPoints()) + " vertices");
+  }
+  return static_cast<std::int64_t>(value);
+}
+
 void readFaces(const std::string& path, const PlyElement& element, BodyReader& reader,
                PointCloud& cloud)
 {
@@ -508,7 +329,6 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
   cloud.faceOffsets.reserve(element.count + 1);
   cloud.faceOffsets.push_back(0);
   cloud.faceConnectivity.reserve(3 * element.count);
-  const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
   for (std::size_t f = 0; f < element.count; ++f)
   {
     for (std::size_t p = 0; p < element.properties.size(); ++p)
@@ -529,18 +349,7 @@ void readFaces(const std::string& path, const PlyElement& element, BodyReader& r
         if (!reader.read(prop.type, value))
           truncated(path, element, f);
         if (static_cast<int>(p) == indexProperty)
-        {
-          if (!(value >= 0 && value < numberOfPoints)) // NaN included
-          {
-            const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
-            throw FileError(path, "PLY face " + std::to_string(f) + " uses vertex " +
-                                      (whole ? std::to_string(static_cast<long long>(value))
-                                             : std::to_string(value)) +
-                                      ", but there are only " +
-                                      std::to_string(cloud.numberOfPoints()) + " vertices");
-          }
-          cloud.faceConnectivity.push_back(static_cast<std::int64_t>(value));
-        }
+          cloud.faceConnectivity.push_back(vertexIndex(path, f, value, cloud));
       }
     }
     cloud.faceOffsets.push_back(static_cast<std::int64_t>(cloud.faceConnectivity.size()));
@@ -606,7 +415,7 @@ void skipElement(const std::string& path, const PlyElement& element, BodyReader&
 PointCloud readPLY(const std::string& path)
 {
   const std::string bytes = detail::readWholeFile(path);
-  const PlyHeader header = parseHeader(path, bytes);
+  const PlyHeader header = detail::parsePlyHeader(path, bytes);
   BodyReader reader(path, bytes, header);
   PointCloud cloud;
   bool sawVertex = false, sawFace = false;
@@ -643,113 +452,6 @@ PointCloud readPLY(const std::string& path)
     throw FileError(path, "PLY file has no 'vertex' element");
   }
   return cloud;
-}
-
-namespace
-{
-
-template <typename T>
-void appendValue(std::string& out, T value, PlyEncoding encoding)
-{
-  if (encoding == PlyEncoding::Ascii)
-  {
-    if constexpr (std::is_floating_point_v<T>)
-    {
-      char buffer[32];
-      const auto r = std::to_chars(buffer, buffer + sizeof(buffer), value);
-      out.append(buffer, r.ptr);
-    }
-    else
-    {
-      out += std::to_string(value);
-    }
-    out += ' ';
-    return;
-  }
-  char bytes[sizeof(T)];
-  std::memcpy(bytes, &value, sizeof(T));
-  if (encoding == PlyEncoding::BinaryBigEndian)
-  {
-    std::reverse(bytes, bytes + sizeof(T));
-  }
-  out.append(bytes, sizeof(T));
-}
-
-} // namespace
-
-void writePLY(const std::string& path, const PointCloud& cloud, PlyEncoding encoding)
-{
-  cloud.validate();
-  const std::size_t n = cloud.numberOfPoints();
-  std::string out = "ply\nformat ";
-  out += encoding == PlyEncoding::Ascii             ? "ascii"
-         : encoding == PlyEncoding::BinaryBigEndian ? "binary_big_endian"
-                                                    : "binary_little_endian";
-  out += " 1.0\ncomment written by DynamicPoints\n";
-  out += "element vertex " + std::to_string(n) + "\n";
-  out += "property float x\nproperty float y\nproperty float z\n";
-  if (cloud.hasNormals())
-    out += "property float nx\nproperty float ny\nproperty float nz\n";
-  if (cloud.hasColors())
-  {
-    out += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
-    if (cloud.colorComponents == 4)
-      out += "property uchar alpha\n";
-  }
-  for (const auto& a : cloud.attributes)
-  {
-    for (int c = 0; c < a.components; ++c)
-    {
-      out += "property float " + a.name + (a.components > 1 ? "_" + std::to_string(c) : "") + "\n";
-    }
-  }
-  if (cloud.numberOfFaces() > 0)
-  {
-    out += "element face " + std::to_string(cloud.numberOfFaces()) + "\n";
-    out += "property list uchar int vertex_indices\n";
-  }
-  out += "end_header\n";
-  out.reserve(out.size() + n * 40 + cloud.faceConnectivity.size() * 5);
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    for (int k = 0; k < 3; ++k)
-      appendValue(out, static_cast<float>(cloud.points[3 * i + k]), encoding);
-    if (cloud.hasNormals())
-      for (int k = 0; k < 3; ++k)
-        appendValue(out, cloud.normals[3 * i + k], encoding);
-    if (cloud.hasColors())
-      for (int k = 0; k < cloud.colorComponents; ++k)
-      {
-        const std::uint8_t c = cloud.colors[cloud.colorComponents * i + k];
-        if (encoding == PlyEncoding::Ascii)
-          appendValue(out, static_cast<int>(c), encoding);
-        else
-          out += static_cast<char>(c);
-      }
-    for (const auto& a : cloud.attributes)
-      for (int c = 0; c < a.components; ++c)
-        appendValue(out, a.values[a.components * i + c], encoding);
-    if (encoding == PlyEncoding::Ascii)
-      out.back() = '\n';
-  }
-  for (std::size_t f = 0; f < cloud.numberOfFaces(); ++f)
-  {
-    const auto begin = cloud.faceOffsets[f];
-    const auto count = cloud.faceOffsets[f + 1] - begin;
-    if (count > 255)
-    {
-      throw FileError(path, "cannot write a PLY face with more than 255 vertices");
-    }
-    if (encoding == PlyEncoding::Ascii)
-      appendValue(out, static_cast<int>(count), encoding);
-    else
-      out += static_cast<char>(count);
-    for (std::int64_t k = 0; k < count; ++k)
-      appendValue(out, static_cast<std::int32_t>(cloud.faceConnectivity[begin + k]), encoding);
-    if (encoding == PlyEncoding::Ascii)
-      out.back() = '\n';
-  }
-  detail::writeWholeFile(path, out);
 }
 
 } // namespace dp
