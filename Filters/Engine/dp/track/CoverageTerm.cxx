@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/CoverageTerm.h"
 
+#include "dp/track/RobustKernel.h"
+
 #include "dp/track/Parallel.h"
 
 #include <algorithm>
@@ -100,6 +102,7 @@ void CoverageTerm::linearise(const double* x)
   WholeSurface = false;
   const double reach = Options.maxDistance > 0 ? Options.maxDistance : HUGE_VAL;
   const double trusted = TrustedFollow * Samples.voxel;
+  const RobustKernel kernel{RobustKernel::Kind::GemanMcClure, Options.robustScale};
   forEachIndex(Matches.size(),
                [&](std::size_t i)
                {
@@ -117,12 +120,9 @@ void CoverageTerm::linearise(const double* x)
                  m.triangle = hit.triangle;
                  std::copy(hit.barycentric, hit.barycentric + 3, m.barycentric);
                  m.weight = 1;
-                 if (Options.robustScale > 0)
-                 {
-                   const double u2 =
-                       hit.squaredDistance / (Options.robustScale * Options.robustScale);
-                   m.weight = 1.0 / ((1 + u2) * (1 + u2));
-                 }
+                 if (kernel.active())
+                   m.weight = kernel.weightOfSquaredRatio(hit.squaredDistance /
+                                                          (kernel.scale * kernel.scale));
                });
 }
 

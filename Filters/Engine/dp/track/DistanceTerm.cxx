@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/DistanceTerm.h"
 
+#include "dp/track/RobustKernel.h"
+
 #include "dp/track/Parallel.h"
 
 #include <cmath>
@@ -151,6 +153,7 @@ std::size_t DistanceTerm::decide(const double* x)
   const std::size_t nv = Mass.size();
   std::vector<double> normals(3 * nv);
   Mesh.vertexNormals(x, normals.data());
+  const RobustKernel kernel{RobustKernel::Kind::GemanMcClure, Options.robustScale};
   const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
   std::vector<std::uint8_t> changed(nv, 0);
   forEachIndex(nv,
@@ -166,10 +169,10 @@ std::size_t DistanceTerm::decide(const double* x)
                           cosLimit;
                  }
                  double weight = keep ? 1.0 : 0.0;
-                 if (keep && Options.robustScale > 0)
+                 if (keep && kernel.active())
                  {
-                   const double u = sample(&x[3 * v], v).distance / Options.robustScale;
-                   weight = 1.0 / ((1 + u * u) * (1 + u * u));
+                   const double u = sample(&x[3 * v], v).distance / kernel.scale;
+                   weight = kernel.weightOfSquaredRatio(u * u);
                  }
                  changed[v] = (Weights[v] != 0) != keep;
                  Weights[v] = weight;

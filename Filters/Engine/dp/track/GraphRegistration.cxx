@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/GraphRegistration.h"
 
+#include "dp/track/RobustKernel.h"
+
 #include "dp/track/AndersonAcceleration.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DistanceTerm.h"
@@ -283,15 +285,13 @@ void GraphRegistration::reweightEdges(const DeformationGraph::State& state, doub
   // Documentation/Tracking.md).
   const auto& edges = Graph.edges();
   EdgeWeight.assign(2 * edges.size(), 1.0);
-  if (!(robustScale > 0))
+  const RobustKernel kernel{RobustKernel::Kind::Huber, robustScale};
+  if (!kernel.active())
     return;
   for (std::size_t index = 0; index < edges.size(); ++index)
     for (int direction = 0; direction < 2; ++direction)
-    {
-      const double u2 =
-          edgeResidual(state, index, direction).squaredNorm() / (robustScale * robustScale);
-      EdgeWeight[2 * index + direction] = std::min(1.0, 1.0 / std::sqrt(u2));
-    }
+      EdgeWeight[2 * index + direction] = kernel.weightOfSquaredRatio(
+          edgeResidual(state, index, direction).squaredNorm() / (kernel.scale * kernel.scale));
 }
 
 DeformationGraph::State GraphRegistration::retract(const DeformationGraph::State& state,
