@@ -3,11 +3,11 @@
 // and the subdivision rule.
 #include "dp/field/SurfaceReconstruction.h"
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/track/ClothEnergy.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/Tracker.h"
 
 #include "NumericChecks.h"

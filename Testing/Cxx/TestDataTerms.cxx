@@ -3,6 +3,8 @@
 // against finite differences; the coverage term's pull and followed matches.
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/LocalThickness.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/track/AndersonAcceleration.h"
@@ -14,9 +16,7 @@
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
-#include "dp/track/LocalThickness.h"
 #include "dp/track/Solvers.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
 #include "dp/track/TracePreconditioner.h"
 #include "dp/track/Tracker.h"

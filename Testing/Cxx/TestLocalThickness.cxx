@@ -2,6 +2,8 @@
 // LocalThickness: inner and outer medial radii, and the softening the tracker derives from them.
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/LocalThickness.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/track/AndersonAcceleration.h"
@@ -13,9 +15,7 @@
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
-#include "dp/track/LocalThickness.h"
 #include "dp/track/Solvers.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
 #include "dp/track/TracePreconditioner.h"
 #include "dp/track/Tracker.h"

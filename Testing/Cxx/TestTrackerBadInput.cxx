@@ -3,11 +3,11 @@
 // NaN positions (the sanitizer build runs these too).
 #include "dp/field/SurfaceReconstruction.h"
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/track/ClothEnergy.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/Tracker.h"
 
 #include "NumericChecks.h"

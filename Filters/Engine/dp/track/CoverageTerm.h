@@ -37,10 +37,10 @@
  */
 #pragma once
 
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/FrameSamples.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/TrackerOptions.h"
 
 #include <cstdint>

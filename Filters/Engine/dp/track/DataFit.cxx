@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/DataFit.h"
 
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/track/Parallel.h"
-#include "dp/track/SurfaceLocator.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameQuality.h"
 
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/track/Parallel.h"
-#include "dp/track/SurfaceLocator.h"
 
 #include <algorithm>
 #include <cmath>

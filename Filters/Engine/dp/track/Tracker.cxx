@@ -2,6 +2,8 @@
 #include "dp/track/Tracker.h"
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/LocalThickness.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/track/ColourTerm.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
@@ -11,13 +13,11 @@
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
-#include "dp/track/LocalThickness.h"
 #include "dp/track/MotionPredictor.h"
 #include "dp/track/Parallel.h"
 #include "dp/track/RecoveryPolicy.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
-#include "dp/track/SurfaceLocator.h"
 #include "dp/track/TemporalTerm.h"
 #include "dp/track/TrackerOptionTable.h"
 

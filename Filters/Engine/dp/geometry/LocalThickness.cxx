@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/track/LocalThickness.h"
+#include "dp/geometry/LocalThickness.h"
 
 #include "dp/detail/KdTree.h"
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/track/SurfaceLocator.h"
+#include "dp/geometry/SurfaceLocator.h"
 
 #include <algorithm>
 #include <cmath>
