@@ -4,12 +4,14 @@
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
 #include "dp/geometry/SurfaceLocator.h"
+#include "dp/track/ClothRegions.h"
 #include "dp/track/ColourTerm.h"
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
 #include "dp/track/FineSolver.h"
 #include "dp/track/FrameData.h"
+#include "dp/track/FrameOrientation.h"
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
@@ -43,61 +45,6 @@ constexpr double FineCoverageScale = 3.0;
 constexpr double FineCoverageReach = 8.0;
 // Robust scale, in voxels, of the distance term that chooses the coarse level's start.
 constexpr double StartChoiceScale = 3.0;
-// A sure vote on a data normal's orientation (Tracker::orientData): the last shape's surface
-// within this many voxels, at most 45 degrees from parallel or antiparallel (cosine).
-constexpr double SureReach = 2.0;
-constexpr double SureCosine = 0.7;
-
-// The cloth's stiffness by region (ThicknessSoftening, CreaseSoftening), from the template's
-// medial balls measured against its thickness (the 90th percentile of the inner radii). Thick
-// parts: per vertex a softness in [0, 1] (smoothstep of the inner radius between `from` and
-// `to`), per edge the mean of its ends', per hinge that of its shared edge. Creases: an edge
-// with an end whose outer radius is below `width` times the thickness has its stretch stiffness
-// multiplied by `stretch`.
-void setRegionStiffness(ClothEnergy& cloth, const TriangleMesh& mesh, const double* positions,
-                        const ThicknessSoftening& thick, const CreaseSoftening& creases)
-{
-  const bool softThick = thick.stretch != 1.0 || thick.bend != 1.0;
-  const bool softCreases = creases.stretch != 1.0 && creases.width > 0;
-  if (!softThick && !softCreases)
-    return;
-  const std::size_t n = mesh.numberOfVertices();
-  const double largest = 0.5 * boundingBoxDiagonal(positions, n);
-  const std::vector<double> ball = medialRadii(mesh, positions, largest, 0);
-  const std::vector<double> inner = smoothOverRings(mesh, ball, 3);
-  std::vector<double> sorted = inner;
-  const auto rank = sorted.begin() + static_cast<std::ptrdiff_t>(0.9 * static_cast<double>(n - 1));
-  std::nth_element(sorted.begin(), rank, sorted.end());
-  const double thickness = *rank;
-  std::vector<double> softness(n, 0.0);
-  if (softThick)
-    for (std::size_t v = 0; v < n; ++v)
-    {
-      // Thick only where the ball inside met the other side: where it met nothing (a sheet, a
-      // template open there) the surface is no trunk, and its stiffness is kept.
-      if (!(ball[v] < largest))
-        continue;
-      const double s =
-          std::clamp((inner[v] / thickness - thick.from) / (thick.to - thick.from), 0.0, 1.0);
-      softness[v] = s * s * (3 - 2 * s);
-    }
-  std::vector<bool> crease(n, false);
-  if (softCreases)
-  {
-    // One smoothing pass: a crease is a few vertices wide.
-    const std::vector<double> outer = medialRadii(mesh, positions, largest, 1, MedialSide::Outside);
-    for (std::size_t v = 0; v < n; ++v)
-      crease[v] = outer[v] < creases.width * thickness;
-  }
-  const auto blend = [](double factor, double s) { return 1.0 + s * (factor - 1.0); };
-  std::vector<double> stretch, bend;
-  for (const auto& e : mesh.edges())
-    stretch.push_back(blend(thick.stretch, 0.5 * (softness[e[0]] + softness[e[1]])) *
-                      (crease[e[0]] || crease[e[1]] ? creases.stretch : 1.0));
-  for (const auto& h : mesh.hinges())
-    bend.push_back(blend(thick.bend, 0.5 * (softness[h[0]] + softness[h[1]])));
-  cloth.setStiffnessScales(std::move(stretch), std::move(bend));
-}
 
 double elapsed(std::chrono::steady_clock::time_point since)
 {
@@ -195,7 +142,7 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
 {
   checkTrackerOptions(options);
   TemplateRest = Cloth.restState();
-  setRegionStiffness(Cloth, Mesh, Template.data(), options.softening, options.creases);
+  softenByRegion(Cloth, Mesh, Template.data(), options.softening, options.creases);
   Voxel = options.voxelSize > 0 ? options.voxelSize : boundingBoxDiagonal(Template) / 200.0;
   P->Fine = FineSolver::make(options, Mesh, Cloth.lengthScale());
   if (options.graph.enabled)
@@ -268,67 +215,7 @@ void Tracker::restartFrom(const std::vector<double>& positions)
 
 void Tracker::orientData(FrameData& frame) const
 {
-  // Normals estimated from points are oriented consistently within each part of the data but
-  // perhaps inward: compare them with the mesh's where the last shape meets the data and flip a
-  // part (all of them, for normals given) if most of its points disagree.
-  if (frame.spread().empty())
-    return;
-  const std::vector<double>& x = P->Predictor.empty() ? Template : P->Predictor.last();
-  const SurfaceLocator locator(Mesh, x.data());
-  std::vector<double> normals(x.size());
-  Mesh.vertexNormals(x.data(), normals.data());
-  const auto& tri = Mesh.triangles();
-  const std::size_t parts = std::max<std::size_t>(1, frame.numberOfParts());
-  // Each subsample point's votes (searched in parallel, counted in order): +1 agrees, -1
-  // disagrees, 0 no surface near. On its part: any surface within 3 voxels. Within its part
-  // (the sure vote): a surface within 2 voxels, at most 45 degrees from parallel either way.
-  const std::vector<std::uint32_t>& spread = frame.spread();
-  std::vector<std::int8_t> vote(spread.size(), 0), sure(spread.size(), 0);
-  forEachIndex(spread.size(),
-               [&](std::size_t i)
-               {
-                 const std::uint32_t p = spread[i];
-                 const SurfaceLocator::Hit hit = locator.closest(frame.point(p), 3 * Voxel);
-                 if (hit.triangle < 0)
-                   return;
-                 double n[3] = {0, 0, 0};
-                 for (int c = 0; c < 3; ++c)
-                   for (int k = 0; k < 3; ++k)
-                     n[k] += hit.barycentric[c] * normals[3 * tri[3 * hit.triangle + c] + k];
-                 const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-                 const double along = n[0] * frame.normal(p)[0] + n[1] * frame.normal(p)[1] +
-                                      n[2] * frame.normal(p)[2];
-                 vote[i] = along >= 0 ? 1 : -1;
-                 if (hit.squaredDistance <= SureReach * SureReach * Voxel * Voxel &&
-                     std::abs(along) >= SureCosine * length)
-                   sure[i] = vote[i];
-               });
-  std::vector<double> agree(parts, 0), disagree(parts, 0);
-  for (std::size_t i = 0; i < spread.size(); ++i)
-  {
-    const std::uint32_t part = frame.numberOfParts() > 0 ? frame.part(spread[i]) : 0;
-    if (vote[i] != 0)
-      (vote[i] > 0 ? agree : disagree)[part] += 1;
-  }
-  for (std::uint32_t part = 0; part < parts; ++part)
-    if (disagree[part] > agree[part])
-    {
-      if (frame.numberOfParts() > 0)
-        frame.flipNormals(part);
-      else
-        frame.flipNormals();
-    }
-  if (frame.numberOfParts() == 0)
-    return; // normals given: no orientation tree to mend
-  // Then within each part: a branch of the orientation turned at a sharp edge (a foot's rim),
-  // judged by the sure votes as the normals now stand.
-  for (std::size_t i = 0; i < spread.size(); ++i)
-  {
-    const std::uint32_t part = frame.part(spread[i]);
-    if (disagree[part] > agree[part])
-      sure[i] = static_cast<std::int8_t>(-sure[i]);
-  }
-  frame.mendOrientation(sure);
+  orientToShape(frame, Mesh, P->Predictor.empty() ? Template : P->Predictor.last(), Voxel);
 }
 
 void Tracker::startState(Start start, Attempt& a) const
