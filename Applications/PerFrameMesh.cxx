@@ -70,35 +70,30 @@ private:
   std::map<std::array<long long, 3>, std::vector<std::size_t>> Cells;
 };
 
-void addDefects(PointCloud& mesh, double diagonal)
+// Appends a copy of vertex v (its normal and colour too) and returns its index.
+std::int64_t copyVertex(PointCloud& mesh, std::int64_t v)
 {
-  const auto n = static_cast<std::int64_t>(mesh.numberOfPoints());
   const int components = mesh.colorComponents;
   // Copies first: inserting a vector's own elements into it may move them.
-  const auto copyVertex = [&](std::int64_t v)
+  const std::vector<double> p(&mesh.points[3 * v], &mesh.points[3 * v] + 3);
+  mesh.points.insert(mesh.points.end(), p.begin(), p.end());
+  if (!mesh.normals.empty())
   {
-    const std::vector<double> p(&mesh.points[3 * v], &mesh.points[3 * v] + 3);
-    mesh.points.insert(mesh.points.end(), p.begin(), p.end());
-    if (!mesh.normals.empty())
-    {
-      const std::vector<float> q(&mesh.normals[3 * v], &mesh.normals[3 * v] + 3);
-      mesh.normals.insert(mesh.normals.end(), q.begin(), q.end());
-    }
-    if (components)
-    {
-      const std::vector<std::uint8_t> c(&mesh.colors[components * v],
-                                        &mesh.colors[components * v] + components);
-      mesh.colors.insert(mesh.colors.end(), c.begin(), c.end());
-    }
-    return static_cast<std::int64_t>(mesh.numberOfPoints() - 1);
-  };
-  // Duplicate vertices: the first corner of faces 0..4 moved to a copy of itself.
-  for (std::size_t f = 0; f < 5 && f < mesh.numberOfFaces(); ++f)
-  {
-    std::int64_t& corner = mesh.faceConnectivity[static_cast<std::size_t>(mesh.faceOffsets[f])];
-    corner = copyVertex(corner);
+    const std::vector<float> q(&mesh.normals[3 * v], &mesh.normals[3 * v] + 3);
+    mesh.normals.insert(mesh.normals.end(), q.begin(), q.end());
   }
-  // Triangles without area: repeated corners, and collinear ones (an edge's midpoint).
+  if (components)
+  {
+    const std::vector<std::uint8_t> c(&mesh.colors[components * v],
+                                      &mesh.colors[components * v] + components);
+    mesh.colors.insert(mesh.colors.end(), c.begin(), c.end());
+  }
+  return static_cast<std::int64_t>(mesh.numberOfPoints() - 1);
+}
+
+// Triangles without area: repeated corners, and collinear ones (an edge's midpoint).
+void addDegenerateTriangles(PointCloud& mesh)
+{
   const std::int64_t a = mesh.faceConnectivity[0], b = mesh.faceConnectivity[1];
   std::int64_t ids[3] = {a, b, b};
   mesh.addFace(ids, 3);
@@ -106,23 +101,27 @@ void addDefects(PointCloud& mesh, double diagonal)
   ids[1] = a;
   ids[2] = a;
   mesh.addFace(ids, 3);
-  const std::int64_t middle = copyVertex(a);
+  const std::int64_t middle = copyVertex(mesh, a);
   for (int k = 0; k < 3; ++k)
     mesh.points[3 * middle + k] = 0.5 * (mesh.points[3 * a + k] + mesh.points[3 * b + k]);
   ids[0] = a;
   ids[1] = b;
   ids[2] = middle;
   mesh.addFace(ids, 3);
-  // A small stray part: a tetrahedron beside the surface's bounding box.
+}
+
+// A small stray part: a tetrahedron beside the bounding box of the first `n` vertices.
+void addStrayPart(PointCloud& mesh, std::int64_t n, double diagonal)
+{
   double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
   for (std::size_t i = 0; i < static_cast<std::size_t>(n); ++i)
     for (int k = 0; k < 3; ++k)
       lo[k] = std::min(lo[k], mesh.points[3 * i + k]);
   const double size = 0.01 * diagonal;
   const double corner[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  const std::int64_t first = copyVertex(0);
+  const std::int64_t first = copyVertex(mesh, 0);
   for (int c = 1; c < 4; ++c)
-    copyVertex(0);
+    copyVertex(mesh, 0);
   for (int c = 0; c < 4; ++c)
     for (int k = 0; k < 3; ++k)
       mesh.points[3 * (first + c) + k] = lo[k] - 0.05 * diagonal + size * corner[c][k];
@@ -132,6 +131,20 @@ void addDefects(PointCloud& mesh, double diagonal)
     const std::int64_t t[3] = {first + f[0], first + f[1], first + f[2]};
     mesh.addFace(t, 3);
   }
+}
+
+// The defects marching cubes leaves: duplicate vertices, triangles without area, a stray part.
+void addDefects(PointCloud& mesh, double diagonal)
+{
+  const auto n = static_cast<std::int64_t>(mesh.numberOfPoints());
+  // Duplicate vertices: the first corner of faces 0..4 moved to a copy of itself.
+  for (std::size_t f = 0; f < 5 && f < mesh.numberOfFaces(); ++f)
+  {
+    std::int64_t& corner = mesh.faceConnectivity[static_cast<std::size_t>(mesh.faceOffsets[f])];
+    corner = copyVertex(mesh, corner);
+  }
+  addDegenerateTriangles(mesh);
+  addStrayPart(mesh, n, diagonal);
 }
 } // namespace
 

@@ -183,11 +183,9 @@ long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 
 namespace
 {
-void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
-                std::size_t frame)
+// The tracked positions on the template's triangles.
+void fillGeometry(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult& r)
 {
-  vtkCellArray* polys = take.polys;
-  const std::vector<double>& rest = *take.rest;
   const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
   vtkNew<vtkDoubleArray> coordinates;
   coordinates->SetNumberOfComponents(3);
@@ -197,7 +195,13 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
   points->SetData(coordinates);
   output->SetPoints(points);
   output->SetPolys(polys);
+}
 
+// Per vertex: Displacement (from the template), Residual, Frozen, Rejected, and Colors where the
+// points carry colour (then the active scalars, which ParaView shows as colours).
+void fillPointData(vtkPolyData* output, const std::vector<double>& rest, const dp::FrameResult& r)
+{
+  const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
   vtkNew<vtkFloatArray> displacement;
   displacement->SetName("Displacement");
   displacement->SetNumberOfComponents(3);
@@ -223,8 +227,6 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
   pd->SetVectors(displacement);
   if (r.colours.size() == 3 * static_cast<std::size_t>(n))
   {
-    // The points' colour carried onto the mesh: the active scalars (bytes of 3 components,
-    // which ParaView shows as colours).
     vtkNew<vtkUnsignedCharArray> colours;
     colours->SetName("Colors");
     colours->SetNumberOfComponents(3);
@@ -237,12 +239,17 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
     pd->SetScalars(residual);
   pd->AddArray(frozen);
   pd->AddArray(rejected);
+}
 
+// Field data: the frame's figures (dp::FrameFigures), its well-spread subsample (what a
+// compressor downstream judges its error by with DataReach: vtkPCACompressFilter,
+// DISTANCE_TO_DATA), and how the template was made.
+void fillFieldData(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
+                   std::size_t frame)
+{
   const dp::FrameFigures figures = dp::FrameFigures::of(r, frame, take.reach);
   for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
     vtkDP::addFieldValue(output, field.name, figures.*field.value);
-  // The frame's well-spread subsample (and DataReach, above): what a compressor downstream
-  // judges its error by (vtkPCACompressFilter, DISTANCE_TO_DATA).
   vtkNew<vtkFloatArray> samples;
   samples->SetName("DataSamples");
   samples->SetNumberOfComponents(3);
@@ -253,6 +260,14 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
   made->SetName("Template");
   made->InsertNextValue(*take.templateMade);
   output->GetFieldData()->AddArray(made);
+}
+
+void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
+                std::size_t frame)
+{
+  fillGeometry(output, take.polys, r);
+  fillPointData(output, *take.rest, r);
+  fillFieldData(output, take, r, frame);
 }
 } // namespace
 

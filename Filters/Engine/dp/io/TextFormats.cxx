@@ -41,6 +41,40 @@ struct TextTable
   std::size_t rows() const { return columns ? values.size() / columns : 0; }
 };
 
+// The line's tokens and, where they are numbers, their values; false when one is not a number.
+bool splitRow(std::string_view line, std::vector<double>& row, std::vector<std::string>& tokens)
+{
+  const bool comma = line.find(',') != std::string_view::npos;
+  row.clear();
+  tokens.clear();
+  std::string_view rest = line;
+  bool numeric = true;
+  for (auto token = detail::nextToken(rest, comma); !token.empty();
+       token = detail::nextToken(rest, comma))
+  {
+    double v = 0;
+    tokens.emplace_back(token);
+    if (detail::parseNumber(token, v))
+      row.push_back(v);
+    else
+      numeric = false;
+  }
+  return numeric;
+}
+
+// The first row of numbers sets the column count: at least x y z, and the header's if any.
+void setColumns(const std::string& path, std::size_t lineNumber, std::size_t columns, TextTable& t)
+{
+  t.columns = columns;
+  if (t.columns < 3)
+    throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
+                              std::to_string(t.columns) + " values; at least x y z are needed");
+  if (!t.header.empty() && t.header.size() != t.columns)
+    throw FileError(path, "the header names " + std::to_string(t.header.size()) +
+                              " columns but line " + std::to_string(lineNumber) + " has " +
+                              std::to_string(t.columns));
+}
+
 TextTable readTable(const std::string& path, std::string_view text, bool isPts)
 {
   TextTable t;
@@ -48,26 +82,13 @@ TextTable readTable(const std::string& path, std::string_view text, bool isPts)
   std::size_t lineNumber = 0;
   bool sawData = false;
   std::vector<double> row;
+  std::vector<std::string> tokens;
   while (detail::nextLine(text, line))
   {
     ++lineNumber;
     if (isCommentLine(line))
       continue;
-    const bool comma = line.find(',') != std::string_view::npos;
-    row.clear();
-    std::string_view rest = line;
-    bool numeric = true;
-    std::vector<std::string> tokens;
-    for (auto token = detail::nextToken(rest, comma); !token.empty();
-         token = detail::nextToken(rest, comma))
-    {
-      double v = 0;
-      tokens.emplace_back(token);
-      if (detail::parseNumber(token, v))
-        row.push_back(v);
-      else
-        numeric = false;
-    }
+    const bool numeric = splitRow(line, row, tokens);
     if (!sawData && !numeric && t.header.empty())
     {
       // A header line naming the columns (CSV style).
@@ -91,14 +112,7 @@ TextTable readTable(const std::string& path, std::string_view text, bool isPts)
     }
     if (!sawData)
     {
-      t.columns = row.size();
-      if (t.columns < 3)
-        throw FileError(path, "line " + std::to_string(lineNumber) + " has " +
-                                  std::to_string(t.columns) + " values; at least x y z are needed");
-      if (!t.header.empty() && t.header.size() != t.columns)
-        throw FileError(path, "the header names " + std::to_string(t.header.size()) +
-                                  " columns but line " + std::to_string(lineNumber) + " has " +
-                                  std::to_string(t.columns));
+      setColumns(path, lineNumber, row.size(), t);
       sawData = true;
     }
     if (row.size() != t.columns)
