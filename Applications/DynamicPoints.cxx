@@ -9,6 +9,8 @@
 #include "MainJob.h"
 #include "TrackerOptionFlags.h"
 
+#include "dp/compress/PcaCompression.h"
+#include "dp/field/TemplateMesh.h"
 #include "dp/track/FrameFigures.h"
 
 #include <nlohmann/json.hpp>
@@ -78,6 +80,8 @@ Options:
   --quiet             no per-frame table and no progress bar
   --describe-report   print the per-frame figures of report.json (and of the track
                       filter's field data) as a Markdown table, and exit
+  --describe-limits   print the ranges of --vertices, --error-target and --fit-growth
+                      (also the ParaView properties') as JSON, and exit
 )";
 
 const char* const UsageEnd = R"(  -h, --help          show this help
@@ -91,6 +95,25 @@ interrupted.
 extern "C" void onInterrupt(int)
 {
   dp::cli::Interrupted = 1;
+}
+
+// The ranges the main job, the filters and their ParaView properties share besides the tracker's
+// options (--describe-limits; a test checks the plugin's XML against them).
+std::string limitsJson()
+{
+  const nlohmann::json limits = {{"templateVertices",
+                                  {{"default", dp::TemplateOptions{}.targetVertices},
+                                   {"minimum", dp::MinimumTemplateVertices},
+                                   {"maximum", dp::MaximumTemplateVertices}}},
+                                 {"karniGotsmanTarget",
+                                  {{"default", dp::PcaOptions{}.target},
+                                   {"minimum", dp::MinimumKarniGotsmanTarget},
+                                   {"maximum", dp::MaximumKarniGotsmanTarget}}},
+                                 {"fitGrowth",
+                                  {{"default", Settings{}.fitGrowth},
+                                   {"minimum", dp::MinimumFitGrowth},
+                                   {"maximum", dp::MaximumFitGrowth}}}};
+  return limits.dump(2) + "\n";
 }
 
 Settings parse(int argc, char** argv, bool& help)
@@ -118,13 +141,17 @@ Settings parse(int argc, char** argv, bool& help)
                                           : vtkDeformableTrackFilter::TEMPLATE_AUTO;
     }
     else if (arg == "--vertices")
-      s.vertices = static_cast<int>(parseCount(arg, optionValue(argc, argv, i), 20, 10000000));
+      s.vertices =
+          static_cast<int>(parseCount(arg, optionValue(argc, argv, i), dp::MinimumTemplateVertices,
+                                      dp::MaximumTemplateVertices));
     else if (arg == "--frames")
       s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
     else if (arg == "--error-target")
-      s.errorTarget = parseDouble(arg, optionValue(argc, argv, i), 1e-4, 50);
+      s.errorTarget = parseDouble(arg, optionValue(argc, argv, i), dp::MinimumKarniGotsmanTarget,
+                                  dp::MaximumKarniGotsmanTarget);
     else if (arg == "--fit-growth")
-      s.fitGrowth = parseDouble(arg, optionValue(argc, argv, i), 0.01, 1000);
+      s.fitGrowth =
+          parseDouble(arg, optionValue(argc, argv, i), dp::MinimumFitGrowth, dp::MaximumFitGrowth);
     else if (arg == "--quiet")
       s.quiet = true;
     else if (arg == "--meshopt")
@@ -133,6 +160,8 @@ Settings parse(int argc, char** argv, bool& help)
       s.printOptions = "values";
     else if (arg == "--describe-report")
       s.printOptions = "report";
+    else if (arg == "--describe-limits")
+      s.printOptions = "limits";
     else if (arg == "--describe-options")
     {
       s.printOptions = optionValue(argc, argv, i);
@@ -297,6 +326,7 @@ int run(int argc, char** argv, dp::cli::Ranks& ranks)
       std::cout << (settings.printOptions == "values"   ? dp::trackerOptionsJson(settings.tracker)
                     : settings.printOptions == "json"   ? dp::trackerOptionTableJson()
                     : settings.printOptions == "report" ? dp::FrameFigures::markdown()
+                    : settings.printOptions == "limits" ? limitsJson()
                                                         : dp::trackerOptionTableMarkdown());
     return 0;
   }

@@ -2,6 +2,7 @@
 // The main job on one input: read, track, write frame by frame, compress, report.
 #pragma once
 
+#include "dp/field/TemplateMesh.h"
 #include "dp/track/TrackerOptions.h"
 
 #include "vtkDeformableTrackFilter.h"
@@ -16,7 +17,7 @@ struct Settings
 {
   std::vector<std::string> inputs; // as given; a batch when more than one
   std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
-  int vertices = 1000;
+  int vertices = static_cast<int>(dp::TemplateOptions{}.targetVertices);
   int templateFrom = vtkDeformableTrackFilter::TEMPLATE_AUTO;
   long long frames = 0;   // 0: all
   double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)

@@ -95,6 +95,17 @@ vtkDeformableTrackFilter::vtkDeformableTrackFilter() : Internal(new Internals)
   this->TemplateSource = TEMPLATE_AUTO;
 }
 
+void vtkDeformableTrackFilter::SetTemplateVertices(int vertices)
+{
+  const int clamped = std::clamp(vertices, static_cast<int>(dp::MinimumTemplateVertices),
+                                 static_cast<int>(dp::MaximumTemplateVertices));
+  if (clamped != this->TemplateVertices)
+  {
+    this->TemplateVertices = clamped;
+    this->Modified();
+  }
+}
+
 void vtkDeformableTrackFilter::SetTrackerOption(const char* name, double value)
 {
   try

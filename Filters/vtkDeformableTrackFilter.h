@@ -332,7 +332,7 @@ public:
    *  What was done is in the output's field data "Template". */
   vtkSetClampMacro(TemplateSource, int, TEMPLATE_AUTO, TEMPLATE_FROM_POINTS);
   vtkGetMacro(TemplateSource, int);
-  vtkSetClampMacro(TemplateVertices, int, 20, 10000000);
+  void SetTemplateVertices(int vertices); // clamped to the engine's range (20 to 10 million)
   vtkGetMacro(TemplateVertices, int);
   ///@}
 

@@ -26,6 +26,12 @@ def describe_options(form):
                           text=True).stdout
 
 
+def describe_options_limits():
+    exe = os.path.join(os.environ["DP_BIN_DIR"], "dynamicpoints")
+    return subprocess.run([exe, "--describe-limits"], check=True, capture_output=True,
+                          text=True).stdout
+
+
 def close(a, b):
     return abs(float(a) - float(b)) <= 1e-12 * max(1.0, abs(float(b)))
 
@@ -115,6 +121,24 @@ class PluginDefaults(unittest.TestCase):
                     else:
                         self.assertIsNotNone(domain.get("max"), "maximum")
                         self.assertTrue(close(domain.get("max"), row["maximum"]), "maximum")
+
+    def test_the_shared_ranges_are_the_engines(self):
+        # The template's vertex count and the KG target: one range, the engine's, in the XML.
+        limits = json.loads(describe_options_limits())
+        root = ET.parse(TRACK_XML).getroot()
+        vertices = next(p for p in root.iter("IntVectorProperty")
+                        if p.get("name") == "TemplateVertices")
+        domain = vertices.find("IntRangeDomain")
+        self.assertEqual(int(vertices.get("default_values")), limits["templateVertices"]["default"])
+        self.assertEqual(int(domain.get("min")), limits["templateVertices"]["minimum"])
+        self.assertEqual(int(domain.get("max")), limits["templateVertices"]["maximum"])
+        targets = [p for p in ET.parse(os.path.join(PLUGIN_DIR, "PCACompressFilter.xml"))
+                   .getroot().iter("DoubleVectorProperty") if p.get("name") == "ErrorTarget"]
+        self.assertEqual(len(targets), 3)  # the filter and the two writers
+        for prop in targets:
+            kg = limits["karniGotsmanTarget"]
+            self.assertTrue(close(prop.find("DoubleRangeDomain").get("min"), kg["minimum"]))
+            self.assertTrue(close(prop.get("default_values"), kg["default"]))
 
     def test_the_option_documentation_is_the_table(self):
         with open(OPTIONS_DOC, encoding="utf-8") as f:

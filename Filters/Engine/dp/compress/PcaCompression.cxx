@@ -34,11 +34,13 @@ void validateInput(const double* positions, std::size_t vertices, std::size_t fr
   if (vertices == 0 || frames == 0)
     throw std::invalid_argument("the sequence has no " +
                                 std::string(vertices == 0 ? "vertices" : "frames"));
+  const bool kg = options.measure == PcaErrorMeasure::KarniGotsman;
   if (!(options.target > 0) || !std::isfinite(options.target) ||
-      (options.measure == PcaErrorMeasure::KarniGotsman && options.target >= 100) ||
+      (kg && !(options.target >= MinimumKarniGotsmanTarget &&
+               options.target <= MaximumKarniGotsmanTarget)) ||
       (options.measure == PcaErrorMeasure::MaxVertexError && options.target >= 1))
     throw std::invalid_argument("error target " + std::to_string(options.target) +
-                                " is out of range (KG: (0, 100) percent; max vertex error: "
+                                " is out of range (KG: [1e-4, 50] percent; max vertex error: "
                                 "(0, 1) of the diagonal; RMS deviation: > 0)");
   if (!times.empty() && times.size() != frames)
     throw std::invalid_argument("times: " + std::to_string(times.size()) + " values for " +

@@ -65,6 +65,16 @@ enum class PcaErrorMeasure
   RmsDeviation
 };
 
+/** The KG targets a compression may ask for, in percent: below 1e-4 % the coding is lossless
+ *  in practice, above 50 % little of the motion is left. The engine, the filters' and writers'
+ *  ParaView properties and the command line take this range (a test checks the XML). */
+constexpr double MinimumKarniGotsmanTarget = 1e-4;
+constexpr double MaximumKarniGotsmanTarget = 50;
+/** The growth of the distance to the data a compression may allow, in percent
+ *  (dp::compressAgainstData, DISTANCE_TO_DATA, the main job's --fit-growth). */
+constexpr double MinimumFitGrowth = 0.01;
+constexpr double MaximumFitGrowth = 1000;
+
 struct PcaOptions
 {
   PcaLayout layout = PcaLayout::Shapes;

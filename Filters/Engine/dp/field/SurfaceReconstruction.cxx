@@ -398,10 +398,12 @@ void validateReconstruction(const double* points, const float* normals, std::siz
   if (count < 16)
     throw std::invalid_argument("surface reconstruction needs at least 16 points, not " +
                                 std::to_string(count));
-  if (options.targetVertices < 20)
-    throw std::invalid_argument("surface reconstruction: a target of " +
-                                std::to_string(options.targetVertices) +
-                                " vertices is too few (at least 20)");
+  if (options.targetVertices < MinimumTemplateVertices ||
+      options.targetVertices > MaximumTemplateVertices)
+    throw std::invalid_argument(
+        "surface reconstruction: a target of " + std::to_string(options.targetVertices) +
+        " vertices is out of range [" + std::to_string(MinimumTemplateVertices) + ", " +
+        std::to_string(MaximumTemplateVertices) + "]");
   if (!(options.voxelSize >= 0 && std::isfinite(options.voxelSize)) ||
       !(options.holeReach >= 0 && std::isfinite(options.holeReach)))
     throw std::invalid_argument("surface reconstruction: voxelSize and holeReach must be finite "

@@ -52,6 +52,10 @@
 namespace dp
 {
 
+/** The vertex counts a template may ask for (reconstruction, remeshing): the engine, the filter,
+ *  its ParaView property and the command line take this range (a test checks the XML). */
+constexpr std::size_t MinimumTemplateVertices = 20;
+constexpr std::size_t MaximumTemplateVertices = 10000000;
 struct ReconstructionOptions
 {
   std::size_t targetVertices = 1000;        // wanted vertex count
