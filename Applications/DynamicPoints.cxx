@@ -116,6 +116,27 @@ std::string limitsJson()
   return limits.dump(2) + "\n";
 }
 
+// The flags that print a description instead of running; false for another flag.
+bool parsePrintFlag(const std::string& arg, int argc, char** argv, int& i, Settings& s)
+{
+  using dp::cli::UsageError;
+  if (arg == "--print-options")
+    s.printOptions = "values";
+  else if (arg == "--describe-report")
+    s.printOptions = "report";
+  else if (arg == "--describe-limits")
+    s.printOptions = "limits";
+  else if (arg == "--describe-options")
+  {
+    s.printOptions = dp::cli::optionValue(argc, argv, i);
+    if (s.printOptions != "json" && s.printOptions != "markdown")
+      throw UsageError("--describe-options wants json or markdown, not '" + s.printOptions + "'");
+  }
+  else
+    return false;
+  return true;
+}
+
 Settings parse(int argc, char** argv, bool& help)
 {
   using namespace dp::cli;
@@ -156,18 +177,8 @@ Settings parse(int argc, char** argv, bool& help)
       s.quiet = true;
     else if (arg == "--meshopt")
       s.meshopt = true;
-    else if (arg == "--print-options")
-      s.printOptions = "values";
-    else if (arg == "--describe-report")
-      s.printOptions = "report";
-    else if (arg == "--describe-limits")
-      s.printOptions = "limits";
-    else if (arg == "--describe-options")
-    {
-      s.printOptions = optionValue(argc, argv, i);
-      if (s.printOptions != "json" && s.printOptions != "markdown")
-        throw UsageError("--describe-options wants json or markdown, not '" + s.printOptions + "'");
-    }
+    else if (parsePrintFlag(arg, argc, argv, i, s))
+      continue;
     else if (parseTrackerOptionFlag(arg, argc, argv, i, s.tracker))
       continue;
     else if (!arg.empty() && arg[0] == '-')
