@@ -10,12 +10,41 @@
 
 #include <random>
 
+namespace
+{
+// Adds 200 random symmetric outer products on `pairs` to both the sparse and the dense matrix:
+// (a, b) gets w u v^T, (b, a) its transpose, a diagonal block w u u^T.
+void addRandomOuters(const std::vector<std::array<std::int64_t, 2>>& pairs, std::mt19937_64& rng,
+                     dp::detail::BlockSparseMatrix& sparse, Eigen::MatrixXd& dense)
+{
+  std::normal_distribution<double> value;
+  for (int k = 0; k < 200; ++k)
+  {
+    const auto& p = pairs[static_cast<std::size_t>(k) % pairs.size()];
+    const Eigen::Vector3d u(value(rng), value(rng), value(rng)),
+        v(value(rng), value(rng), value(rng));
+    const double w = value(rng);
+    // Symmetric: (a, b) gets w u v^T, (b, a) its transpose; a diagonal block gets w u u^T.
+    if (p[0] == p[1])
+    {
+      sparse.addOuter(p[0], p[0], u.data(), u.data(), w);
+      dense.block<3, 3>(3 * p[0], 3 * p[0]) += w * u * u.transpose();
+    }
+    else
+    {
+      sparse.addOuter(sparse.slotOf(p[0], p[1]), u.data(), v.data(), w);
+      dense.block<3, 3>(3 * p[0], 3 * p[1]) += w * u * v.transpose();
+      dense.block<3, 3>(3 * p[1], 3 * p[0]) += w * v * u.transpose();
+    }
+  }
+}
+} // namespace
+
 TEST(BlockSparseMatrix, AssemblesLikeADenseMatrix)
 {
   const std::size_t blocks = 12;
   std::mt19937_64 rng(7);
   std::uniform_int_distribution<int> pick(0, blocks - 1);
-  std::normal_distribution<double> value;
   std::vector<std::array<std::int64_t, 2>> pairs;
   for (int k = 0; k < 30; ++k)
     pairs.push_back({pick(rng), pick(rng)}); // repeats, both orders and self pairs included
@@ -25,25 +54,7 @@ TEST(BlockSparseMatrix, AssemblesLikeADenseMatrix)
   {
     sparse.setZero();
     dense.setZero();
-    for (int k = 0; k < 200; ++k)
-    {
-      const auto& p = pairs[static_cast<std::size_t>(k) % pairs.size()];
-      const Eigen::Vector3d u(value(rng), value(rng), value(rng)),
-          v(value(rng), value(rng), value(rng));
-      const double w = value(rng);
-      // Symmetric: (a, b) gets w u v^T, (b, a) its transpose; a diagonal block gets w u u^T.
-      if (p[0] == p[1])
-      {
-        sparse.addOuter(p[0], p[0], u.data(), u.data(), w);
-        dense.block<3, 3>(3 * p[0], 3 * p[0]) += w * u * u.transpose();
-      }
-      else
-      {
-        sparse.addOuter(sparse.slotOf(p[0], p[1]), u.data(), v.data(), w);
-        dense.block<3, 3>(3 * p[0], 3 * p[1]) += w * u * v.transpose();
-        dense.block<3, 3>(3 * p[1], 3 * p[0]) += w * v * u.transpose();
-      }
-    }
+    addRandomOuters(pairs, rng, sparse, dense);
     // A symmetric block added to a diagonal block (as the data terms do).
     const Eigen::Matrix3d R = Eigen::Matrix3d::Random();
     const Eigen::Matrix3d M = R + R.transpose();

@@ -52,39 +52,51 @@ class Terms : public ::testing::TestWithParam<int>
 {
 };
 
+// Term number `kind` of the suite on frame f: 0 internal, 1 distance to the planes (squared), 2
+// the paper's distance to the points (linear), 3 robust, 4 points -> mesh, 5 temporal.
+std::unique_ptr<dp::EnergyTerm> termOf(int kind, const Frame& f, const dp::ClothEnergy& cloth,
+                                       const std::vector<double>& target)
+{
+  dp::DistanceTermOptions d;
+  d.normalTestDegrees = 180;
+  dp::CoverageOptions c;
+  c.robustScale = 3 * f.voxel;
+  switch (kind)
+  {
+  case 0:
+    return std::make_unique<dp::InternalEnergyTerm>(cloth);
+  case 1:
+    return std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+  case 2:
+    d.measure = dp::DistanceMeasure::Points;
+    d.squared = false;
+    return std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+  case 3:
+    d.robustScale = 2 * f.voxel;
+    return std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
+  case 4:
+    return std::make_unique<dp::CoverageTerm>(f.data->spreadSamples(), f.mesh, f.L, c);
+  default:
+    return std::make_unique<dp::TemporalTerm>(target, f.mass, 3.0, f.L, f.voxel);
+  }
+}
+
+// The model's matrix as a dense symmetric matrix (it stores its lower triangle, diagonal blocks
+// whole: that triangle, mirrored).
+Eigen::MatrixXd denseModel(const dp::detail::BlockSparseMatrix& H)
+{
+  const Eigen::MatrixXd lower = Eigen::MatrixXd(H.matrix()).triangularView<Eigen::Lower>();
+  Eigen::MatrixXd dense = lower + lower.transpose();
+  dense.diagonal() /= 2;
+  return dense;
+}
+
 TEST_P(Terms, GradientAndModelMatchFiniteDifferences)
 {
   Frame f(tube().positions);
   const std::vector<double> target = jiggle(f.shape.positions, 0.01, 4);
   const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{1, 0.1, 0.5});
-  std::unique_ptr<dp::EnergyTerm> term;
-  dp::DistanceTermOptions d;
-  d.normalTestDegrees = 180;
-  dp::CoverageOptions c;
-  c.robustScale = 3 * f.voxel;
-  switch (GetParam())
-  {
-  case 0:
-    term = std::make_unique<dp::InternalEnergyTerm>(cloth);
-    break;
-  case 1: // the distance to the data's tangent planes, squared
-    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
-    break;
-  case 2: // the paper's distance to the points, linear
-    d.measure = dp::DistanceMeasure::Points;
-    d.squared = false;
-    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
-    break;
-  case 3: // robust weights
-    d.robustScale = 2 * f.voxel;
-    term = std::make_unique<dp::DistanceTerm>(*f.data, f.mesh, f.mass, f.L, d);
-    break;
-  case 4:
-    term = std::make_unique<dp::CoverageTerm>(f.data->spreadSamples(), f.mesh, f.L, c);
-    break;
-  default:
-    term = std::make_unique<dp::TemporalTerm>(target, f.mass, 3.0, f.L, f.voxel);
-  }
+  const std::unique_ptr<dp::EnergyTerm> term = termOf(GetParam(), f, cloth, target);
   const std::vector<double> x = jiggle(f.shape.positions, 0.01, 9);
   term->decide(x.data());
   term->linearise(x.data());
@@ -111,11 +123,7 @@ TEST_P(Terms, GradientAndModelMatchFiniteDifferences)
   else
     EXPECT_LT((a - b).norm(), 1e-9 * b.norm());
   // The model's matrix is positive semidefinite (a sum of J^T W J).
-  // The matrix stores its lower triangle (diagonal blocks whole): its scalar lower triangle,
-  // mirrored, is the full matrix.
-  const Eigen::MatrixXd lower = Eigen::MatrixXd(H.matrix()).triangularView<Eigen::Lower>();
-  Eigen::MatrixXd dense = lower + lower.transpose();
-  dense.diagonal() /= 2;
+  const Eigen::MatrixXd dense = denseModel(H);
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(dense);
   EXPECT_GT(eigen.eigenvalues().minCoeff(), -1e-9 * eigen.eigenvalues().maxCoeff());
   // Points -> mesh and temporal terms are quadratic for fixed correspondences: their model is

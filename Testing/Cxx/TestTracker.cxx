@@ -195,22 +195,21 @@ TEST(Tracker, AfterTheGraphTheFineLevelTakesAFewStepsUnlessAFrameFails)
   EXPECT_GT(longer, 0);
 }
 
-TEST(Tracker, FollowsARigidMotionWithTheDefaults)
+// A lumpy closed shape (no motion along its surface leaves it unchanged, unlike a sphere or a
+// round tube): a lat-long grid of 40 x 60 vertices.
+Shape lumpyShape()
 {
-  // A lumpy closed shape (no motion along its surface leaves it unchanged, unlike a sphere or a
-  // round tube), its template reconstructed from frame 0's points as for data without one, then
-  // turned and moved a little more each frame: an isometry, which the default energy holds.
   const std::size_t rings = 40, segments = 60;
-  std::vector<double> shape;
-  std::vector<std::int64_t> triangles;
+  Shape s;
   for (std::size_t i = 0; i <= rings; ++i)
     for (std::size_t j = 0; j < segments; ++j)
     {
       const double theta = M_PI * static_cast<double>(i) / rings;
       const double phi = 2 * M_PI * static_cast<double>(j) / segments;
       const double r = 1 + 0.2 * std::sin(3 * theta) * std::cos(2 * phi) + 0.1 * std::cos(5 * phi);
-      shape.insert(shape.end(), {r * std::sin(theta) * std::cos(phi),
-                                 0.8 * r * std::sin(theta) * std::sin(phi), r * std::cos(theta)});
+      s.positions.insert(s.positions.end(),
+                         {r * std::sin(theta) * std::cos(phi),
+                          0.8 * r * std::sin(theta) * std::sin(phi), r * std::cos(theta)});
     }
   for (std::size_t i = 0; i < rings; ++i)
     for (std::size_t j = 0; j < segments; ++j)
@@ -220,22 +219,35 @@ TEST(Tracker, FollowsARigidMotionWithTheDefaults)
       const auto c = a + static_cast<std::int64_t>(segments);
       const auto d = b + static_cast<std::int64_t>(segments);
       if (i > 0)
-        triangles.insert(triangles.end(), {a, b, d});
+        s.triangles.insert(s.triangles.end(), {a, b, d});
       if (i + 1 < rings)
-        triangles.insert(triangles.end(), {a, d, c});
+        s.triangles.insert(s.triangles.end(), {a, d, c});
     }
-  auto moved = [&](const std::vector<double>& x, int f)
+  return s;
+}
+
+// Positions x turned and moved a little more each frame f: an isometry.
+std::vector<double> movedRigidly(const std::vector<double>& x, int f)
+{
+  const double angle = 0.05 * f, shift = 0.02 * f;
+  std::vector<double> y(x.size());
+  for (std::size_t i = 0; i < x.size(); i += 3)
   {
-    const double angle = 0.05 * f, shift = 0.02 * f;
-    std::vector<double> y(x.size());
-    for (std::size_t i = 0; i < x.size(); i += 3)
-    {
-      y[i] = std::cos(angle) * x[i] + std::sin(angle) * x[i + 1] + shift;
-      y[i + 1] = -std::sin(angle) * x[i] + std::cos(angle) * x[i + 1];
-      y[i + 2] = x[i + 2] + 0.5 * shift;
-    }
-    return y;
-  };
+    y[i] = std::cos(angle) * x[i] + std::sin(angle) * x[i + 1] + shift;
+    y[i + 1] = -std::sin(angle) * x[i] + std::cos(angle) * x[i + 1];
+    y[i + 2] = x[i + 2] + 0.5 * shift;
+  }
+  return y;
+}
+
+TEST(Tracker, FollowsARigidMotionWithTheDefaults)
+{
+  // The lumpy shape, its template reconstructed from frame 0's points as for data without one,
+  // then moved rigidly: an isometry, which the default energy holds.
+  const Shape lumpy = lumpyShape();
+  const std::vector<double>& shape = lumpy.positions;
+  const std::vector<std::int64_t>& triangles = lumpy.triangles;
+  const auto moved = movedRigidly;
   dp::SamplerOptions sampling;
   sampling.pointsPerFrame = 8000;
   const dp::PointCloud first = dp::sampleSurface(shape, triangles, sampling, 0);
