@@ -11,6 +11,8 @@
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <random>
 #include <string>
 #include <unistd.h>
@@ -115,6 +117,11 @@ TEST(PcaColour, VersionOneFilesStillRead)
   EXPECT_EQ(old.pca.model.frames, 5u);
   EXPECT_TRUE(old.colours.empty());
   EXPECT_EQ(old.report.colourBytes, 0u);
+  // ... and this writer writes it again byte for byte.
+  std::ifstream in(DP_VERSION_1_DPZ, std::ios::binary);
+  const std::vector<std::uint8_t> file((std::istreambuf_iterator<char>(in)),
+                                       std::istreambuf_iterator<char>());
+  EXPECT_EQ(dp::encodeCompressedSequence(old), file);
   // A sequence without colour is still written as version 1, and reads back without colour.
   const dp::CompressedSequence s = tube(6);
   const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
