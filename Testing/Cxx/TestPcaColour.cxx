@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The .dpz colour stream: exact round trips through memory and a file, version-1 files (no
 // colour) still read, a corrupt or truncated colour stream and colours of the wrong count
-// refused.
+// refused (by the .glb writer too).
 #include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
 #include "dp/io/AnimatedMesh.h"
 
 #include <gtest/gtest.h>
@@ -200,6 +201,8 @@ TEST(PcaColour, AColourStreamOfTheWrongCountIsRefused)
   }
   s.colours.assign(3 * nv * 6 + 3, 1);
   EXPECT_THROW(dp::encodeCompressedSequence(s), std::invalid_argument);
+  EXPECT_THROW(dp::writeGlb(temporaryPath("count.glb"), s), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(temporaryPath("count.glb")));
   s.colours.clear();
   // A file whose colour stream holds five or seven frames for six: refused, by name.
   dp::setColours(s, colours(nv, 6));

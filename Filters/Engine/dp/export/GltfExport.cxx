@@ -399,6 +399,10 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
     throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
   if (sequence.triangles.empty())
     throw std::invalid_argument("glTF export needs triangles");
+  if (!sequence.colours.empty() && sequence.colours.size() != 3 * m.vertices * m.frames)
+    throw std::invalid_argument("glTF export: " + std::to_string(sequence.colours.size()) +
+                                " colour bytes for " + std::to_string(m.frames) + " frames of " +
+                                std::to_string(m.vertices) + " vertices (3 each)");
   const MorphTargets morph = morphTargetsOf(m);
   tinygltf::Model model;
   model.asset.version = "2.0";

@@ -45,8 +45,9 @@ struct GlbOptions
   bool meshopt = false; // EXT_meshopt_compression on every buffer view
 };
 
-/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout
- *  or a sequence without triangles, std::runtime_error when the file cannot be written. */
+/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout,
+ *  a sequence without triangles or colours of the wrong count, std::runtime_error when the file
+ *  cannot be written. */
 void writeGlb(const std::string& path, const CompressedSequence& sequence,
               const GlbOptions& options = {});
 
