@@ -398,6 +398,20 @@ private:
     Compression["Bytes"] = fs::file_size(Dpz);
     Compression["InputPointBytes"] = rawBytes;
     Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
+    const double colourBytes = fieldValue(result, "ColourBytes"); // NaN: no colour
+    if (colourBytes > 0)
+      Compression["ColourBytes"] = static_cast<long long>(colourBytes);
+  }
+
+  // The compressed file's name for the "Compressed:" line, with its colour's share when it has
+  // colour.
+  std::string dpzSaid() const
+  {
+    if (!Compression.contains("ColourBytes"))
+      return Dpz.string();
+    return Dpz.string() +
+           " (with colour: " + std::to_string(Compression["ColourBytes"].get<long long>()) +
+           " of its " + std::to_string(Compression["Bytes"].get<long long>()) + " bytes)";
   }
 
   void sayDataFit(vtkPolyData* result)
@@ -414,7 +428,7 @@ private:
     std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame, %.0fx smaller "
                 "than the input points (float32); the decompressed mesh lies %.3g from the "
                 "points (RMS), the tracked one %.3g (%+.1f %%, at most %g %%)\n",
-                Dpz.string().c_str(), Compression["Components"].get<double>(),
+                dpzSaid().c_str(), Compression["Components"].get<double>(),
                 Compression["BitsPerVertexFrame"].get<double>(),
                 Compression["InputPointsOverFile"].get<double>(), after, before, growth,
                 S.fitGrowth);
@@ -432,9 +446,8 @@ private:
     Compression["ErrorTargetKG"] = S.errorTarget;
     std::printf("Compressed: %s, %zu components, %.3g bits per vertex per frame (%.1fx "
                 "smaller than float32), KG error %.3g%%\n",
-                Dpz.string().c_str(), sequence.report.components,
-                sequence.report.bitsPerVertexFrame, 96.0 / sequence.report.bitsPerVertexFrame,
-                sequence.report.kgError);
+                dpzSaid().c_str(), sequence.report.components, sequence.report.bitsPerVertexFrame,
+                96.0 / sequence.report.bitsPerVertexFrame, sequence.report.kgError);
     if (weak)
       std::printf("Compression is weak: %zu components for %zu frames (the motion is not "
                   "low-rank, the tracking shakes, or KG %.3g %% asks for more than the data's "

@@ -11,10 +11,12 @@
 #include "vtkInformationVector.h"
 #include "vtkNew.h"
 #include "vtkObjectFactory.h"
+#include "vtkPointData.h"
 #include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
 
 #include <algorithm>
 #include <cmath>
@@ -23,6 +25,26 @@
 #include <memory>
 
 vtkStandardNewMacro(vtkCompressedSequenceReader);
+
+namespace
+{
+// Frame `frame`'s colours as the active scalars "Colors" (bytes: ParaView shows them as they are)
+// and their size in the file as field data "ColourBytes"; nothing for a file without colour.
+void addColours(const dp::CompressedSequence& sequence, std::size_t frame, vtkPolyData* output)
+{
+  if (sequence.colours.empty())
+    return;
+  const std::size_t n = sequence.pca.model.vertices;
+  vtkNew<vtkUnsignedCharArray> colours;
+  colours->SetName("Colors");
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  const auto first = sequence.colours.begin() + static_cast<std::ptrdiff_t>(3 * n * frame);
+  std::copy(first, first + static_cast<std::ptrdiff_t>(3 * n), colours->GetPointer(0));
+  output->GetPointData()->SetScalars(colours);
+  vtkDP::addFieldValue(output, "ColourBytes", static_cast<double>(sequence.report.colourBytes));
+}
+} // namespace
 
 struct vtkCompressedSequenceReader::Internals
 {
@@ -121,6 +143,7 @@ int vtkCompressedSequenceReader::RequestData(vtkInformation*, vtkInformationVect
   components->SetName("Components");
   components->InsertNextValue(static_cast<double>(model.components()));
   output->GetFieldData()->AddArray(components);
+  addColours(*in.Sequence, frame, output);
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), times[frame]);
   return 1;
 }

@@ -8,7 +8,9 @@
  * header and of each zstd section; see dp::readCompressedSequence) and publishes its time steps;
  * a bad file is reported with its name and what is wrong, and the output stays empty. Each
  * request then rebuilds only the requested frame from the decoded basis and weights (3 Nv k
- * multiply-adds). Field data: "Components".
+ * multiply-adds). Field data: "Components". A file with a colour stream (format version 2) gives
+ * each frame's "Colors" (unsigned char, r g b, exactly as written) as the active scalars, so
+ * ParaView shows them by default, and field data "ColourBytes" (the stream's size in the file).
  */
 #ifndef vtkCompressedSequenceReader_h
 #define vtkCompressedSequenceReader_h

@@ -12,6 +12,9 @@
  *    vtkCompressedSequenceReader;
  *  - .glb: glTF 2.0 binary, one morph target per shape component and one animation of the
  *    weights at 24 frames per second (always the shape layout, which glTF needs).
+ * Where every input frame has point array "Colors" (see vtkPCACompressFilter), the .dpz carries
+ * them losslessly (its colour stream) and the .glb as COLOR_0 with a colour morph target per
+ * frame (see dp/export/GltfExport.h).
  * The file is written beside its name and renamed when complete, so a failure never leaves a
  * broken file. In ParaView this is File > Save Data for .dpz and .glb.
  *

@@ -18,6 +18,7 @@
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
+#include "vtkUnsignedCharArray.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,6 +26,24 @@
 #include <vector>
 
 vtkStandardNewMacro(vtkPCACompressFilter);
+
+namespace
+{
+// Frame `frame`'s colours of `sequence` as point array "Colors" of `output` (none without colour).
+void addColours(const dp::CompressedSequence& sequence, std::size_t frame, vtkPolyData* output)
+{
+  if (sequence.colours.empty())
+    return;
+  const std::size_t n = sequence.pca.model.vertices;
+  vtkNew<vtkUnsignedCharArray> colours;
+  colours->SetName("Colors");
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  const auto first = sequence.colours.begin() + static_cast<std::ptrdiff_t>(3 * n * frame);
+  std::copy(first, first + static_cast<std::ptrdiff_t>(3 * n), colours->GetPointer(0));
+  output->GetPointData()->AddArray(colours);
+}
+} // namespace
 
 struct vtkPCACompressFilter::Internals
 {
@@ -34,6 +53,9 @@ struct vtkPCACompressFilter::Internals
   std::vector<std::int64_t> Triangles; // frame 0's, for the file
   std::unique_ptr<dp::CompressedSequence> Result;
   std::string Failure; // of the last update
+  // Each frame's "Colors" (r g b), frame-major, while every frame so far had them.
+  std::vector<std::uint8_t> Colours;
+  bool ColoursInEveryFrame = true;
   // DISTANCE_TO_DATA: each frame's data samples and reach (the input's field data), and the fit
   // before and after.
   std::vector<dp::FrameSamples> Samples;
@@ -51,6 +73,8 @@ struct vtkPCACompressFilter::Internals
     Polys = nullptr;
     Triangles.clear();
     Result.reset();
+    Colours.clear();
+    ColoursInEveryFrame = true;
     Samples.clear();
     Reach = 0;
     Before = After = dp::DataFit{};
@@ -151,7 +175,26 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
       return "frame " + std::to_string(frame) + ": point " + std::to_string(i) + " is not finite";
     in.Positions.insert(in.Positions.end(), p, p + 3);
   }
+  this->CollectColours(input);
   return this->ErrorMeasure == DISTANCE_TO_DATA ? this->CollectData(input, frame) : std::string();
+}
+
+void vtkPCACompressFilter::CollectColours(vtkPolyData* input)
+{
+  Internals& in = *this->Internal;
+  auto* colours = vtkUnsignedCharArray::SafeDownCast(input->GetPointData()->GetArray("Colors"));
+  const int components = colours ? colours->GetNumberOfComponents() : 0;
+  if (!in.ColoursInEveryFrame || (components != 3 && components != 4) ||
+      colours->GetNumberOfTuples() != in.Vertices)
+  {
+    // Colour in some frames only is not a colour stream: none is kept.
+    in.ColoursInEveryFrame = false;
+    in.Colours.clear();
+    return;
+  }
+  const unsigned char* c = colours->GetPointer(0);
+  for (vtkIdType i = 0; i < in.Vertices; ++i, c += components)
+    in.Colours.insert(in.Colours.end(), c, c + 3); // alpha dropped
 }
 
 std::string vtkPCACompressFilter::CollectData(vtkPolyData* input, std::size_t frame)
@@ -202,17 +245,21 @@ std::string vtkPCACompressFilter::Compress()
       in.Before = c.tracked;
       in.After = c.decompressed;
       in.Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
-      return {};
     }
-    in.Result = std::make_unique<dp::CompressedSequence>(
-        dp::compressSequence(in.Positions.data(), vertices, frames, Internals::optionsOf(*this),
-                             in.Triangles, times, progress));
+    else
+      in.Result = std::make_unique<dp::CompressedSequence>(
+          dp::compressSequence(in.Positions.data(), vertices, frames, Internals::optionsOf(*this),
+                               in.Triangles, times, progress));
+    if (in.ColoursInEveryFrame && !in.Colours.empty())
+      dp::setColours(*in.Result, std::move(in.Colours));
   }
   catch (const std::exception& e)
   {
+    in.Result.reset();
     return std::string("cannot compress: ") + e.what();
   }
-  this->WarnIfWeak(frames);
+  if (this->ErrorMeasure != DISTANCE_TO_DATA) // against the data, the data decide the bits
+    this->WarnIfWeak(frames);
   return {};
 }
 
@@ -241,6 +288,7 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   output->SetPoints(points);
   output->SetPolys(in.Polys);
   output->GetPointData()->SetScalars(error);
+  addColours(result, frame, output);
   const dp::PcaReport& r = result.report;
   vtkDP::addFieldValue(output, "Components", static_cast<double>(r.components));
   vtkDP::addFieldValue(output, "PaperD0", r.paperD0);
@@ -252,6 +300,8 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   vtkDP::addFieldValue(output, "MaxError", r.maxError);
   vtkDP::addFieldValue(output, "MaxErrorRelative", r.maxErrorRelative);
   vtkDP::addFieldValue(output, "RmsError", r.rmsError);
+  if (!result.colours.empty())
+    vtkDP::addFieldValue(output, "ColourBytes", static_cast<double>(r.colourBytes));
   if (in.Before.samples > 0)
   {
     vtkDP::addFieldValue(output, "DistanceToDataInput", in.Before.rms);

@@ -17,7 +17,12 @@
  * grow by at most ErrorTarget percent.
  *
  * Output: the reconstruction at the requested time (the input's time steps), the input's
- * polygons, point array "CompressionError" (distance of each vertex to its input position).
+ * polygons, point array "CompressionError" (distance of each vertex to its input position; the
+ * active scalars).
+ * Colour: where every input frame has point array "Colors" (unsigned char, 3 or 4 components;
+ * alpha is dropped), the colours go into the compressed sequence losslessly (the .dpz's colour
+ * stream, the .glb's COLOR_0) and the output carries the frame's "Colors" too, with field data
+ * "ColourBytes" (what the colour stream takes in the .dpz).
  * Field data: "Components", "PaperD0", "PaperD1", "PaperRatio" (the paper's counts of
  * numbers), "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "KGError" (percent),
  * "MaxError" (world units), "MaxErrorRelative" (of the diagonal), "RmsError" (world units),
@@ -130,6 +135,9 @@ private:
   // RequestFrameData's steps; those returning text return the error, empty when none.
   /** Checks input frame `frame` against frame 0 and keeps its positions. */
   std::string CollectFrame(vtkPolyData* input, std::size_t frame);
+  /** The frame's point array "Colors" (unsigned char, 3 or 4 components; alpha dropped), kept
+   *  for the colour stream while every frame so far has it. */
+  void CollectColours(vtkPolyData* input);
   /** DISTANCE_TO_DATA: the frame's data samples and reach from the input's field data. */
   std::string CollectData(vtkPolyData* input, std::size_t frame);
   /** Compresses the frames collected and warns when the compression is weak. */

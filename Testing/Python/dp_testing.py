@@ -60,6 +60,47 @@ def decode_meshopt(path, output):
     return run_node_tool("meshoptimizer", "decode_meshopt.js", path, output)
 
 
+def glb_colours(path):
+    """Each animation key's vertex colours (bytes, frames x vertices x 3) as a glTF player
+    computes them from a plain .glb: the base's COLOR_0 plus each morph target's COLOR_0 times
+    its weight at that key, rounded to bytes; a file without animation gives its one COLOR_0.
+    None when the mesh has no COLOR_0."""
+    import numpy as np
+    with open(path, "rb") as f:
+        data = f.read()
+    json_length = struct.unpack_from("<I", data, 12)[0]
+    gltf = json.loads(data[20:20 + json_length])
+    binary = data[20 + json_length + 8:]
+    types = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5126: np.float32}
+    widths = {"SCALAR": 1, "VEC3": 3}
+
+    def accessor(index):
+        a = gltf["accessors"][index]
+        view = gltf["bufferViews"][a["bufferView"]]
+        dtype = np.dtype(types[a["componentType"]])
+        width = widths[a["type"]]
+        stride = view.get("byteStride", dtype.itemsize * width)
+        start = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+        rows = np.ndarray((a["count"], width), dtype, binary, start, (stride, dtype.itemsize))
+        values = rows.astype(np.float64)
+        if a.get("normalized"):
+            values = np.maximum(values / np.iinfo(dtype).max, -1.0)
+        return values
+
+    primitive = gltf["meshes"][0]["primitives"][0]
+    if "COLOR_0" not in primitive["attributes"]:
+        return None
+    base = accessor(primitive["attributes"]["COLOR_0"])
+    targets = [accessor(t["COLOR_0"]) if "COLOR_0" in t else np.zeros_like(base)
+               for t in primitive.get("targets", [])]
+    if not gltf.get("animations") or not targets:
+        return np.rint(255 * base[None]).astype(np.uint8)
+    sampler = gltf["animations"][0]["samplers"][0]
+    weights = accessor(sampler["output"]).reshape(-1, len(targets))
+    frames = [base + sum(w * t for w, t in zip(key, targets)) for key in weights]
+    return np.rint(255 * np.clip(np.stack(frames), 0, 1)).astype(np.uint8)
+
+
 def blender_report(path, frames=()):
     """What Blender (batch mode) makes of a .glb: see Utilities/gltf/blender_glb_report.py."""
     blender = shutil.which("blender")

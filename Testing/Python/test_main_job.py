@@ -18,7 +18,7 @@ from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
 import dynamicpoints
 from dp_testing import (PLUGIN, TempDirTestCase, blender_addon_import, blender_open_tracked,
-                        blender_report, run_tool, tool, validate_gltf)
+                        blender_report, glb_colours, run_tool, tool, validate_gltf)
 
 FRAMES = 30  # the built-in sequence
 
@@ -129,6 +129,7 @@ class TestDefaultRun(TempDirTestCase):
         self.assertIn(f"Sequence: {FRAMES} frame(s)", out)
         self.assertIn(f"{FRAMES} of {FRAMES} frame(s) tracked", out)
         self.assertIn("Compressed: ", out)
+        self.assertNotIn("colour", out)  # the points carry none
         self.assertEqual(self.result.stderr.count("error"), 0, self.result.stderr)
         rows = [l.split() for l in out.splitlines()
                 if len(l.split()) in (9, 10) and l.split()[0].isdigit() and l.split()[1] != "of"]
@@ -288,6 +289,7 @@ class TestDefaultRun(TempDirTestCase):
         self.assertLess(compression["ComponentsPerFrame"], 0.5)
         self.assertNotIn("weak", compression)  # judged against the data, not the motion
         self.assertEqual(compression["Bytes"], os.path.getsize(self.output("tracked.dpz")))
+        self.assertNotIn("ColourBytes", compression)
         points = sum(frame["points"] for frame in report["perFrame"])
         self.assertAlmostEqual(compression["InputPointsOverFile"],
                                12 * points / compression["Bytes"])
@@ -402,6 +404,52 @@ class TestPerFrameMeshes(TempDirTestCase):
         points = run_tool("dynamicpoints", "--output", self.path("points"), "--frames", 2,
                           "--template-from", "points", frames)
         self.assertIn("Template: frame 0's points: a surface of", points.stdout)
+
+
+class TestColouredRun(TempDirTestCase):
+    """Points with a colour fixed to the material: the tracked mesh's colours reach the .dpz
+    exactly and the .glb's COLOR_0 at every key."""
+
+    def test_the_colours_reach_the_compressed_files(self):
+        run_tool("dynamicpoints-sample", "--colour", "--frames", 6, "--points", 6000,
+                 self.path("seq"))
+        out = self.path("out")
+        result = run_tool("dynamicpoints", "--output", out, "--vertices", 300,
+                          self.path("seq", "points.series"))
+        tracked = [read_vtp(f) for _, f in pvd_files(os.path.join(out, "tracked.pvd"))]
+        colours = np.stack([np.array(dsa.WrapDataObject(m).PointData["Colors"]) for m in tracked])
+        self.assertEqual(colours.shape, (6, 300, 3))
+        # The .dpz, as the product's reader gives it back: the same bytes every frame.
+        reader = dynamicpoints.vtkCompressedSequenceReader()
+        reader.SetFileName(os.path.join(out, "tracked.dpz"))
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        for t, step in enumerate(steps):
+            reader.UpdateTimeStep(step)
+            np.testing.assert_array_equal(
+                dsa.WrapDataObject(reader.GetOutput()).PointData["Colors"], colours[t])
+        # The report and the terminal say what the colour takes.
+        compression = json.load(open(os.path.join(out, "report.json")))["compression"]
+        colour_bytes = compression["ColourBytes"]
+        self.assertEqual(colour_bytes,
+                         dsa.WrapDataObject(reader.GetOutput()).FieldData["ColourBytes"][0])
+        self.assertLess(colour_bytes, colours.size)
+        self.assertIn(f"(with colour: {colour_bytes} of its {compression['Bytes']} bytes)",
+                      result.stdout)
+        # The .glb: valid, frame 0's colours as COLOR_0, each frame's at its key.
+        glb = os.path.join(out, "tracked.glb")
+        report = validate_gltf(glb)
+        self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
+        np.testing.assert_array_equal(glb_colours(glb), colours)
+        # Blender 3.4 imports COLOR_0 as a colour attribute and the colour targets as shape keys
+        # that move nothing: the shapes still play where the tracker put them.
+        blender = blender_report(glb, (4,))
+        self.assertEqual(blender["colour_attributes"], ["Col"])
+        self.assertEqual(blender["morph_targets"], compression["Components"] + 5)
+        diagonal = json.load(open(os.path.join(out, "report.json")))["boundingBoxDiagonal"]
+        played = np.array(blender["positions"]["4"])
+        original = np.array(dsa.WrapDataObject(tracked[4]).Points)
+        self.assertLess(np.abs(played - original).max(), 0.02 * diagonal)
 
 
 class TestBadInput(TempDirTestCase):

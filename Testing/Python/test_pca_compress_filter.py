@@ -11,7 +11,7 @@ from vtkmodules.vtkIOGeometry import vtkGLTFReader
 
 import dynamicpoints
 from dp_testing import (MessageRecorder, TempDirTestCase, blender_report, decode_meshopt,
-                        run_tool, validate_gltf)
+                        glb_colours, run_tool, validate_gltf)
 
 FRAMES = 16
 
@@ -280,6 +280,93 @@ class TestPCACompressFilter(TempDirTestCase):
             self.assertEqual(played.shape, rebuilt.shape)
             # Same vertices in the same order, at Blender's float32 precision.
             np.testing.assert_allclose(played, rebuilt, atol=1e-5)
+
+    def coloured(self, components=3, uncoloured_frame=None):
+        """The tube's frames written as .vtp with point array "Colors" (bytes, COMPONENTS per
+        point; every frame's different, wrapping past 255), except UNCOLOURED_FRAME; returns
+        the source reading them and each frame's r g b."""
+        from vtkmodules.util.numpy_support import numpy_to_vtk
+        from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
+        source, colours = dynamicpoints.vtkPointSequenceSource(), []
+        for t, name in enumerate(self.files):
+            self.source.UpdateTimeStep(t)
+            frame = self.source.GetOutput().NewInstance()
+            frame.DeepCopy(self.source.GetOutput())
+            n = frame.GetNumberOfPoints()
+            values = (np.arange(n)[:, None] * [7, 13, 29, 31][:components] + 11 * t) % 256
+            colours.append(values[:, :3].astype(np.uint8))
+            if t != uncoloured_frame:
+                array = numpy_to_vtk(values.astype(np.uint8), deep=1)
+                array.SetName("Colors")
+                frame.GetPointData().AddArray(array)
+            writer = vtkXMLPolyDataWriter()
+            writer.SetInputData(frame)
+            writer.SetFileName(self.path(f"coloured_{t:02d}.vtp"))
+            writer.Write()
+            source.AddFileName(self.path(f"coloured_{t:02d}.vtp"))
+        return source, np.stack(colours)
+
+    def test_the_colours_go_through_the_dpz_exactly(self):
+        for components in (3, 4):  # the alpha of r g b a is dropped
+            source, colours = self.coloured(components)
+            path = self.path(f"coloured{components}.dpz")
+            self.write(path, source)
+            f = dynamicpoints.vtkPCACompressFilter()
+            f.SetInputConnection(source.GetOutputPort())
+            reader = dynamicpoints.vtkCompressedSequenceReader()
+            reader.SetFileName(path)
+            reader.UpdateInformation()
+            steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+            for t in range(FRAMES):
+                reader.UpdateTimeStep(steps[t])
+                out = reader.GetOutput()
+                self.assertEqual(out.GetPointData().GetScalars().GetName(), "Colors")
+                np.testing.assert_array_equal(dsa.WrapDataObject(out).PointData["Colors"],
+                                              colours[t])
+                f.UpdateTimeStep(t)  # the decompressed mesh carries them too
+                np.testing.assert_array_equal(dsa.WrapDataObject(f.GetOutput()).PointData["Colors"],
+                                              colours[t])
+            # The file grew by what both say the colour takes.
+            colour_bytes = dsa.WrapDataObject(reader.GetOutput()).FieldData["ColourBytes"][0]
+            self.assertEqual(dsa.WrapDataObject(f.GetOutput()).FieldData["ColourBytes"][0],
+                             colour_bytes)
+            self.write(self.path("plain.dpz"))
+            self.assertEqual(os.path.getsize(path),
+                             os.path.getsize(self.path("plain.dpz")) + colour_bytes)
+
+    def test_colour_in_some_frames_only_is_left_out(self):
+        source, _ = self.coloured(uncoloured_frame=FRAMES // 2)
+        self.write(self.path("partly.dpz"), source)
+        reader = dynamicpoints.vtkCompressedSequenceReader()
+        reader.SetFileName(self.path("partly.dpz"))
+        reader.Update()
+        self.assertIsNone(reader.GetOutput().GetPointData().GetArray("Colors"))
+        self.assertIsNone(reader.GetOutput().GetFieldData().GetArray("ColourBytes"))
+        with open(self.path("partly.dpz"), "rb") as f:
+            self.assertEqual(f.read(12)[8:], (1).to_bytes(4, "little"))  # format version 1
+
+    def test_the_gltf_export_plays_each_frames_colours(self):
+        source, colours = self.coloured()
+        glb = self.path("coloured.glb")
+        self.write(glb, source)
+        report = validate_gltf(glb)
+        self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
+        np.testing.assert_array_equal(glb_colours(glb), colours)
+        # VTK's reader still plays the shapes (it takes COLOR_0, not the colour targets).
+        reader = vtkGLTFReader()
+        reader.SetFileName(glb)
+        reader.UpdateInformation()
+        reader.EnableAnimation(0)
+        reader.SetApplyDeformationsToGeometry(True)
+        reader.SetFrameRate(24)
+        reader.UpdateInformation()
+        steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+        self.assertEqual(len(steps), FRAMES)
+        reader.UpdateTimeStep(steps[9])
+        played = dsa.WrapDataObject(first_polydata(reader.GetOutput()))
+        self.assertLess(np.abs(np.array(played.Points) - self.original(9)).max(), 0.01)
+        np.testing.assert_array_equal(np.rint(255 * np.array(played.PointData["COLOR_0"])),
+                                      colours[0])
 
     def add_another_connectivity(self):
         """Appends a frame of another mesh (the sheet) to the tube's sequence."""

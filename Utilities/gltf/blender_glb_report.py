@@ -1,7 +1,7 @@
 """Opens a .glb in Blender (batch mode; imported as a user would with smooth shading, see
 Utilities/blender/open_tracked.py) or a saved .blend, and prints what Blender made of it as one
 JSON line after the marker "DP-REPORT ": the mesh objects, vertex count, morph targets (shape
-keys), the animation's frame range, the scene's frame range and frame rate, and the vertex
+keys), the colour attributes (a glTF COLOR_0 becomes one), the animation's frame range, the scene's frame range and frame rate, and the vertex
 positions Blender evaluates at the frames asked for, in glTF axes (Y up) so they compare directly
 with the file.
 
@@ -31,6 +31,7 @@ if meshes:
     action = keys.animation_data.action if keys and keys.animation_data else None
     report["vertices"] = len(obj.data.vertices)
     report["morph_targets"] = len(keys.key_blocks) - 1 if keys else 0  # minus the basis
+    report["colour_attributes"] = [a.name for a in obj.data.color_attributes]
     report["fps"] = scene.render.fps / scene.render.fps_base
     report["scene_frames"] = [scene.frame_start, scene.frame_end]
     if action:

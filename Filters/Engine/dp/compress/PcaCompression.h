@@ -122,6 +122,7 @@ struct PcaReport
   double bitsPerVertexFrame = 0; // what is stored for the geometry, per vertex per frame
   double quantisedPlainBits = 0; // the same integers in fixed-width fields, no coding
   std::size_t payloadBytes = 0;  // geometry, compressed (0 for float PCA)
+  std::size_t colourBytes = 0;   // the colour stream, compressed (0: no colour)
 };
 
 struct CompressedSequence
@@ -129,8 +130,18 @@ struct CompressedSequence
   QuantisedPca pca;                    // for float PCA: model only, steps 0
   std::vector<std::int64_t> triangles; // connectivity, stored once
   std::vector<double> times;           // one per frame
+  // Optional colour of every vertex in every frame: r g b bytes, frame-major (frame t starts at
+  // 3 * vertices * t); empty: no colour. Stored losslessly, beside the geometry.
+  std::vector<std::uint8_t> colours;
   PcaReport report;
 };
+
+/**
+ * Gives `sequence` its colours (frames x vertices x 3 bytes, as CompressedSequence::colours) and
+ * sets report.colourBytes to what they take in the file, so a caller can say it before writing.
+ * Throws std::invalid_argument when the count is not frames * vertices * 3.
+ */
+void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours);
 
 /**
  * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at
@@ -156,10 +167,14 @@ double maxVertexError(const Eigen::Ref<const Eigen::MatrixXd>& original,
                       const Eigen::Ref<const Eigen::MatrixXd>& approx);
 
 /**
- * The compressed file (.dpz): magic, version, a header with its CRC-32, and one zstd payload
- * (connectivity, mean, basis, weights as predicted zigzag varints) with its CRC-32. The reader
- * checks every length, count and checksum and throws std::runtime_error naming the file and
- * what is wrong; it never returns partial geometry.
+ * The compressed file (.dpz): magic, version, a header with its CRC-32, and zstd sections, each
+ * with its CRC-32: the connectivity, the geometry (mean, basis, weights as predicted zigzag
+ * varints) and, in version 2, the colours (each frame's bytes as differences from the previous
+ * frame's, so colour fixed to the surface costs little). A sequence without colour is written as
+ * version 1, which earlier readers read; this reader reads both. The reader checks every length,
+ * count and checksum and throws std::runtime_error naming the file and what is wrong; it never
+ * returns partial geometry or colour. Writing throws std::invalid_argument when the colours'
+ * count is neither 0 nor frames * vertices * 3.
  */
 void writeCompressedSequence(const std::string& path, const CompressedSequence& sequence);
 CompressedSequence readCompressedSequence(const std::string& path);

@@ -57,6 +57,33 @@ int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int ty
   return static_cast<int>(model.accessors.size()) - 1;
 }
 
+// Appends `bytes` (elements of `stride` bytes, each a multiple of 4 as glTF wants of vertex
+// attributes) as a vertex-attribute view and adds an accessor of `count` elements of `type` in
+// `componentType` over it; returns the accessor.
+int addAttributeBytes(tinygltf::Model& model, const std::vector<unsigned char>& bytes,
+                      int componentType, int type, std::size_t count, std::size_t stride,
+                      bool normalized)
+{
+  auto& data = model.buffers[0].data;
+  data.resize((data.size() + 3) & ~std::size_t{3});
+  tinygltf::BufferView view;
+  view.buffer = 0;
+  view.byteOffset = data.size();
+  view.byteLength = bytes.size();
+  view.byteStride = stride;
+  view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
+  data.insert(data.end(), bytes.begin(), bytes.end());
+  model.bufferViews.push_back(view);
+  tinygltf::Accessor accessor;
+  accessor.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+  accessor.componentType = componentType;
+  accessor.normalized = normalized;
+  accessor.count = count;
+  accessor.type = type;
+  model.accessors.push_back(accessor);
+  return static_cast<int>(model.accessors.size()) - 1;
+}
+
 // Compresses every buffer view of `model` (all in buffer 0) with meshoptimizer and returns the
 // EXT_meshopt_compression object of each view; buffer 0 then holds the compressed bytes. The
 // views keep their offsets into the original bytes, which become the fallback buffer 1.
@@ -73,7 +100,9 @@ std::vector<nlohmann::json> compressViews(tinygltf::Model& model, std::size_t ve
     const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(a.bufferView)];
     const unsigned char* source = raw.data() + view.byteOffset;
     const bool indices = view.target == TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
-    const std::size_t stride = indices ? 4 : 4 * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1);
+    const std::size_t stride = indices           ? 4
+                               : view.byteStride ? view.byteStride
+                                                 : 4 * (a.type == TINYGLTF_TYPE_VEC3 ? 3 : 1);
     std::vector<unsigned char> out;
     if (indices)
     {
@@ -179,10 +208,90 @@ int addIndices(tinygltf::Model& model, const std::vector<std::int64_t>& triangle
   return static_cast<int>(model.accessors.size()) - 1;
 }
 
-// One node with the mesh: the base shape, the triangles and a morph target per component.
-void addMesh(tinygltf::Model& model, const MorphTargets& morph,
-             const std::vector<std::int64_t>& triangles, std::size_t nv)
+// Colour differences are stored as normalized signed shorts: exact to 1/65534, so each frame's
+// bytes come back at its key, in 8 bytes a vertex (x y z and the padding glTF asks for).
+constexpr double ShortScale = 32767.0;
+
+// Names the morph targets (extras.targetNames, which Blender and three.js show): "shape j" for
+// the shape components, "colour of frame t" for the colour targets, so that the shape keys that
+// only change colour are told apart from those that move the mesh.
+void nameTargets(tinygltf::Mesh& mesh, std::size_t shapes, std::size_t colourTargets)
 {
+  tinygltf::Value::Array names;
+  for (std::size_t j = 0; j < shapes; ++j)
+    names.emplace_back("shape " + std::to_string(j));
+  for (std::size_t t = 1; t <= colourTargets; ++t)
+    names.emplace_back("colour of frame " + std::to_string(t));
+  tinygltf::Value::Object extras;
+  extras["targetNames"] = tinygltf::Value(std::move(names));
+  mesh.extras = tinygltf::Value(std::move(extras));
+}
+
+// Frame 0's colours as the base's COLOR_0 (normalized bytes, padded to 4 per vertex) and, for
+// each later frame, a morph target holding its colours' change from frame 0. glTF morphs all
+// attributes of a target by one weight, so colour that changes on its own cannot ride on the
+// shape targets: each frame's colour target is weighted 1 at its key and 0 elsewhere (see
+// colourWeights), and LINEAR interpolation blends neighbouring frames' colours. Every target
+// gets both attributes, the ones it does not change as a shared accessor of zeros: players that
+// fill a missing target attribute with the base's (three.js) would otherwise add the base to it.
+// Returns the number of colour targets added.
+std::size_t addColourTargets(tinygltf::Model& model, tinygltf::Primitive& primitive,
+                             tinygltf::Mesh& mesh, const std::vector<std::uint8_t>& colours,
+                             std::size_t nv, std::size_t nt)
+{
+  std::vector<unsigned char> base(4 * nv, 0);
+  for (std::size_t v = 0; v < nv; ++v)
+    std::copy_n(colours.begin() + static_cast<std::ptrdiff_t>(3 * v), 3, base.begin() + 4 * v);
+  primitive.attributes["COLOR_0"] = addAttributeBytes(
+      model, base, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_TYPE_VEC3, nv, 4, true);
+  if (nt < 2)
+    return 0;
+  const int noColourChange =
+      addAttributeBytes(model, std::vector<unsigned char>(8 * nv, 0), TINYGLTF_COMPONENT_TYPE_SHORT,
+                        TINYGLTF_TYPE_VEC3, nv, 8, true);
+  for (auto& target : primitive.targets)
+    target["COLOR_0"] = noColourChange;
+  const int noMotion = addAccessor(model, std::vector<float>(3 * nv, 0.0f), TINYGLTF_TYPE_VEC3, nv,
+                                   true, TINYGLTF_TARGET_ARRAY_BUFFER);
+  for (std::size_t t = 1; t < nt; ++t)
+  {
+    std::vector<unsigned char> change(8 * nv, 0);
+    for (std::size_t v = 0; v < nv; ++v)
+      for (std::size_t c = 0; c < 3; ++c)
+      {
+        const int d = colours[3 * (nv * t + v) + c] - colours[3 * v + c];
+        const auto q = static_cast<std::int16_t>(std::lround(d * ShortScale / 255.0));
+        std::memcpy(change.data() + 8 * v + 2 * c, &q, 2);
+      }
+    primitive.targets.push_back(
+        {{"POSITION", noMotion},
+         {"COLOR_0", addAttributeBytes(model, change, TINYGLTF_COMPONENT_TYPE_SHORT,
+                                       TINYGLTF_TYPE_VEC3, nv, 8, true)}});
+    mesh.weights.push_back(0.0);
+  }
+  nameTargets(mesh, primitive.targets.size() - (nt - 1), nt - 1);
+  return nt - 1;
+}
+
+// The shape weights with a colour target per frame after the first beside them: frame t's
+// weighted 1 at key t, every other 0.
+Eigen::MatrixXd colourWeights(const Eigen::MatrixXd& shapes, std::size_t colourTargets)
+{
+  Eigen::MatrixXd w = Eigen::MatrixXd::Zero(shapes.rows(), shapes.cols() + colourTargets);
+  w.leftCols(shapes.cols()) = shapes;
+  for (std::size_t t = 1; t <= colourTargets; ++t)
+    w(static_cast<Eigen::Index>(t), shapes.cols() + static_cast<Eigen::Index>(t) - 1) = 1;
+  return w;
+}
+
+// One node with the mesh: the base shape, the triangles and a morph target per component; with
+// colour, COLOR_0 and a colour target per frame after the first (addColourTargets). Returns the
+// number of colour targets.
+std::size_t addMesh(tinygltf::Model& model, const MorphTargets& morph,
+                    const CompressedSequence& sequence)
+{
+  const std::size_t nv = sequence.pca.model.vertices;
+  const std::vector<std::int64_t>& triangles = sequence.triangles;
   std::vector<float> positions(morph.base.data(), morph.base.data() + morph.base.size());
   tinygltf::Primitive primitive;
   primitive.mode = TINYGLTF_MODE_TRIANGLES;
@@ -198,6 +307,10 @@ void addMesh(tinygltf::Model& model, const MorphTargets& morph,
                                                           true, TINYGLTF_TARGET_ARRAY_BUFFER)}});
     mesh.weights.push_back(morph.weights(0, j));
   }
+  const std::size_t colourTargets = sequence.colours.empty()
+                                        ? 0
+                                        : addColourTargets(model, primitive, mesh, sequence.colours,
+                                                           nv, sequence.pca.model.frames);
   mesh.primitives.push_back(primitive);
   model.meshes.push_back(mesh);
   tinygltf::Node node;
@@ -208,6 +321,7 @@ void addMesh(tinygltf::Model& model, const MorphTargets& morph,
   scene.nodes.push_back(0);
   model.scenes.push_back(scene);
   model.defaultScene = 0;
+  return colourTargets;
 }
 
 // The weights over time: one linear sampler, a key per frame at FramesPerSecond.
@@ -285,14 +399,18 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
     throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
   if (sequence.triangles.empty())
     throw std::invalid_argument("glTF export needs triangles");
+  if (!sequence.colours.empty() && sequence.colours.size() != 3 * m.vertices * m.frames)
+    throw std::invalid_argument("glTF export: " + std::to_string(sequence.colours.size()) +
+                                " colour bytes for " + std::to_string(m.frames) + " frames of " +
+                                std::to_string(m.vertices) + " vertices (3 each)");
   const MorphTargets morph = morphTargetsOf(m);
   tinygltf::Model model;
   model.asset.version = "2.0";
   model.asset.generator = "DynamicPoints";
   model.buffers.resize(1);
-  addMesh(model, morph, sequence.triangles, m.vertices);
-  if (m.components() > 0 && m.frames > 1)
-    addAnimation(model, morph.weights);
+  const std::size_t colourTargets = addMesh(model, morph, sequence);
+  if (m.components() + colourTargets > 0 && m.frames > 1)
+    addAnimation(model, colourWeights(morph.weights, colourTargets));
 
   // Written beside and renamed, so a failed write never leaves a broken file under the name.
   detail::writeBesideAndMove(path,

@@ -16,6 +16,18 @@
  * is then required: viewers without it (Blender 3.4, VTK 9.2) cannot read that variant, so the
  * uncompressed one is the default. Decoding gives back the same bytes (lossless).
  *
+ * Colour (a sequence with a colour stream): frame 0's colours as the base's COLOR_0 (normalized
+ * unsigned bytes), and one morph target per later frame holding its colours' change from frame 0
+ * (normalized signed shorts, exact at every key), weighted 1 at its frame's key and 0 at the
+ * others, so players that morph COLOR_0 (three.js) play each frame's colours and blend between
+ * neighbouring frames. Every target carries both POSITION and COLOR_0 (shared accessors of zeros
+ * where it changes nothing): three.js fills a missing target attribute with the base's. The
+ * targets are named (extras.targetNames: "shape j", "colour of frame t"). Costs 8 bytes per
+ * vertex per frame after the first. Players that do not morph colour show frame 0's: Blender
+ * 3.4 imports COLOR_0 as the colour attribute "Col" and the colour targets as shape keys that
+ * move nothing; VTK 9.2 reads COLOR_0 as point data and warns once per target that it ignores
+ * the targets' COLOR_0.
+ *
  * Limits: only the shape layout maps onto morph targets (the trajectory layout is refused);
  * no normals (viewers compute them).
  */
@@ -33,8 +45,9 @@ struct GlbOptions
   bool meshopt = false; // EXT_meshopt_compression on every buffer view
 };
 
-/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout
- *  or a sequence without triangles, std::runtime_error when the file cannot be written. */
+/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout,
+ *  a sequence without triangles or colours of the wrong count, std::runtime_error when the file
+ *  cannot be written. */
 void writeGlb(const std::string& path, const CompressedSequence& sequence,
               const GlbOptions& options = {});
 

@@ -1,0 +1,225 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The .dpz colour stream: exact round trips through memory and a file, version-1 files (no
+// colour) still read, a corrupt or truncated colour stream and colours of the wrong count
+// refused (by the .glb writer too).
+#include "dp/compress/PcaCompression.h"
+#include "dp/export/GltfExport.h"
+#include "dp/io/AnimatedMesh.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <string>
+#include <unistd.h>
+
+namespace
+{
+
+// The bending tube's first `frames` frames, compressed with the default options.
+dp::CompressedSequence tube(std::size_t frames)
+{
+  dp::BendingTube::Options o;
+  o.frames = frames;
+  const dp::BendingTube mesh(o);
+  std::vector<double> positions;
+  for (std::size_t t = 0; t < frames; ++t)
+  {
+    const std::vector<double> p = mesh.positions(t);
+    positions.insert(positions.end(), p.begin(), p.end());
+  }
+  return dp::compressSequence(positions.data(), mesh.numberOfVertices(), frames, dp::PcaOptions{},
+                              mesh.triangles());
+}
+
+// Colour as a tracker gives it: each vertex its own colour, a few steps of noise from frame to
+// frame, and values at 0 and 255 that step across the byte's ends (differences wrap mod 256).
+std::vector<std::uint8_t> colours(std::size_t vertices, std::size_t frames)
+{
+  std::mt19937 random(7);
+  std::uniform_int_distribution<int> base(0, 255), noise(-2, 2);
+  std::vector<std::uint8_t> first(3 * vertices);
+  for (std::size_t i = 0; i < first.size(); ++i)
+    first[i] = static_cast<std::uint8_t>(i % 7 == 0 ? 0 : i % 7 == 1 ? 255 : base(random));
+  std::vector<std::uint8_t> out;
+  for (std::size_t t = 0; t < frames; ++t)
+    for (std::uint8_t c : first)
+      out.push_back(static_cast<std::uint8_t>(std::clamp(c + noise(random), 0, 255)));
+  return out;
+}
+
+std::uint32_t versionOf(const std::vector<std::uint8_t>& bytes)
+{
+  std::uint32_t v = 0;
+  std::memcpy(&v, bytes.data() + 8, 4);
+  return v;
+}
+
+std::string temporaryPath(const std::string& name)
+{
+  return (std::filesystem::temp_directory_path() /
+          ("dp_colour_" + std::to_string(::getpid()) + "_" + name))
+      .string();
+}
+
+// `a` with its colour section replaced by `b`'s (their geometry sections differ in nothing the
+// colour reader looks at).
+std::vector<std::uint8_t> withColourSectionOf(const dp::CompressedSequence& a,
+                                              const dp::CompressedSequence& b)
+{
+  const std::vector<std::uint8_t> x = dp::encodeCompressedSequence(a);
+  const std::vector<std::uint8_t> y = dp::encodeCompressedSequence(b);
+  std::vector<std::uint8_t> out(x.begin(), x.end() - static_cast<long>(a.report.colourBytes));
+  out.insert(out.end(), y.end() - static_cast<long>(b.report.colourBytes), y.end());
+  return out;
+}
+
+} // namespace
+
+TEST(PcaColour, RoundTripIsExactThroughMemoryAndAFile)
+{
+  dp::CompressedSequence s = tube(12);
+  const dp::PcaModel& m = s.pca.model;
+  const std::vector<std::uint8_t> plain = dp::encodeCompressedSequence(s);
+  dp::setColours(s, colours(m.vertices, m.frames));
+  ASSERT_EQ(s.colours.size(), 3 * m.vertices * m.frames);
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  EXPECT_EQ(versionOf(plain), 1u);
+  EXPECT_EQ(versionOf(bytes), 2u);
+  // The report says what the colour takes in the file: the file grows by exactly that.
+  EXPECT_GT(s.report.colourBytes, 0u);
+  EXPECT_EQ(bytes.size(), plain.size() + s.report.colourBytes);
+  // Noise of a few steps costs far less than the colours as they are.
+  EXPECT_LT(s.report.colourBytes, s.colours.size() / 2);
+
+  const dp::CompressedSequence r = dp::decodeCompressedSequence(bytes.data(), bytes.size(), "c");
+  EXPECT_EQ(r.colours, s.colours);
+  EXPECT_EQ(r.report.colourBytes, s.report.colourBytes);
+  EXPECT_EQ(r.pca.model.reconstruct(), s.pca.model.reconstruct()); // the geometry untouched
+  const std::string path = temporaryPath("roundtrip.dpz");
+  dp::writeCompressedSequence(path, s);
+  const dp::CompressedSequence f = dp::readCompressedSequence(path);
+  std::filesystem::remove(path);
+  EXPECT_EQ(f.colours, s.colours);
+  EXPECT_EQ(f.triangles, s.triangles);
+  EXPECT_EQ(f.pca.model.reconstruct(), s.pca.model.reconstruct());
+}
+
+TEST(PcaColour, VersionOneFilesStillRead)
+{
+  // A file the writer before the colour stream wrote (the .dpz fuzzer's seed).
+  const dp::CompressedSequence old = dp::readCompressedSequence(DP_VERSION_1_DPZ);
+  EXPECT_EQ(old.pca.model.vertices, 300u);
+  EXPECT_EQ(old.pca.model.frames, 5u);
+  EXPECT_TRUE(old.colours.empty());
+  EXPECT_EQ(old.report.colourBytes, 0u);
+  // ... and this writer writes it again byte for byte.
+  std::ifstream in(DP_VERSION_1_DPZ, std::ios::binary);
+  const std::vector<std::uint8_t> file((std::istreambuf_iterator<char>(in)),
+                                       std::istreambuf_iterator<char>());
+  EXPECT_EQ(dp::encodeCompressedSequence(old), file);
+  // A sequence without colour is still written as version 1, and reads back without colour.
+  const dp::CompressedSequence s = tube(6);
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  EXPECT_EQ(versionOf(bytes), 1u);
+  const dp::CompressedSequence r = dp::decodeCompressedSequence(bytes.data(), bytes.size(), "v1");
+  EXPECT_TRUE(r.colours.empty());
+  EXPECT_EQ(r.pca.model.reconstruct(), s.pca.model.reconstruct());
+}
+
+TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
+{
+  dp::CompressedSequence s = tube(5);
+  dp::setColours(s, colours(s.pca.model.vertices, 5));
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  // Every byte of the section's sizes and checksum, and a couple of hundred of its packed bytes.
+  const std::size_t start = bytes.size() - s.report.colourBytes;
+  const std::size_t stride = std::max<std::size_t>(1, s.report.colourBytes / 200);
+  const auto next = [&](std::size_t i) { return i < start + 20 ? i + 1 : i + stride; };
+  for (std::size_t n = start; n < bytes.size(); n = next(n))
+  {
+    try
+    {
+      dp::decodeCompressedSequence(bytes.data(), n, "cut.dpz");
+      ADD_FAILURE() << "a file cut at " << n << " of " << bytes.size() << " bytes was read";
+    }
+    catch (const std::runtime_error& e)
+    {
+      ASSERT_EQ(std::string(e.what()).rfind("cut.dpz", 0), 0u) << e.what();
+    }
+  }
+  for (std::size_t i = start; i < bytes.size(); i = next(i))
+  {
+    std::vector<std::uint8_t> bad = bytes;
+    bad[i] ^= 0x5a;
+    EXPECT_THROW(dp::decodeCompressedSequence(bad.data(), bad.size(), "bad.dpz"),
+                 std::runtime_error)
+        << "byte " << i;
+  }
+  // Version 1 with a colour section after the geometry: refused, not read without colour.
+  std::vector<std::uint8_t> relabelled = bytes;
+  relabelled[8] = 1;
+  EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
+               std::runtime_error);
+  // A version this reader does not know.
+  relabelled[8] = 3;
+  try
+  {
+    dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "new.dpz");
+    ADD_FAILURE();
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 3"), std::string::npos)
+        << e.what();
+  }
+}
+
+TEST(PcaColour, AColourStreamOfTheWrongCountIsRefused)
+{
+  dp::CompressedSequence s = tube(6);
+  const std::size_t nv = s.pca.model.vertices;
+  // Colours for one frame too few or too many, or with a byte too few: refused with the counts.
+  for (std::size_t count : {3 * nv * 5, 3 * nv * 7, 3 * nv * 6 - 1, 4 * nv * 6})
+  {
+    try
+    {
+      dp::setColours(s, std::vector<std::uint8_t>(count, 9));
+      ADD_FAILURE() << count;
+    }
+    catch (const std::invalid_argument& e)
+    {
+      EXPECT_NE(std::string(e.what()).find(std::to_string(3 * nv * 6)), std::string::npos)
+          << e.what();
+    }
+    EXPECT_TRUE(s.colours.empty());
+  }
+  s.colours.assign(3 * nv * 6 + 3, 1);
+  EXPECT_THROW(dp::encodeCompressedSequence(s), std::invalid_argument);
+  EXPECT_THROW(dp::writeGlb(temporaryPath("count.glb"), s), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(temporaryPath("count.glb")));
+  s.colours.clear();
+  // A file whose colour stream holds five or seven frames for six: refused, by name.
+  dp::setColours(s, colours(nv, 6));
+  for (std::size_t frames : {5, 7})
+  {
+    dp::CompressedSequence other = tube(frames);
+    dp::setColours(other, colours(nv, frames));
+    const std::vector<std::uint8_t> bad = withColourSectionOf(s, other);
+    try
+    {
+      dp::decodeCompressedSequence(bad.data(), bad.size(), "count.dpz");
+      ADD_FAILURE() << frames;
+    }
+    catch (const std::runtime_error& e)
+    {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind("count.dpz: colour stream", 0), 0u) << what;
+    }
+  }
+}
