@@ -392,13 +392,15 @@ private:
                              "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
                              "PaperD1", "PaperRatio", "ComponentsPerFrame"})
       Compression[name] = fieldValue(result, name);
+    // The input as raw points: float32 x y z, and r g b bytes where the file keeps colour.
+    const double colourBytes = fieldValue(result, "ColourBytes"); // NaN: no colour
+    const double bytesPerPoint = colourBytes > 0 ? 15.0 : 12.0;
     double rawBytes = 0;
     for (const FrameRecord& r : Records)
-      rawBytes += 12.0 * r.figures.points;
+      rawBytes += bytesPerPoint * r.figures.points;
     Compression["Bytes"] = fs::file_size(Dpz);
     Compression["InputPointBytes"] = rawBytes;
     Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
-    const double colourBytes = fieldValue(result, "ColourBytes"); // NaN: no colour
     if (colourBytes > 0)
       Compression["ColourBytes"] = static_cast<long long>(colourBytes);
   }
@@ -426,11 +428,12 @@ private:
     Compression["DistanceToPointsDecompressed"] = after;
     Compression["FitGrowthPercent"] = growth;
     std::printf("Compressed: %s, %.0f components, %.3g bits per vertex per frame, %.0fx smaller "
-                "than the input points (float32); the decompressed mesh lies %.3g from the "
-                "points (RMS), the tracked one %.3g (%+.1f %%, at most %g %%)\n",
+                "than the input points (float32 x y z%s); the decompressed mesh lies %.3g from "
+                "the points (RMS), the tracked one %.3g (%+.1f %%, at most %g %%)\n",
                 dpzSaid().c_str(), Compression["Components"].get<double>(),
                 Compression["BitsPerVertexFrame"].get<double>(),
-                Compression["InputPointsOverFile"].get<double>(), after, before, growth,
+                Compression["InputPointsOverFile"].get<double>(),
+                Compression.contains("ColourBytes") ? ", r g b bytes" : "", after, before, growth,
                 S.fitGrowth);
   }
 
