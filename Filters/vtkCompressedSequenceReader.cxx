@@ -35,13 +35,8 @@ void addColours(const dp::CompressedSequence& sequence, std::size_t frame, vtkPo
   if (sequence.colours.empty())
     return;
   const std::size_t n = sequence.pca.model.vertices;
-  vtkNew<vtkUnsignedCharArray> colours;
-  colours->SetName("Colors");
-  colours->SetNumberOfComponents(3);
-  colours->SetNumberOfTuples(static_cast<vtkIdType>(n));
-  const auto first = sequence.colours.begin() + static_cast<std::ptrdiff_t>(3 * n * frame);
-  std::copy(first, first + static_cast<std::ptrdiff_t>(3 * n), colours->GetPointer(0));
-  output->GetPointData()->SetScalars(colours);
+  output->GetPointData()->SetScalars(
+      vtkDP::colorsArray(sequence.colours.data() + 3 * n * frame, static_cast<vtkIdType>(n)));
   vtkDP::addFieldValue(output, "ColourBytes", static_cast<double>(sequence.report.colourBytes));
 }
 } // namespace

@@ -238,12 +238,7 @@ void fillPointData(vtkPolyData* output, const std::vector<double>& rest, const d
   pd->SetVectors(displacement);
   if (r.colours.size() == 3 * static_cast<std::size_t>(n))
   {
-    vtkNew<vtkUnsignedCharArray> colours;
-    colours->SetName("Colors");
-    colours->SetNumberOfComponents(3);
-    colours->SetNumberOfTuples(n);
-    std::copy(r.colours.begin(), r.colours.end(), colours->GetPointer(0));
-    pd->SetScalars(colours);
+    pd->SetScalars(vtkDP::colorsArray(r.colours.data(), n));
     pd->AddArray(residual);
   }
   else

@@ -158,6 +158,16 @@ std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* out
   return frameAtTime(steps, outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
 }
 
+vtkSmartPointer<vtkUnsignedCharArray> colorsArray(const std::uint8_t* rgb, vtkIdType n)
+{
+  auto colours = vtkSmartPointer<vtkUnsignedCharArray>::New();
+  colours->SetName("Colors");
+  colours->SetNumberOfComponents(3);
+  colours->SetNumberOfTuples(n);
+  std::copy(rgb, rgb + 3 * n, colours->GetPointer(0));
+  return colours;
+}
+
 void addFieldValue(vtkDataObject* data, const char* name, double value)
 {
   vtkNew<vtkDoubleArray> a;

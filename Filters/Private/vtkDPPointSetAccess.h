@@ -3,6 +3,7 @@
 #ifndef vtkDPPointSetAccess_h
 #define vtkDPPointSetAccess_h
 
+#include "vtkSmartPointer.h"
 #include "vtkType.h"
 
 #include <cstdint>
@@ -48,6 +49,10 @@ std::size_t frameAtTime(const std::vector<double>& steps, double t);
 /** The frame an output request asks for: frameAtTime of its UPDATE_TIME_STEP; 0 for a static
  *  input (no steps) or a request without a time. */
 std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* outInfo);
+
+/** A "Colors" array of `n` r g b byte triples copied from `rgb` (the mesh colours the tracker,
+ *  the compressor and the reader give; ParaView shows such bytes as they are). */
+vtkSmartPointer<vtkUnsignedCharArray> colorsArray(const std::uint8_t* rgb, vtkIdType n);
 
 /** Adds a one-value double array `name` to `data`'s field data (per-frame figures). */
 void addFieldValue(vtkDataObject* data, const char* name, double value);

@@ -21,24 +21,32 @@ namespace
 
 constexpr double FramesPerSecond = 24.0;
 
-// Appends `values` to the buffer (4-byte aligned) and adds a view and an accessor for them.
-int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int type,
-                std::size_t count, bool withBounds, int target)
+// Appends `size` bytes to buffer 0 (4-byte aligned) and a view of them (`target`, `stride`: 0
+// for none); returns the view.
+int addView(tinygltf::Model& model, const unsigned char* bytes, std::size_t size, int target,
+            std::size_t stride)
 {
   auto& data = model.buffers[0].data;
   data.resize((data.size() + 3) & ~std::size_t{3});
   tinygltf::BufferView view;
   view.buffer = 0;
   view.byteOffset = data.size();
-  view.byteLength = values.size() * sizeof(float);
+  view.byteLength = size;
+  view.byteStride = stride;
   if (target)
     view.target = target;
-  const auto* bytes = reinterpret_cast<const unsigned char*>(values.data());
-  data.insert(data.end(), bytes, bytes + view.byteLength);
+  data.insert(data.end(), bytes, bytes + size);
   model.bufferViews.push_back(view);
+  return static_cast<int>(model.bufferViews.size()) - 1;
+}
 
+// Appends `values` to the buffer and adds a view and an accessor for them.
+int addAccessor(tinygltf::Model& model, const std::vector<float>& values, int type,
+                std::size_t count, bool withBounds, int target)
+{
   tinygltf::Accessor accessor;
-  accessor.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+  accessor.bufferView = addView(model, reinterpret_cast<const unsigned char*>(values.data()),
+                                values.size() * sizeof(float), target, 0);
   accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
   accessor.count = count;
   accessor.type = type;
@@ -64,18 +72,9 @@ int addAttributeBytes(tinygltf::Model& model, const std::vector<unsigned char>& 
                       int componentType, int type, std::size_t count, std::size_t stride,
                       bool normalized)
 {
-  auto& data = model.buffers[0].data;
-  data.resize((data.size() + 3) & ~std::size_t{3});
-  tinygltf::BufferView view;
-  view.buffer = 0;
-  view.byteOffset = data.size();
-  view.byteLength = bytes.size();
-  view.byteStride = stride;
-  view.target = TINYGLTF_TARGET_ARRAY_BUFFER;
-  data.insert(data.end(), bytes.begin(), bytes.end());
-  model.bufferViews.push_back(view);
   tinygltf::Accessor accessor;
-  accessor.bufferView = static_cast<int>(model.bufferViews.size()) - 1;
+  accessor.bufferView =
+      addView(model, bytes.data(), bytes.size(), TINYGLTF_TARGET_ARRAY_BUFFER, stride);
   accessor.componentType = componentType;
   accessor.normalized = normalized;
   accessor.count = count;
