@@ -2,6 +2,7 @@
 #include "vtkDeformableTrackFilter.h"
 
 #include "dp/field/TemplateMesh.h"
+#include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/track/FrameFigures.h"
 #include "dp/track/Tracker.h"
 #include "dp/track/TrackerOptionTable.h"
@@ -275,6 +276,57 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
   fillPointData(output, *take.rest, r);
   fillFieldData(output, take, r, frame);
 }
+
+// A frame that is a mesh, copied for the tracker to read as its surface.
+struct MeshFrame
+{
+  std::vector<std::int64_t> triangles;
+  std::vector<double> positions;
+  std::vector<std::uint8_t> colours; // 3 or 4 bytes a vertex, or none
+  int colourComponents = 0;
+
+  dp::MeshSurface surface() const
+  {
+    dp::MeshSurface s;
+    s.positions = positions.data();
+    s.vertices = positions.size() / 3;
+    s.triangles = triangles.data();
+    s.triangleCount = triangles.size() / 3;
+    s.colours = colours.empty() ? nullptr : colours.data();
+    s.colourComponents = colours.empty() ? 0 : colourComponents;
+    return s;
+  }
+};
+
+// The frame's mesh, when it has polygons and every point is finite (`why` says otherwise).
+bool meshFrameOf(vtkPointSet* input, MeshFrame& frame, const char*& why)
+{
+  auto* mesh = vtkPolyData::SafeDownCast(input);
+  if (!mesh || mesh->GetNumberOfPolys() == 0)
+  {
+    why = nullptr;
+    return false;
+  }
+  if (!vtkDP::triangleMesh(mesh, frame.triangles, frame.positions, why))
+    return false;
+  if (vtkUnsignedCharArray* colours = vtkDP::pointColours(input))
+  {
+    frame.colourComponents = colours->GetNumberOfComponents();
+    const auto* bytes = colours->GetPointer(0);
+    frame.colours.assign(bytes, bytes + colours->GetNumberOfValues());
+  }
+  return true;
+}
+
+// A frame's preparation, beside the solve only when there is a second thread for it (a batch
+// process given one thread keeps to one); its errors come out when the frame is tracked.
+template <typename Prepare>
+std::future<dp::PreparedFrame> startPreparing(Prepare prepare)
+{
+  const bool beside =
+      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
+  return std::async(beside ? std::launch::async : std::launch::deferred, std::move(prepare));
+}
 } // namespace
 
 bool vtkDeformableTrackFilter::TemplateOf(vtkInformationVector** inputVector, vtkPointSet* frame0,
@@ -366,27 +418,30 @@ bool vtkDeformableTrackFilter::MakeTracker(vtkInformationVector** inputVector, v
 vtkDeformableTrackFilter::PendingFrame vtkDeformableTrackFilter::PrepareFrame(std::size_t frame,
                                                                               vtkPointSet* input)
 {
+  MeshFrame mesh;
+  const char* why = nullptr;
+  if (this->Internal->Options.meshFrameSamples > 0)
+  {
+    if (meshFrameOf(input, mesh, why))
+      return {startPreparing([&tracker = *this->Internal->Tracker, mesh = std::move(mesh)]
+                             { return tracker.prepare(mesh.surface()); })};
+    if (why)
+      vtkWarningMacro(<< "frame " << frame << ": its polygons are not read as a surface (" << why
+                      << "); its points are tracked instead");
+  }
   vtkDP::TargetPoints points = vtkDP::finitePoints(input);
   if (points.dropped > 0)
   {
     vtkWarningMacro(<< "frame " << frame << ": dropped " << points.dropped
                     << " point(s) with NaN or infinite coordinates");
   }
-  PendingFrame pending;
-  const dp::Tracker& tracker = *this->Internal->Tracker;
-  auto prepare = [&tracker, points = std::move(points)]
-  {
-    return tracker.prepare(points.xyz.data(), points.ids.size(),
-                           points.normals.empty() ? nullptr : points.normals.data(),
-                           points.colours.empty() ? nullptr : points.colours.data(), 3);
-  };
-  // Beside the solve only when there is a second thread for it (a batch process given one
-  // thread keeps to one); its errors come out when the frame is tracked.
-  const bool beside =
-      tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
-  pending.data =
-      std::async(beside ? std::launch::async : std::launch::deferred, std::move(prepare));
-  return pending;
+  return {startPreparing(
+      [&tracker = *this->Internal->Tracker, points = std::move(points)]
+      {
+        return tracker.prepare(points.xyz.data(), points.ids.size(),
+                               points.normals.empty() ? nullptr : points.normals.data(),
+                               points.colours.empty() ? nullptr : points.colours.data(), 3);
+      })};
 }
 
 bool vtkDeformableTrackFilter::TrackFrame(std::size_t frame, PendingFrame pending)

@@ -121,6 +121,13 @@ public:
   ///@}
 
   ///@{
+  /** Frames that are meshes are read as this many points spread over their area, with their
+   *  faces' normals (default 20000, or one a vertex if more; 0: their vertices alone). */
+  void SetMeshFrameSamples(int value) { this->SetTrackerOption("MeshFrameSamples", value); }
+  int GetMeshFrameSamples() { return static_cast<int>(this->GetTrackerOption("MeshFrameSamples")); }
+  ///@}
+
+  ///@{
   /** Share of the previous frame in the rest state of the deformation energy (default 0.3;
    *  0 = the template, as in the paper; 1 = the previous frame). */
   void SetRestUpdate(double value) { this->SetTrackerOption("RestUpdate", value); }

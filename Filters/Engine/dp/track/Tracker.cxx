@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/Tracker.h"
 
+#include "dp/geometry/MeshSurfaceSamples.h"
+
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
 #include "dp/geometry/SurfaceLocator.h"
@@ -562,6 +564,22 @@ PreparedFrame Tracker::prepare(const double* points, std::size_t count, const fl
         std::make_unique<FrameData>(points, count, normals, colours, colourComponents, dataOptions);
   frame.Seconds = elapsed(start);
   return frame;
+}
+
+PreparedFrame Tracker::prepare(const MeshSurface& frame) const
+{
+  if (Options.meshFrameSamples == 0 || frame.triangleCount == 0)
+    return prepare(frame.positions, frame.vertices, nullptr,
+                   frame.colourComponents ? frame.colours : nullptr, frame.colourComponents);
+  const auto start = std::chrono::steady_clock::now();
+  const PointCloud samples =
+      sampleMeshSurface(frame, std::max(Options.meshFrameSamples, frame.vertices));
+  const double sampling = elapsed(start);
+  PreparedFrame prepared = prepare(samples.points.data(), samples.numberOfPoints(),
+                                   samples.normals.empty() ? nullptr : samples.normals.data(),
+                                   samples.hasColors() ? samples.colors.data() : nullptr, 3);
+  prepared.Seconds += sampling;
+  return prepared;
 }
 
 FrameResult Tracker::track(const double* points, std::size_t count, const float* normals)

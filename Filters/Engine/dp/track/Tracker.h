@@ -115,6 +115,7 @@ struct FrameResult
 
 class FrameData;
 struct FrameQuality;
+struct MeshSurface;
 
 /** A frame's data made ready for Tracker::track(): its distance field, normals and subsample
  *  (FrameData), or the finding that it has too little data to say where a surface is. Made from
@@ -167,6 +168,10 @@ public:
    *  colours ride along to FrameResult::samples for the take's colour term. */
   PreparedFrame prepare(const double* points, std::size_t count, const float* normals,
                         const std::uint8_t* colours, int colourComponents) const;
+  /** The same for a frame that is a mesh: read as its surface (options().meshFrameSamples
+   *  points spread over its area with its faces' normals and its vertices' colours,
+   *  sampleMeshSurface), or as its vertices when that option is 0. */
+  PreparedFrame prepare(const MeshSurface& frame) const;
   /** The second half: fits the mesh to a prepared frame, as track() does. Its `seconds` and
    *  `timings.data` include the preparation's time, wherever it ran. Throws
    *  std::invalid_argument for a frame another tracker (or nobody) prepared. */

@@ -251,6 +251,11 @@ std::vector<Row> startRows()
           "maxFramePoints", "", P::None, 100, 1e12,
           "a frame of more points is thinned evenly to this many; 0: no limit",
           [](auto& o) -> auto& { return o.maxFramePoints; })),
+      integer(
+          "meshFrameSamples", "MeshFrameSamples", P::Advanced, 0, 1e9,
+          "a frame that is a mesh is read as this many points spread evenly over its area, with "
+          "its faces' normals (or one a vertex, if it has more vertices); 0: its vertices alone",
+          [](auto& o) -> auto& { return o.meshFrameSamples; }),
       solverRow(),
       flag(
           "motionPrediction", "MotionPrediction", P::Advanced,

@@ -174,6 +174,10 @@ struct TrackerOptions
   // nothing finer than a voxel, and a 10-million-point frame would otherwise take minutes and
   // gigabytes. 0: no limit.
   std::size_t maxFramePoints = 200000;
+  // A frame that is a mesh (Tracker::prepare(MeshSurface)) is read as its surface: this many
+  // points spread evenly over its area, with its faces' normals (sampleMeshSurface), or as many
+  // as it has vertices when that is more; 0: its vertices as points.
+  std::size_t meshFrameSamples = 20000;
   TrackerSolver solver = TrackerSolver::GaussNewton;
   // Rest state of E_int for frame t: (1 - restUpdate) * template + restUpdate * frame t-1.
   // 0 is the paper (the template); a share of the last frame lets the rest state follow shapes
