@@ -5,6 +5,7 @@
 // VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkPCACompressFilter;
 // this file only drives it, writes the files and talks to the user.
 #include "MainJob.h"
+#include "MeshFidelity.h"
 
 #include "CommandLine.h"
 #include "Console.h"
@@ -382,7 +383,44 @@ private:
       sayDataFit(compressor->GetOutput());
     else
       sayMotionFit(*sequence);
+    sayAgainstInputMeshes(*sequence);
     std::printf("glTF: %s\n", Glb.string().c_str());
+  }
+
+  // Per-frame mesh input: each decompressed frame against the frame's own mesh, as
+  // volumetric-video codecs are measured (report.json's compression.againstInputMeshes).
+  void sayAgainstInputMeshes(const dp::CompressedSequence& sequence)
+  {
+    std::vector<std::string> paths;
+    for (int f = 0; f < Frames; ++f)
+      paths.emplace_back(Source->GetFramePath(f));
+    nlohmann::json m;
+    try
+    {
+      m = measureAgainstInputMeshes(
+          sequence, paths, fs::file_size(Dpz),
+          [this](std::size_t t)
+          { Bar.show("measuring against input", static_cast<double>(t + 1) / Frames); });
+      Bar.clear();
+    }
+    catch (const std::exception& e)
+    {
+      Bar.clear();
+      std::cerr << "warning: the decompressed frames were not measured against the input "
+                   "meshes: "
+                << e.what() << "\n";
+      return;
+    }
+    if (m.is_null())
+      return;
+    Compression["againstInputMeshes"] = m;
+    std::printf("Against the input meshes: D1 PSNR %.1f dB, D2 PSNR %.1f dB (means over the "
+                "frames; worst frame %.1f and %.1f dB; peak: each frame's diagonal), %.3g bits "
+                "per input vertex per frame (%.3g without the colour)\n",
+                m["d1PsnrDb"].get<double>(), m["d2PsnrDb"].get<double>(),
+                m["worstD1PsnrDb"].get<double>(), m["worstD2PsnrDb"].get<double>(),
+                m["bitsPerInputVertexFrame"].get<double>(),
+                m["geometryBitsPerInputVertexFrame"].get<double>());
   }
 
   // The codec's figures in report.json's "compression".

@@ -17,6 +17,7 @@
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
+#include "PerFrameMesh.h"
 #include "ScalingTable.h"
 #include "TakeFigures.h"
 #include "TakeMeasures.h"
@@ -24,6 +25,7 @@
 #include "TrackingTruth.h"
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/io/PointCloudIO.h"
@@ -74,6 +76,9 @@ struct Settings
   std::vector<double> colourRest; // the sequence's first frame: where the colour pattern lies
   bool compress = false;          // the compression of the take beside the true motion's
   dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
+  // Each frame given as a mesh of about this many vertices reconstructed from its points, with
+  // a capture's defects in frame 0 (dynamicpoints-sample --per-frame-mesh); 0: the points.
+  std::size_t perFrameMesh = 0;
 };
 Settings S;
 
@@ -99,6 +104,15 @@ dp::SamplerOptions samplingFor(const Condition& c, std::size_t points)
     o.holesMove = true;
   }
   return o;
+}
+
+// The data of frame f as the tracker is given it: the sampled points, or with --per-frame-mesh a
+// mesh reconstructed from them as a capture studio publishes it (with defects in frame 0).
+dp::PointCloud frameData(const dp::AnimatedMesh& mesh, const dp::SamplerOptions& sampling,
+                         std::size_t f)
+{
+  dp::PointCloud cloud = dp::sampleSurface(mesh.positions(f), mesh.triangles(), sampling, f);
+  return S.perFrameMesh ? dp::cli::perFrameMesh(cloud, S.perFrameMesh, f == 0) : cloud;
 }
 
 // Feeds a tracker its frames as the main job does (vtkDeformableTrackFilter): frame f + 1's data
@@ -131,6 +145,11 @@ public:
 private:
   dp::PreparedFrame prepare(const dp::PointCloud& c) const
   {
+    if (c.numberOfFaces() > 0)
+    {
+      const std::vector<std::int64_t> triangles = dp::triangleFans(c);
+      return Tracker.prepare(dp::meshSurfaceOf(c, triangles));
+    }
     return Tracker.prepare(c.points.data(), c.numberOfPoints(),
                            c.hasNormals() ? c.normals.data() : nullptr,
                            c.hasColors() ? c.colors.data() : nullptr, c.colorComponents);
@@ -299,13 +318,11 @@ TrackedTake trackForward(dp::Tracker& tracker, const dp::AnimatedMesh& mesh, con
   FramePipeline pipeline(tracker);
   TrackedTake take;
   take.first = std::min(S.startFrame, frames - 1);
-  dp::PointCloud cloud =
-      dp::sampleSurface(mesh.positions(take.first), mesh.triangles(), sampling, take.first);
+  dp::PointCloud cloud = frameData(mesh, sampling, take.first);
   for (std::size_t f = take.first; f < frames; ++f)
   {
     const dp::PointCloud next =
-        f + 1 < frames ? dp::sampleSurface(mesh.positions(f + 1), mesh.triangles(), sampling, f + 1)
-                       : dp::PointCloud{};
+        f + 1 < frames ? frameData(mesh, sampling, f + 1) : dp::PointCloud{};
     if (S.oracle == "previous" && f > 0)
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
     else if (S.oracle == "same")
@@ -390,6 +407,8 @@ const char* Usage =
     "Usage: BenchmarkTracker [--data DIR] [--sequence NAME[,NAME...]|tube] [--frames N]\n"
     "  data:      [--height M (0: as stored)] [--points N] [--seed S] [--condition clean,noisy]\n"
     "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
+    "             [--per-frame-mesh N (each frame a mesh of about N vertices reconstructed\n"
+    "             from its points, with a capture's defects in frame 0)]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--set NAME=VALUE (repeatable; every option of dp::TrackerOptionTable,\n"
@@ -448,6 +467,8 @@ bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan
     S.holeRadius = 1e-3 * parseDouble(arg, optionValue(argc, argv, i), 0, 1e6);
   else if (arg == "--given-normals")
     S.givenNormals = true;
+  else if (arg == "--per-frame-mesh")
+    S.perFrameMesh = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
   else if (arg == "--template")
   {
     plan.kinds.clear();
@@ -649,8 +670,7 @@ void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
       for (const Condition& condition : plan.conditions)
       {
         const TemplateKind k = size == 0 ? TemplateKind::Full : kind;
-        const dp::PointCloud frame0 = dp::sampleSurface(mesh.positions(0), mesh.triangles(),
-                                                        samplingFor(condition, S.points), 0);
+        const dp::PointCloud frame0 = frameData(mesh, samplingFor(condition, S.points), 0);
         const Template t = makeTemplate(mesh, k, size, frame0, S.reconstruction);
         const std::string label = name + "-" + templateName(k) + "-" +
                                   std::to_string(t.vertices()) + "-" + condition.name;

@@ -7,6 +7,7 @@
 
 #include "dp/field/SurfaceReconstruction.h"
 #include "dp/field/TemplateMesh.h"
+#include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 
@@ -248,15 +249,17 @@ inline Template makeTemplate(const dp::AnimatedMesh& mesh, TemplateKind kind, st
   vtkSmartPointer<vtkPolyData> coarse;
   if (kind == TemplateKind::Reconstructed)
   {
-    // As the main job and the filter make it from frame 0's points (dp::makeTemplate).
+    // As the main job and the filter make it (dp::makeTemplate): from frame 0's mesh (repaired
+    // and remeshed) where the data are meshes, else from its points.
+    const std::vector<std::int64_t> triangles = dp::triangleFans(frame0Samples);
     dp::TemplateOptions options;
-    options.source = dp::TemplateSource::Points;
+    options.source = triangles.empty() ? dp::TemplateSource::Points : dp::TemplateSource::Mesh;
     options.targetVertices = vertices;
     options.reconstruction = reconstruction;
-    const dp::TemplateMesh r =
-        dp::makeTemplate(frame0Samples.points.data(), frame0Samples.numberOfPoints(),
-                         frame0Samples.hasNormals() ? frame0Samples.normals.data() : nullptr, {},
-                         options, "frame 0's points");
+    const dp::TemplateMesh r = dp::makeTemplate(
+        frame0Samples.points.data(), frame0Samples.numberOfPoints(),
+        frame0Samples.hasNormals() ? frame0Samples.normals.data() : nullptr, triangles, options,
+        triangles.empty() ? "frame 0's points" : "frame 0's mesh");
     coarse = toPolyData(r.positions, r.triangles);
   }
   else

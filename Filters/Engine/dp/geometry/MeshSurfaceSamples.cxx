@@ -116,6 +116,35 @@ private:
 };
 } // namespace
 
+std::vector<std::int64_t> triangleFans(const PointCloud& cloud)
+{
+  std::vector<std::int64_t> triangles;
+  for (std::size_t f = 0; f < cloud.numberOfFaces(); ++f)
+  {
+    const auto first = static_cast<std::size_t>(cloud.faceOffsets[f]);
+    const auto end = static_cast<std::size_t>(cloud.faceOffsets[f + 1]);
+    for (std::size_t k = first + 1; k + 1 < end; ++k)
+      triangles.insert(triangles.end(), {cloud.faceConnectivity[first], cloud.faceConnectivity[k],
+                                         cloud.faceConnectivity[k + 1]});
+  }
+  return triangles;
+}
+
+MeshSurface meshSurfaceOf(const PointCloud& cloud, const std::vector<std::int64_t>& triangles)
+{
+  MeshSurface s;
+  s.positions = cloud.points.data();
+  s.vertices = cloud.numberOfPoints();
+  s.triangles = triangles.data();
+  s.triangleCount = triangles.size() / 3;
+  if (cloud.hasColors())
+  {
+    s.colours = cloud.colors.data();
+    s.colourComponents = cloud.colorComponents;
+  }
+  return s;
+}
+
 double meshSurfaceArea(const MeshSurface& mesh)
 {
   checkIndices(mesh);

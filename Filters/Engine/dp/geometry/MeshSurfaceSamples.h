@@ -26,6 +26,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 namespace dp
 {
@@ -40,6 +41,13 @@ struct MeshSurface
   const std::uint8_t* colours = nullptr; // colourComponents bytes per vertex, or null
   int colourComponents = 0;              // 3 (RGB) or 4 (RGBA; alpha dropped)
 };
+
+/** A point cloud's polygons split into triangle fans (3 indices each); none without polygons. */
+std::vector<std::int64_t> triangleFans(const PointCloud& cloud);
+
+/** `cloud` with `triangles` (its polygons as triangleFans gives them), seen as a MeshSurface;
+ *  both must outlive the view. */
+MeshSurface meshSurfaceOf(const PointCloud& cloud, const std::vector<std::int64_t>& triangles);
 
 /** The surface's area (triangles without area count 0). Throws std::invalid_argument for an
  *  index out of range. */

@@ -579,6 +579,7 @@ PreparedFrame Tracker::prepare(const MeshSurface& frame) const
                                    samples.normals.empty() ? nullptr : samples.normals.data(),
                                    samples.hasColors() ? samples.colors.data() : nullptr, 3);
   prepared.Seconds += sampling;
+  prepared.Count = frame.vertices; // what the frame gave; pointsUsed counts the samples read
   return prepared;
 }
 

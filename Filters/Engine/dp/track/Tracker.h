@@ -98,8 +98,10 @@ struct FrameResult
   double overlapped = 0;
   FrameTimings timings;
   bool emptyFrame = false;
-  std::size_t pointsGiven = 0; // the frame's points
-  std::size_t pointsUsed = 0;  // the same, or fewer when the frame was thinned (maxFramePoints)
+  std::size_t pointsGiven = 0; // the frame's points (a mesh frame's vertices)
+  // The points read: the same, fewer when the frame was thinned (maxFramePoints), or a mesh
+  // frame's samples of its surface (meshFrameSamples).
+  std::size_t pointsUsed = 0;
   bool thinned = false;
   // The frame's well-spread subsample with its oriented normals (empty for an empty frame or
   // one with too little data): what a take's fit to its data is measured on (measureDataFit).
@@ -170,7 +172,8 @@ public:
                         const std::uint8_t* colours, int colourComponents) const;
   /** The same for a frame that is a mesh: read as its surface (options().meshFrameSamples
    *  points spread over its area with its faces' normals and its vertices' colours,
-   *  sampleMeshSurface), or as its vertices when that option is 0. */
+   *  sampleMeshSurface), or as its vertices when that option is 0. The result's pointsGiven
+   *  is then the mesh's vertex count, and pointsUsed the samples read. */
   PreparedFrame prepare(const MeshSurface& frame) const;
   /** The second half: fits the mesh to a prepared frame, as track() does. Its `seconds` and
    *  `timings.data` include the preparation's time, wherever it ran. Throws

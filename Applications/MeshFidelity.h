@@ -1,0 +1,32 @@
+// SPDX-License-Identifier: BSD-3-Clause
+// The main job's figures for per-frame mesh input, as volumetric-video codecs give them: each
+// decompressed frame against that frame's own mesh (D1 and D2 PSNR, dp::meshDistortion) and
+// the file's bits per input vertex per frame.
+#pragma once
+
+#include "dp/compress/PcaCompression.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cstddef>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace dp::cli
+{
+
+/**
+ * The decompressed `sequence` (frame t) against the mesh in `framePaths[t]`, for every frame:
+ * {"d1PsnrDb", "d2PsnrDb" (means over frames), "worstD1PsnrDb", "worstD2PsnrDb",
+ *  "bitsPerInputVertexFrame" (the whole file), "geometryBitsPerInputVertexFrame" (without the
+ *  colour stream), "inputVertices", "samplesPerSurface", "perFrame": [...]}.
+ * Null when frame 0's file has no polygons (point input: nothing to compare surfaces with) or
+ * the counts differ. `progress` is told each frame measured. Throws what the readers throw.
+ */
+nlohmann::json measureAgainstInputMeshes(const CompressedSequence& sequence,
+                                         const std::vector<std::string>& framePaths,
+                                         std::size_t fileBytes,
+                                         const std::function<void(std::size_t)>& progress = {});
+
+} // namespace dp::cli
