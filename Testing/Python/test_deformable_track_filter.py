@@ -221,6 +221,38 @@ class TestDeformableTrackFilter(TempDirTestCase):
         self.assertLess(rms, 0.03 * diagonal)
         self.assertEqual(f.GetOutput().GetNumberOfPolys(), truth.GetOutput().GetNumberOfPolys())
 
+    def test_mesh_frames_are_read_as_their_surfaces(self):
+        # Per-frame meshes far coarser than the template: read as their vertices, the data
+        # leave gaps between them; read as their surfaces (the default), the tracked mesh lies
+        # on each frame's surface.
+        from vtkmodules.vtkFiltersCore import vtkImplicitPolyDataDistance
+        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 4, "--points", 4000,
+                 "--per-frame-mesh", 60, self.path("coarse"))
+        frames = dynamicpoints.vtkPointSequenceSource()
+        frames.SetDirectoryName(self.path("coarse"))
+        frames.SetFilePattern("*.ply")
+
+        def distance_to_frames(samples):
+            f = dynamicpoints.vtkDeformableTrackFilter()
+            f.SetInputConnection(frames.GetOutputPort())
+            f.SetTemplateConnection(self.template.GetOutputPort())
+            f.SetMeshFrameSamples(samples)
+            squares = []
+            for frame in range(4):
+                f.UpdateTimeStep(frame)
+                frames.UpdateTimeStep(frame)
+                surface = vtkImplicitPolyDataDistance()
+                surface.SetInput(frames.GetOutput())
+                out = dsa.WrapDataObject(f.GetOutput())
+                self.assertEqual(out.FieldData["Points"][0],
+                                 frames.GetOutput().GetNumberOfPoints())
+                squares += [surface.EvaluateFunction(p) ** 2 for p in np.asarray(out.Points)]
+            return np.sqrt(np.mean(squares))
+
+        self.assertEqual(dynamicpoints.vtkDeformableTrackFilter().GetMeshFrameSamples(), 20000)
+        as_vertices, as_surface = distance_to_frames(0), distance_to_frames(20000)
+        self.assertLess(as_surface, 0.5 * as_vertices, (as_surface, as_vertices))
+
     def test_without_any_template_it_reconstructs_one_from_frame_zero(self):
         from scipy.spatial import cKDTree
         f = dynamicpoints.vtkDeformableTrackFilter()
