@@ -19,6 +19,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -42,6 +43,7 @@ struct Plan
   std::size_t tubeVertices = 0, tubeFrames = 0; // --tube-size (0: the sequences)
   std::vector<dp::PcaLayout> layouts = {dp::PcaLayout::Trajectories, dp::PcaLayout::Shapes};
   std::string glbFolder;
+  std::vector<std::size_t> segments; // --segments: also code the take cut into this many parts
 };
 
 // Reads the command line into `plan`; an exit status when the benchmark should stop there.
@@ -80,11 +82,16 @@ std::optional<int> parseArguments(int argc, char** argv, Plan& plan)
       }
       else if (arg == "--glb")
         plan.glbFolder = optionValue(argc, argv, i);
+      else if (arg == "--segments")
+        for (const std::string& n : splitList(optionValue(argc, argv, i)))
+          plan.segments.push_back(parseCount(arg, n, 2, 1000));
       else
       {
         std::cerr << "Usage: BenchmarkCompression [--data DIR] [--sequence NAME|tube] "
                      "[--tube-size VERTICES,FRAMES] [--layout shapes|trajectories] "
-                     "[--target KG_PERCENT] [--repeats N] [--glb FOLDER]\n";
+                     "[--target KG_PERCENT] [--repeats N] [--glb FOLDER] "
+                     "[--segments N[,N...] (also each take cut in N parts of equal length, "
+                     "each part coded on its own at the whole's RMS error)]\n";
         return arg == "-h" || arg == "--help" ? 0 : 2;
       }
     }
@@ -159,6 +166,37 @@ void printRow(double target, const char* layoutName, const char* coding, double 
               coding, report.components, bits, 96.0 / bits, report.kgError, median(ms), peakMiB());
 }
 
+// --segments: the take cut into `parts` runs of frames, each coded on its own at the RMS error
+// the whole take's coding reached; their bits against the whole's (components chosen per
+// segment pay where the motion changes character within a take).
+void runSegments(const dp::AnimatedMesh& mesh, const std::vector<double>& positions,
+                 dp::PcaLayout layout, const dp::PcaReport& whole, std::size_t parts)
+{
+  const std::size_t nv = mesh.numberOfVertices(), nt = mesh.numberOfFrames();
+  if (parts > nt / 2)
+    return;
+  dp::PcaOptions o;
+  o.layout = layout;
+  o.measure = dp::PcaErrorMeasure::RmsDeviation;
+  o.target = whole.rmsError;
+  double bits = 0, squares = 0;
+  std::string components;
+  for (std::size_t p = 0; p < parts; ++p)
+  {
+    const std::size_t first = nt * p / parts, end = nt * (p + 1) / parts;
+    const dp::CompressedSequence part = dp::compressSequence(positions.data() + 3 * nv * first, nv,
+                                                             end - first, o, mesh.triangles());
+    bits += part.report.bitsPerVertexFrame * static_cast<double>(end - first);
+    squares += part.report.rmsError * part.report.rmsError * static_cast<double>(end - first);
+    components += (p ? "+" : "") + std::to_string(part.report.components);
+  }
+  bits /= static_cast<double>(nt);
+  std::printf("%6s %-12s %zu segments: %s components, %.3f bpvf (%.2fx the whole take's), RMS "
+              "error %.3g (the whole's %.3g)\n",
+              "", "", parts, components.c_str(), bits, bits / whole.bitsPerVertexFrame,
+              std::sqrt(squares / static_cast<double>(nt)), whole.rmsError);
+}
+
 // The rows of one error target and layout: float PCA (the paper), then quantised plain PCA and
 // the full codec, with the codec's gain, its time on one thread and, with --glb, its export.
 void runLayout(const std::string& name, const dp::AnimatedMesh& mesh,
@@ -189,6 +227,8 @@ void runLayout(const std::string& name, const dp::AnimatedMesh& mesh,
                       dp::encodeCompressedSequence(coded.oneThread)
                   ? "yes"
                   : "NO");
+  for (std::size_t parts : plan.segments)
+    runSegments(mesh, positions, layout, report, parts);
   if (plan.glbFolder.empty() || layout != dp::PcaLayout::Shapes)
     return;
   std::filesystem::create_directories(plan.glbFolder);

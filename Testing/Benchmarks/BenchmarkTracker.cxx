@@ -17,6 +17,7 @@
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
+#include "FrameOutputs.h"
 #include "PerFrameMesh.h"
 #include "ScalingTable.h"
 #include "TakeFigures.h"
@@ -43,6 +44,7 @@
 #include <future>
 #include <iostream>
 #include <memory>
+#include <numeric>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -180,54 +182,6 @@ void printFrame(std::size_t f, const dp::FrameResult& r, const std::vector<doubl
       r.failed ? " FAILED" : "");
 }
 
-// --csv: one row a frame.
-void writeCsvRow(std::ostream& csv, const std::string& label, std::size_t f,
-                 const dp::FrameResult& r, const FrameFigures& figures, double vertices)
-{
-  csv << label << ',' << f << ',' << 1e3 * std::sqrt(figures.vertexSquaredSum / vertices) << ','
-      << 1e3 * figures.largestVertexError << ','
-      << 1e3 * std::sqrt(figures.surfaceSquaredSum / vertices) << ',' << 100 * figures.uncovered
-      << ',' << r.iterations << ',' << 1e3 * r.seconds << '\n';
-}
-
-void dumpFrame(const std::string& folder, std::size_t frame, const std::vector<double>& positions,
-               const std::vector<double>& truth, const std::vector<std::int64_t>& triangles,
-               const dp::PointCloud& data)
-{
-  std::filesystem::create_directories(folder);
-  dp::PointCloud mesh;
-  mesh.points = positions;
-  for (std::size_t t = 0; t < triangles.size(); t += 3)
-    mesh.addFace(&triangles[t], 3);
-  // Each vertex's error against the truth, for colouring.
-  dp::PointAttribute error{"error", 1, {}};
-  for (std::size_t i = 0; i < positions.size(); i += 3)
-    error.values.push_back(static_cast<float>(
-        std::sqrt((positions[i] - truth[i]) * (positions[i] - truth[i]) +
-                  (positions[i + 1] - truth[i + 1]) * (positions[i + 1] - truth[i + 1]) +
-                  (positions[i + 2] - truth[i + 2]) * (positions[i + 2] - truth[i + 2]))));
-  mesh.attributes.push_back(error);
-  // ... and as colours: grey at 0, red at 5 cm and beyond.
-  mesh.colorComponents = 3;
-  for (float e : error.values)
-  {
-    const double u = std::min(1.0, e / 0.05);
-    const auto c = [&](double from, double to)
-    { return static_cast<std::uint8_t>(from + u * (to - from)); };
-    mesh.colors.insert(mesh.colors.end(), {c(200, 230), c(200, 20), c(200, 20)});
-  }
-  char name[64];
-  std::snprintf(name, sizeof name, "/tracked_%04zu.ply", frame);
-  dp::writePLY(folder + name, mesh);
-  mesh.points = truth;
-  std::snprintf(name, sizeof name, "/truth_%04zu.ply", frame);
-  dp::writePLY(folder + name, mesh);
-  std::snprintf(name, sizeof name, "/points_%04zu.ply", frame);
-  dp::PointCloud points;
-  points.points = data.points;
-  dp::writePLY(folder + name, points);
-}
-
 // --colour: the colour each vertex carries (FrameResult::colours) against the true colour of its
 // material point (the sampler's pattern at its truth's rest position); and the frame's colour
 // field (as the tracker reads it) at the true positions, which shows what the field's blur
@@ -300,6 +254,8 @@ struct TrackedTake
   std::size_t first = 0; // the first frame tracked (--start-frame)
   std::vector<dp::FrameResult> results;
   std::vector<double> cycleSeconds;
+  // --per-frame-mesh: each input mesh's D1 mean squared error against the true surface.
+  std::vector<double> inputMeshD1;
 
   std::vector<const dp::FrameSamples*> samples() const
   {
@@ -327,6 +283,8 @@ TrackedTake trackForward(dp::Tracker& tracker, const dp::AnimatedMesh& mesh, con
       tracker.restartFrom(groundTruth(t, mesh.positions(f - 1), mesh.triangles()));
     else if (S.oracle == "same")
       tracker.restartFrom(groundTruth(t, mesh.positions(f), mesh.triangles()));
+    if (cloud.numberOfFaces() > 0)
+      take.inputMeshD1.push_back(inputMeshError(mesh, f, cloud));
     double seconds = 0;
     take.results.push_back(pipeline.track(cloud, f + 1 < frames ? &next : nullptr, seconds));
     take.cycleSeconds.push_back(seconds);
@@ -683,6 +641,14 @@ void runSequence(const std::string& name, const Plan& plan, std::ostream* csv)
         const TrackedTake take = trackForward(tracker, mesh, t, condition, n);
         printRun(evaluate(mesh, t, tracker, condition, take, true, csv, label), k, t.vertices(),
                  condition, diagonal);
+        if (!take.inputMeshD1.empty())
+          std::printf(
+              "               the input meshes lie %.1f mm RMS from the true surface "
+              "(D1, the worse direction; worst frame %.1f mm)\n",
+              1e3 *
+                  std::sqrt(std::accumulate(take.inputMeshD1.begin(), take.inputMeshD1.end(), 0.0) /
+                            static_cast<double>(take.inputMeshD1.size())),
+              1e3 * std::sqrt(*std::max_element(take.inputMeshD1.begin(), take.inputMeshD1.end())));
         if (S.compress)
           printCompressionRows(tracker, mesh, t, take);
         if (plan.ablation)

@@ -5,6 +5,8 @@
 
 #include "TrackingTruth.h"
 
+#include "dp/geometry/MeshDistortion.h"
+#include "dp/io/AnimatedMesh.h"
 #include "dp/track/Tracker.h"
 
 #include <Eigen/Dense>
@@ -115,6 +117,21 @@ inline double rigidFreeRms(const std::vector<double>& y, const std::vector<doubl
   for (std::size_t v = 0; v < n; ++v)
     e += (R * (Eigen::Vector3d(&y[3 * v]) - a) + b - Eigen::Vector3d(&truth[3 * v])).squaredNorm();
   return 1e3 * std::sqrt(e / static_cast<double>(n));
+}
+
+// How far a per-frame input mesh lies from the true surface of its frame: D1's mean squared
+// error (both directions, the worse kept), what no tracking of that mesh can undo.
+inline double inputMeshError(const dp::AnimatedMesh& mesh, std::size_t f,
+                             const dp::PointCloud& input)
+{
+  const std::vector<double> truth = mesh.positions(f);
+  dp::MeshSurface surface;
+  surface.positions = truth.data();
+  surface.vertices = truth.size() / 3;
+  surface.triangles = mesh.triangles().data();
+  surface.triangleCount = mesh.triangles().size() / 3;
+  const std::vector<std::int64_t> triangles = dp::triangleFans(input);
+  return dp::meshDistortion(surface, dp::meshSurfaceOf(input, triangles), 20000).d1;
 }
 
 } // namespace dp::bench
