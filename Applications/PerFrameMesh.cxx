@@ -155,6 +155,8 @@ PointCloud perFrameMesh(const PointCloud& samples, std::size_t vertices, bool de
       samples.hasNormals() ? samples.normals : estimateNormals(samples.points.data(), n);
   ReconstructionOptions o;
   o.targetVertices = vertices;
+  // As a capture's marching cubes: a part cut off by a hole (a tail) stays, noise floaters go.
+  o.keptPieceShare = 0.01;
   const ReconstructedMesh surface = reconstructSurface(samples.points.data(), normals.data(), n, o);
   PointCloud mesh;
   mesh.points = surface.positions;

@@ -14,10 +14,11 @@ namespace dp::cli
 
 /** The mesh of about `vertices` vertices reconstructed from `samples` (their normals, or
  *  estimated ones), with the samples' colours carried to the nearest vertex and vertex normals
- *  when the samples had normals. With `defects`: duplicate vertices (5 vertices split off, one
- *  triangle each using the copy), triangles without area (two with a repeated corner, one with
- *  collinear corners) and a small stray part (a tetrahedron of 1 % of the diagonal beside the
- *  surface). */
+ *  when the samples had normals. Every piece of at least 1 % of the largest's size is kept (a
+ *  part cut off by a hole in the data, a tail, stays, as marching cubes keep it). With `defects`:
+ * duplicate vertices (5 vertices split off, one triangle each using the copy), triangles without
+ * area (two with a repeated corner, one with collinear corners) and a small stray part (a
+ * tetrahedron of 1 % of the diagonal beside the surface). */
 PointCloud perFrameMesh(const PointCloud& samples, std::size_t vertices, bool defects);
 
 } // namespace dp::cli

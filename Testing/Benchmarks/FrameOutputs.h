@@ -62,9 +62,12 @@ inline void dumpFrame(const std::string& folder, std::size_t frame,
   std::snprintf(name, sizeof name, "/truth_%04zu.ply", frame);
   dp::writePLY(folder + name, mesh);
   std::snprintf(name, sizeof name, "/points_%04zu.ply", frame);
-  dp::PointCloud points;
-  points.points = data.points;
-  dp::writePLY(folder + name, points);
+  // The frame's data as the tracker was given it (with --per-frame-mesh, the mesh's faces too).
+  dp::PointCloud input;
+  input.points = data.points;
+  input.faceOffsets = data.faceOffsets;
+  input.faceConnectivity = data.faceConnectivity;
+  dp::writePLY(folder + name, input);
 }
 
 } // namespace dp::bench

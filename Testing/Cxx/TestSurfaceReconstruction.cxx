@@ -2,7 +2,7 @@
 // Surface reconstruction from oriented points: a closed, outward-facing mesh on the sampled
 // surface with the wanted vertex count (within 10%) and well-shaped triangles, at any scale,
 // from estimated normals too, with the data's holes bridged and a patch of wrong normals
-// tolerated; open data give an open mesh; bad input refused with a message.
+// tolerated; open data give an open mesh; pieces kept by size; bad input refused with a message.
 #include "dp/field/SurfaceReconstruction.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceSampler.h"
@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <map>
 #include <random>
@@ -278,6 +279,45 @@ TEST(SurfaceReconstruction, OpenDataGiveAnOpenMesh)
   EXPECT_GT(up, 0);
 }
 
+// Three separate balls: radius 1 at the origin, 0.4 at x = 3 and 0.06 at x = -3 (a floater).
+// By default only the largest is meshed; with keptPieceShare 0.1 the 0.4 ball (a sixth of the
+// largest's area) is kept too, and the floater is not.
+TEST(SurfaceReconstruction, KeepsThePiecesAsLargeAsTheAskedShareOfTheLargest)
+{
+  Cloud c = sphere(8000, 1.0);
+  const auto add = [&](const Cloud& ball, double x)
+  {
+    for (std::size_t i = 0; i < ball.points.size(); i += 3)
+    {
+      c.points.insert(c.points.end(), {ball.points[i] + x, ball.points[i + 1], ball.points[i + 2]});
+      c.normals.insert(c.normals.end(), &ball.normals[i], &ball.normals[i] + 3);
+    }
+  };
+  add(sphere(1280, 0.4), 3.0);
+  add(sphere(40, 0.06), -3.0);
+  const auto piecesMeshed = [&](double share)
+  {
+    dp::ReconstructionOptions o;
+    o.targetVertices = 800;
+    o.keptPieceShare = share;
+    const dp::ReconstructedMesh m =
+        dp::reconstructSurface(c.points.data(), c.normals.data(), c.points.size() / 3, o);
+    std::array<std::size_t, 3> onBall{0, 0, 0};
+    for (std::size_t v = 0; v < m.positions.size(); v += 3)
+      onBall[m.positions[v] > 2 ? 1 : m.positions[v] < -2 ? 2 : 0]++;
+    return onBall;
+  };
+  const std::array<std::size_t, 3> largest = piecesMeshed(1);
+  EXPECT_GT(largest[0], 700u);
+  EXPECT_EQ(largest[1], 0u);
+  EXPECT_EQ(largest[2], 0u);
+  const std::array<std::size_t, 3> large = piecesMeshed(0.1);
+  EXPECT_GT(large[0], 500u);
+  EXPECT_GT(large[1], 40u); // about a sixth of the vertices, by area
+  EXPECT_EQ(large[2], 0u);
+  EXPECT_GT(piecesMeshed(0.0001)[2], 0u); // the floater is a piece of its own, dropped by size
+}
+
 TEST(SurfaceReconstruction, RefusesBadInputWithAMessage)
 {
   const Cloud c = sphere(100, 1.0);
@@ -312,6 +352,13 @@ TEST(SurfaceReconstruction, RefusesBadInputWithAMessage)
     up[3 * i + 2] = 1.0f;
   o.targetVertices = 100;
   EXPECT_THROW(dp::reconstructSurface(same.data(), up.data(), 50, o), std::invalid_argument);
+  for (double share : {0.0, 1.5, std::nan("")})
+  {
+    dp::ReconstructionOptions shares;
+    shares.keptPieceShare = share;
+    EXPECT_THROW(dp::reconstructSurface(c.points.data(), c.normals.data(), 100, shares),
+                 std::invalid_argument);
+  }
   o.voxelSize = -1;
   EXPECT_THROW(dp::reconstructSurface(c.points.data(), c.normals.data(), 100, o),
                std::invalid_argument);

@@ -316,8 +316,9 @@ FineMesh meshField(const Input& in, double h, double reach, std::size_t k,
   return zeroCrossing(*grid, h);
 }
 
-// Keeps the triangles of the largest edge-connected piece and drops unused vertices.
-void keepLargestPiece(FineMesh& mesh)
+// Keeps the triangles of the largest edge-connected piece (and of the pieces with at least
+// `share` of its triangles) and drops unused vertices.
+void keepLargePieces(FineMesh& mesh, double share)
 {
   const std::size_t nt = mesh.triangles.size();
   std::unordered_map<std::uint64_t, int> edgeOwner;
@@ -349,7 +350,9 @@ void keepLargestPiece(FineMesh& mesh)
   FineMesh kept;
   for (std::size_t t = 0; t < nt; ++t)
   {
-    if (find(static_cast<int>(t)) != largest)
+    const int piece = find(static_cast<int>(t));
+    if (piece != largest && !(share < 1 && static_cast<double>(size[piece]) >=
+                                               share * static_cast<double>(size[largest])))
       continue;
     std::array<int, 3> tri{};
     for (int e = 0; e < 3; ++e)
@@ -408,6 +411,9 @@ void validateReconstruction(const double* points, const float* normals, std::siz
       !(options.holeReach >= 0 && std::isfinite(options.holeReach)))
     throw std::invalid_argument("surface reconstruction: voxelSize and holeReach must be finite "
                                 "and not negative");
+  if (!(options.keptPieceShare > 0 && options.keptPieceShare <= 1))
+    throw std::invalid_argument("surface reconstruction: keptPieceShare must be in (0, 1], not " +
+                                std::to_string(options.keptPieceShare));
   for (std::size_t i = 0; i < 3 * count; ++i)
     if (!std::isfinite(points[i]) || !std::isfinite(normals[i]))
       throw std::invalid_argument("surface reconstruction: point " + std::to_string(i / 3) +
@@ -480,7 +486,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
   // Open data: the crossings where the band ends (at least NarrowBand voxels from the points)
   // are no surface of the data.
   dropUnsupported(fine, in, open ? (NarrowBand - 0.5) * h : reach);
-  keepLargestPiece(fine);
+  keepLargePieces(fine, options.keptPieceShare);
   if (fine.triangles.size() < 4)
     throw std::runtime_error("surface reconstruction found no surface in " + std::to_string(count) +
                              " points");

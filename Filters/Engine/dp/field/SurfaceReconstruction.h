@@ -21,7 +21,8 @@
  *    oriented patch, cloth folded over itself) are flipped and the field evaluated again there;
  *    border voxels still in disagreement take their piece's sign, which leaves at worst a small
  *    blister instead of a surface far from the data. OpenVDB's volumeToMesh meshes the zero
- *    crossing; the largest connected piece is kept.
+ *    crossing; the largest connected piece is kept (or, with `keptPieceShare` under 1, every
+ *    piece at least that share of its size).
  * 2. Isotropic remeshing of that surface to the wanted count (Botsch & Kobbelt 2004): edge splits,
  *    collapses (with the link condition, no folded triangles, the merged vertex where the fine
  *    surface's planes around the edge are best kept, as in Garland & Heckbert's quadric
@@ -61,10 +62,14 @@ struct ReconstructionOptions
   std::size_t targetVertices = 1000;        // wanted vertex count
   std::size_t neighbours = 8;               // points whose planes each voxel averages
   std::size_t maxActiveVoxels = 50'000'000; // refuse larger grids (memory guard)
-  double voxelSize = 0;     // of the fine grid; 0: 1.5 times the points' median spacing
-  double holeReach = 0.035; // holes in the data are bridged up to about this distance from
-                            // their rim, as a fraction of the bounding box diagonal (0.035:
-                            // 6.7 cm on a person 1.70 m tall; 0: only gaps of a few voxels)
+  double voxelSize = 0;      // of the fine grid; 0: 1.5 times the points' median spacing
+  double holeReach = 0.035;  // holes in the data are bridged up to about this distance from
+                             // their rim, as a fraction of the bounding box diagonal (0.035:
+                             // 6.7 cm on a person 1.70 m tall; 0: only gaps of a few voxels)
+  double keptPieceShare = 1; // pieces with at least this share of the largest piece's triangles
+                             // are kept (1: the largest alone, as a template needs; a small
+                             // share keeps what a capture's marching cubes keep, a tail cut off
+                             // by a hole, and drops the floaters of noise)
 };
 
 struct ReconstructedMesh
@@ -79,8 +84,9 @@ struct ReconstructedMesh
  * Reconstructs a surface from `count` points (x y z each) with unit normals (nx ny nz each;
  * estimateNormals gives them). Throws std::invalid_argument for fewer than 16 points,
  * non-finite coordinates or normals, points that all coincide, a target under 20 vertices or
- * a negative or non-finite voxelSize or holeReach, and std::runtime_error when the fine grid
- * would exceed maxActiveVoxels (a larger voxelSize helps) or no surface comes out.
+ * a negative or non-finite voxelSize or holeReach, a keptPieceShare outside (0, 1], and
+ * std::runtime_error when the fine grid would exceed maxActiveVoxels (a larger voxelSize helps) or
+ * no surface comes out.
  */
 ReconstructedMesh reconstructSurface(const double* points, const float* normals, std::size_t count,
                                      const ReconstructionOptions& options = {});
