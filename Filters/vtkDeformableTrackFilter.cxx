@@ -280,22 +280,10 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
 // A frame that is a mesh, copied for the tracker to read as its surface.
 struct MeshFrame
 {
+  dp::PointCloud vertices; // positions, and colours where the frame has them
   std::vector<std::int64_t> triangles;
-  std::vector<double> positions;
-  std::vector<std::uint8_t> colours; // 3 or 4 bytes a vertex, or none
-  int colourComponents = 0;
 
-  dp::MeshSurface surface() const
-  {
-    dp::MeshSurface s;
-    s.positions = positions.data();
-    s.vertices = positions.size() / 3;
-    s.triangles = triangles.data();
-    s.triangleCount = triangles.size() / 3;
-    s.colours = colours.empty() ? nullptr : colours.data();
-    s.colourComponents = colours.empty() ? 0 : colourComponents;
-    return s;
-  }
+  dp::MeshSurface surface() const { return dp::meshSurfaceOf(vertices, triangles); }
 };
 
 // The frame's mesh, when it has polygons and every point is finite (`why` says otherwise).
@@ -307,13 +295,13 @@ bool meshFrameOf(vtkPointSet* input, MeshFrame& frame, const char*& why)
     why = nullptr;
     return false;
   }
-  if (!vtkDP::triangleMesh(mesh, frame.triangles, frame.positions, why))
+  if (!vtkDP::triangleMesh(mesh, frame.triangles, frame.vertices.points, why))
     return false;
   if (vtkUnsignedCharArray* colours = vtkDP::pointColours(input))
   {
-    frame.colourComponents = colours->GetNumberOfComponents();
+    frame.vertices.colorComponents = colours->GetNumberOfComponents();
     const auto* bytes = colours->GetPointer(0);
-    frame.colours.assign(bytes, bytes + colours->GetNumberOfValues());
+    frame.vertices.colors.assign(bytes, bytes + colours->GetNumberOfValues());
   }
   return true;
 }

@@ -23,8 +23,7 @@ class Target
 {
 public:
   explicit Target(const MeshSurface& s)
-      : Positions(s.positions), Mesh(usableTriangles(s), s.vertices), Locator(Mesh, s.positions),
-        Normals(3 * s.vertices)
+      : Mesh(usableTriangles(s), s.vertices), Locator(Mesh, s.positions), Normals(3 * s.vertices)
   {
     Mesh.vertexNormals(s.positions, Normals.data());
   }
@@ -59,7 +58,6 @@ private:
     }
     return kept;
   }
-  const double* Positions;
   TriangleMesh Mesh;
   SurfaceLocator Locator;
   std::vector<double> Normals;
