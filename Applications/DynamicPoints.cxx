@@ -73,6 +73,10 @@ Options:
                       over the tracked mesh's (default: 10)
   --error-target KG   compression judged against the motion instead: Karni-Gotsman error
                       in percent (e.g. 0.2)
+  --colour-tolerance L where the points carry colour: the levels (of 255) a stored
+                      colour may differ from the tracked one; more holds each vertex's
+                      colour while it stays within L (no flicker, a smaller colour
+                      stream); 0: lossless (default: 4)
   --meshopt           store tracked.glb's buffers compressed by meshoptimizer
                       (EXT_meshopt_compression: smaller, for web viewers such as
                       three.js; Blender 3.4 and ParaView cannot open it)
@@ -80,8 +84,9 @@ Options:
   --quiet             no per-frame table and no progress bar
   --describe-report   print the per-frame figures of report.json (and of the track
                       filter's field data) as a Markdown table, and exit
-  --describe-limits   print the ranges of --vertices, --error-target and --fit-growth
-                      (also the ParaView properties') as JSON, and exit
+  --describe-limits   print the ranges of --vertices, --error-target, --fit-growth and
+                      --colour-tolerance (also the ParaView properties') as JSON, and
+                      exit
 )";
 
 const char* const UsageEnd = R"(  -h, --help          show this help
@@ -112,7 +117,11 @@ std::string limitsJson()
                                  {"fitGrowth",
                                   {{"default", Settings{}.fitGrowth},
                                    {"minimum", dp::MinimumFitGrowth},
-                                   {"maximum", dp::MaximumFitGrowth}}}};
+                                   {"maximum", dp::MaximumFitGrowth}}},
+                                 {"colourTolerance",
+                                  {{"default", Settings{}.colourTolerance},
+                                   {"minimum", 0},
+                                   {"maximum", dp::MaximumColourTolerance}}}};
   return limits.dump(2) + "\n";
 }
 
@@ -173,6 +182,9 @@ Settings parse(int argc, char** argv, bool& help)
     else if (arg == "--fit-growth")
       s.fitGrowth =
           parseDouble(arg, optionValue(argc, argv, i), dp::MinimumFitGrowth, dp::MaximumFitGrowth);
+    else if (arg == "--colour-tolerance")
+      s.colourTolerance = static_cast<int>(
+          parseCount(arg, optionValue(argc, argv, i), 0, dp::MaximumColourTolerance));
     else if (arg == "--quiet")
       s.quiet = true;
     else if (arg == "--meshopt")

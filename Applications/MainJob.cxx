@@ -356,6 +356,7 @@ private:
     compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
                                             : vtkPCACompressFilter::KARNI_GOTSMAN);
     compressor->SetErrorTarget(againstData ? S.fitGrowth : S.errorTarget);
+    compressor->SetColourTolerance(S.colourTolerance);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";
@@ -440,7 +441,10 @@ private:
     Compression["InputPointBytes"] = rawBytes;
     Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
     if (colourBytes > 0)
+    {
       Compression["ColourBytes"] = static_cast<long long>(colourBytes);
+      Compression["ColourTolerance"] = S.colourTolerance;
+    }
   }
 
   // The compressed file's name for the "Compressed:" line, with its colour's share when it has
@@ -451,7 +455,10 @@ private:
       return Dpz.string();
     return Dpz.string() +
            " (with colour: " + std::to_string(Compression["ColourBytes"].get<long long>()) +
-           " of its " + std::to_string(Compression["Bytes"].get<long long>()) + " bytes)";
+           " of its " + std::to_string(Compression["Bytes"].get<long long>()) + " bytes, " +
+           (S.colourTolerance > 0 ? "within " + std::to_string(S.colourTolerance) + " levels"
+                                  : std::string("lossless")) +
+           ")";
   }
 
   void sayDataFit(vtkPolyData* result)

@@ -2,6 +2,7 @@
 // The main job on one input: read, track, write frame by frame, compress, report.
 #pragma once
 
+#include "dp/compress/PcaCompression.h"
 #include "dp/field/TemplateMesh.h"
 #include "dp/track/TrackerOptions.h"
 
@@ -22,6 +23,8 @@ struct Settings
   long long frames = 0;   // 0: all
   double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)
   double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
+  int colourTolerance = dp::PcaOptions{}.colourTolerance; // levels (of 255) a stored colour
+                                                          // may differ from the tracked one
   bool quiet = false;
   bool meshopt = false;
   // What to print instead of running: "values" (--print-options), "json" or "markdown"

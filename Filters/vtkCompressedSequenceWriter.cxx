@@ -28,6 +28,7 @@ vtkCompressedSequenceWriter::vtkCompressedSequenceWriter()
   this->ErrorMeasure = codec->GetErrorMeasure();
   this->ErrorTarget = codec->GetErrorTarget();
   this->NumberOfComponents = codec->GetNumberOfComponents();
+  this->ColourTolerance = codec->GetColourTolerance();
   this->MeshoptCompression = dp::GlbOptions().meshopt;
 }
 
@@ -78,6 +79,7 @@ std::string compress(vtkCompressedSequenceWriter* writer, vtkPCACompressFilter* 
   codec->SetErrorMeasure(writer->GetErrorMeasure());
   codec->SetErrorTarget(writer->GetErrorTarget());
   codec->SetNumberOfComponents(writer->GetNumberOfComponents());
+  codec->SetColourTolerance(writer->GetColourTolerance());
   ProgressRelay relay{writer, vtksys::SystemTools::GetFilenameName(writer->GetFileName())};
   vtkNew<vtkCallbackCommand> progress;
   progress->SetCallback(relayProgress);
@@ -140,6 +142,7 @@ void vtkCompressedSequenceWriter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ErrorMeasure: " << this->ErrorMeasure << "\n";
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
+  os << indent << "ColourTolerance: " << this->ColourTolerance << "\n";
   os << indent << "MeshoptCompression: " << this->MeshoptCompression << "\n";
   os << indent << "Piece: " << this->Piece << " of " << this->NumberOfPieces << "\n";
 }

@@ -13,10 +13,10 @@
  *  - .glb: glTF 2.0 binary, one morph target per shape component and one animation of the
  *    weights at 24 frames per second (always the shape layout, which glTF needs).
  * Where every input frame has point array "Colors" (see vtkPCACompressFilter), the .dpz carries
- * them losslessly (its colour stream) and the .glb as COLOR_0 with a colour morph target per
- * frame (see dp/export/GltfExport.h).
- * The file is written beside its name and renamed when complete, so a failure never leaves a
- * broken file. In ParaView this is File > Save Data for .dpz and .glb.
+ * them (its colour stream; losslessly, or within ColourTolerance levels) and the .glb as COLOR_0
+ * with a colour morph target per frame (see dp/export/GltfExport.h). The file is written beside its
+ * name and renamed when complete, so a failure never leaves a broken file. In ParaView this is File
+ * > Save Data for .dpz and .glb.
  *
  * Under MPI only piece 0 writes (the sequence is whole there; see vtkDPTemporalFilter):
  * ParaView sets Piece and NumberOfPieces to each process's rank and count.
@@ -44,7 +44,7 @@ public:
   ///@{
   /** As vtkPCACompressFilter: Layout (default SHAPES; .glb is always SHAPES), ErrorMeasure
    *  (default KARNI_GOTSMAN), ErrorTarget (default 0.2), NumberOfComponents (0: chosen for
-   *  the target). */
+   *  the target), ColourTolerance (0: colours lossless). */
   vtkSetClampMacro(Layout, int, 0, 1);
   vtkGetMacro(Layout, int);
   vtkSetClampMacro(ErrorMeasure, int, 0, 2);
@@ -53,6 +53,8 @@ public:
   vtkGetMacro(ErrorTarget, double);
   vtkSetClampMacro(NumberOfComponents, int, 0, VTK_INT_MAX);
   vtkGetMacro(NumberOfComponents, int);
+  vtkSetClampMacro(ColourTolerance, int, 0, 64);
+  vtkGetMacro(ColourTolerance, int);
   ///@}
 
   ///@{
@@ -86,6 +88,7 @@ protected:
   int ErrorMeasure;
   double ErrorTarget;
   int NumberOfComponents;
+  int ColourTolerance;
   vtkTypeBool MeshoptCompression;
   int Piece = 0;
   int NumberOfPieces = 1;

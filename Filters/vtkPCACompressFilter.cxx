@@ -85,6 +85,7 @@ struct vtkPCACompressFilter::Internals
     f.ErrorTarget = o.target;
     f.NumberOfComponents = static_cast<int>(o.components);
     f.Quantize = o.quantise;
+    f.ColourTolerance = o.colourTolerance;
   }
 
   // (DISTANCE_TO_DATA sets its own measure and target: dp::compressAgainstData.)
@@ -97,9 +98,13 @@ struct vtkPCACompressFilter::Internals
     o.target = f.ErrorTarget;
     o.components = static_cast<std::size_t>(f.NumberOfComponents);
     o.quantise = f.Quantize;
+    o.colourTolerance = f.ColourTolerance;
     return o;
   }
 };
+
+// The headers' clamps (ColourTolerance here and in vtkCompressedSequenceWriter) say 64.
+static_assert(dp::MaximumColourTolerance == 64, "the ColourTolerance clamps need updating");
 
 vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals)
 {
@@ -246,7 +251,7 @@ std::string vtkPCACompressFilter::Compress()
           dp::compressSequence(in.Positions.data(), vertices, frames, Internals::optionsOf(*this),
                                in.Triangles, times, progress));
     if (in.ColoursInEveryFrame && !in.Colours.empty())
-      dp::setColours(*in.Result, std::move(in.Colours));
+      dp::setColours(*in.Result, std::move(in.Colours), this->ColourTolerance);
   }
   catch (const std::exception& e)
   {
@@ -296,7 +301,10 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   vtkDP::addFieldValue(output, "MaxErrorRelative", r.maxErrorRelative);
   vtkDP::addFieldValue(output, "RmsError", r.rmsError);
   if (!result.colours.empty())
+  {
     vtkDP::addFieldValue(output, "ColourBytes", static_cast<double>(r.colourBytes));
+    vtkDP::addFieldValue(output, "ColourTolerance", r.colourTolerance);
+  }
   if (in.Before.samples > 0)
   {
     vtkDP::addFieldValue(output, "DistanceToDataInput", in.Before.rms);
@@ -377,4 +385,5 @@ void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)
   os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
   os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
   os << indent << "Quantize: " << this->Quantize << "\n";
+  os << indent << "ColourTolerance: " << this->ColourTolerance << "\n";
 }

@@ -20,9 +20,10 @@
  * polygons, point array "CompressionError" (distance of each vertex to its input position; the
  * active scalars).
  * Colour: where every input frame has point array "Colors" (unsigned char, 3 or 4 components;
- * alpha is dropped), the colours go into the compressed sequence losslessly (the .dpz's colour
- * stream, the .glb's COLOR_0) and the output carries the frame's "Colors" too, with field data
- * "ColourBytes" (what the colour stream takes in the .dpz).
+ * alpha is dropped), the colours go into the compressed sequence (the .dpz's colour stream, the
+ * .glb's COLOR_0), losslessly or within ColourTolerance levels, and the output carries the
+ * frame's stored "Colors" too, with field data "ColourBytes" (what the colour stream takes in
+ * the .dpz) and "ColourTolerance".
  * Field data: "Components", "PaperD0", "PaperD1", "PaperRatio" (the paper's counts of
  * numbers), "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "KGError" (percent),
  * "MaxError" (world units), "MaxErrorRelative" (of the diagonal), "RmsError" (world units),
@@ -103,6 +104,15 @@ public:
   vtkBooleanMacro(Quantize, vtkTypeBool);
   ///@}
 
+  ///@{
+  /** Colour levels (of 255) a stored colour may differ from the input's "Colors" (default 4):
+   *  0 stores them losslessly; more holds each vertex's colour while it stays within that many
+   *  levels, which removes the tracked colour's flicker and most of the colour stream's bytes
+   *  (dp::setColours). */
+  vtkSetClampMacro(ColourTolerance, int, 0, 64);
+  vtkGetMacro(ColourTolerance, int);
+  ///@}
+
   /** Why the last update failed (the error it reported: a frame that differs from frame 0, a
    *  point that is not finite, the codec's refusal), empty when it did not. */
   const char* GetFailureMessage() const;
@@ -127,6 +137,7 @@ protected:
   double ErrorTarget;
   int NumberOfComponents;
   vtkTypeBool Quantize;
+  int ColourTolerance;
 
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;

@@ -25,6 +25,7 @@
 #include "TrackerOptionFlags.h"
 #include "TrackingTruth.h"
 
+#include "dp/compress/PcaCompression.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/SurfaceSampler.h"
@@ -75,6 +76,7 @@ struct Settings
   std::size_t startFrame = 0;
   std::string csvFile; // per-frame figures
   bool colour = false; // the samples carry a colour fixed to the material (the tracker gets it)
+  int colourTolerance = dp::PcaOptions{}.colourTolerance; // of the stored colour swim
   std::vector<double> colourRest; // the sequence's first frame: where the colour pattern lies
   bool compress = false;          // the compression of the take beside the true motion's
   dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
@@ -208,10 +210,9 @@ public:
   {
     if (True.empty() || r.colours.size() != True.size())
       return;
-    std::vector<float> tracked(r.colours.begin(), r.colours.end());
-    for (float& c : tracked)
-      c /= 255.0f;
-    TrackedSum += squared(tracked, TrackedCount);
+    TrackedSum += squared(scaled(r.colours), TrackedCount);
+    dp::holdColours(Held, r.colours, S.colourTolerance);
+    StoredSum += squared(scaled(Held), StoredCount);
     const dp::PointCloud cloud = dp::sampleSurface(Mesh.positions(frame), Mesh.triangles(),
                                                    samplingFor(Sampled, S.points), frame);
     std::vector<float> colours(cloud.colors.begin(), cloud.colors.end());
@@ -225,8 +226,16 @@ public:
   }
   double tracked() const { return TrackedCount ? 255 * std::sqrt(TrackedSum / TrackedCount) : -1; }
   double truth() const { return TruthCount ? 255 * std::sqrt(TruthSum / TruthCount) : -1; }
+  double stored() const { return StoredCount ? 255 * std::sqrt(StoredSum / StoredCount) : -1; }
 
 private:
+  static std::vector<float> scaled(const std::vector<std::uint8_t>& bytes)
+  {
+    std::vector<float> colours(bytes.begin(), bytes.end());
+    for (float& c : colours)
+      c /= 255.0f;
+    return colours;
+  }
   double squared(const std::vector<float>& colours, double& count) const
   {
     double sum = 0;
@@ -245,7 +254,9 @@ private:
   double Area, Voxel;
   std::vector<double> True;
   std::vector<float> AtTruth;
+  std::vector<std::uint8_t> Held; // the colours a .dpz stores (setColours' hold)
   double TrackedSum = 0, TruthSum = 0, TrackedCount = 0, TruthCount = 0;
+  double StoredSum = 0, StoredCount = 0;
 };
 
 // A take tracked: each frame's result, and the wall time of its cycle.
@@ -325,13 +336,13 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const dp::Tracker&
     if (report && csv)
       writeCsvRow(*csv, label, f, r, figures, static_cast<double>(t.vertices()));
     if (report && !S.dumpFolder.empty())
-      dumpFrame(
-          S.dumpFolder + "/" + label, f, x, truth, t.triangles,
-          dp::sampleSurface(truthMesh, mesh.triangles(), samplingFor(condition, S.points), f));
+      dumpFrame(S.dumpFolder + "/" + label, f, x, truth, t.triangles,
+                frameData(mesh, samplingFor(condition, S.points), f));
   }
   Run run = sums.finish(t.vertices());
   run.colourSwim = swim.tracked();
   run.truthColourSwim = swim.truth();
+  run.storedColourSwim = swim.stored();
   return run;
 }
 
@@ -375,6 +386,7 @@ const char* Usage =
     "  output:    [--verbose] [--csv FILE] [--dump DIR] [--oracle previous|same]\n"
     "             [--start-frame K (track frames K.. from the template, as a chunk would)]\n"
     "  take:      [--colour (a colour fixed to the material; colour swim printed)]\n"
+    "             [--colour-tolerance L (the stored colours' hold, as the codec's)]\n"
     "             [--compress (beside the true motion's)]\n"
     "  other:     [--ablation] [--scaling] [--scaling-sizes N,N,...]\n";
 
@@ -471,6 +483,9 @@ bool parseOutputOption(const std::string& arg, int argc, char** argv, int& i, Pl
     plan.ablation = true;
   else if (arg == "--colour")
     S.colour = true;
+  else if (arg == "--colour-tolerance")
+    S.colourTolerance = static_cast<int>(
+        parseCount(arg, optionValue(argc, argv, i), 0, dp::MaximumColourTolerance));
   else if (arg == "--compress")
     S.compress = true;
   else if (arg == "--scaling")
@@ -539,8 +554,9 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
               1e3 *
                   std::sqrt(std::max(0.0, r.vertexRms * r.vertexRms - r.normalRms * r.normalRms)));
   if (r.colourSwim >= 0)
-    std::printf("%14s colour swim: %.1f of 255 RMS (at the true positions: %.1f)\n", "",
-                r.colourSwim, r.truthColourSwim);
+    std::printf("%14s colour swim: %.1f of 255 RMS (stored within %d levels: %.1f; at the true "
+                "positions: %.1f)\n",
+                "", r.colourSwim, S.colourTolerance, r.storedColourSwim, r.truthColourSwim);
   std::printf("%14s ms/frame: data %.1f, prediction %.1f, coarse %.1f, fine %.1f, quality "
               "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
               "", perFrame * r.time.data, perFrame * r.time.prediction, perFrame * r.time.coarse,

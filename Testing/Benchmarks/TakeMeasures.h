@@ -28,7 +28,8 @@ struct Run
   double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
   // --colour: RMS over vertices and frames of the colour a vertex carries (the frame's colour at
   // it) against its material point's true colour, 0-255; and the same at the true positions.
-  double colourSwim = -1, truthColourSwim = -1;
+  // The same for the colours as the .dpz stores them (held within --colour-tolerance).
+  double colourSwim = -1, truthColourSwim = -1, storedColourSwim = -1;
   double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
   std::size_t worstFrame = 0, frames = 0;
 };

@@ -110,6 +110,40 @@ TEST(PcaColour, RoundTripIsExactThroughMemoryAndAFile)
   EXPECT_EQ(f.pca.model.reconstruct(), s.pca.model.reconstruct());
 }
 
+// With a tolerance the stored colours keep their value while the given ones stay within it:
+// every byte within the tolerance, the flicker gone (the noise of +-2 is held), a jump of 60
+// levels passed exactly in its frame, a third of the bytes or fewer, and the file gives back
+// what was stored. setColours' default (tolerance 0) is lossless; a tolerance outside
+// [0, MaximumColourTolerance] is refused.
+TEST(PcaColour, AToleranceHoldsEachColourWithinItAndShrinksTheStream)
+{
+  dp::CompressedSequence exact = tube(12);
+  const dp::PcaModel& m = exact.pca.model;
+  std::vector<std::uint8_t> given = colours(m.vertices, m.frames);
+  const std::size_t frameBytes = 3 * m.vertices, jumpFrame = 7;
+  for (std::size_t t = jumpFrame; t < m.frames; ++t) // vertex 1's red turns 60 levels darker
+    given[t * frameBytes + 3 * 1] = static_cast<std::uint8_t>(given[3 * 1] > 128 ? 40 : 200);
+  dp::CompressedSequence held = exact;
+  dp::setColours(exact, given);
+  dp::setColours(held, given, 4);
+  EXPECT_EQ(exact.colours, given);
+  EXPECT_EQ(exact.report.colourTolerance, 0);
+  EXPECT_EQ(held.report.colourTolerance, 4);
+  std::size_t repeats = 0;
+  for (std::size_t i = 0; i < given.size(); ++i)
+  {
+    ASSERT_LE(std::abs(int(held.colours[i]) - int(given[i])), 4) << "byte " << i;
+    repeats += i >= frameBytes && held.colours[i] == held.colours[i - frameBytes];
+  }
+  EXPECT_EQ(repeats, given.size() - frameBytes - 1); // the jump is the one change
+  EXPECT_EQ(held.colours[jumpFrame * frameBytes + 3], given[jumpFrame * frameBytes + 3]);
+  EXPECT_LT(3 * held.report.colourBytes, exact.report.colourBytes);
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(held);
+  EXPECT_EQ(dp::decodeCompressedSequence(bytes.data(), bytes.size(), "held").colours, held.colours);
+  for (int tolerance : {-1, dp::MaximumColourTolerance + 1})
+    EXPECT_THROW(dp::setColours(held, given, tolerance), std::invalid_argument);
+}
+
 TEST(PcaColour, VersionOneFilesStillRead)
 {
   // A file the writer before the colour stream wrote (the .dpz fuzzer's seed).

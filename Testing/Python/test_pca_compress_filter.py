@@ -281,10 +281,11 @@ class TestPCACompressFilter(TempDirTestCase):
             # Same vertices in the same order, at Blender's float32 precision.
             np.testing.assert_allclose(played, rebuilt, atol=1e-5)
 
-    def coloured(self, components=3, uncoloured_frame=None):
+    def coloured(self, components=3, uncoloured_frame=None, flicker=False):
         """The tube's frames written as .vtp with point array "Colors" (bytes, COMPONENTS per
-        point; every frame's different, wrapping past 255), except UNCOLOURED_FRAME; returns
-        the source reading them and each frame's r g b."""
+        point; every frame's different, wrapping past 255; with FLICKER each point's own colour
+        with +-2 levels of noise a frame, as tracked colour has), except UNCOLOURED_FRAME;
+        returns the source reading them and each frame's r g b."""
         from vtkmodules.util.numpy_support import numpy_to_vtk
         from vtkmodules.vtkIOXML import vtkXMLPolyDataWriter
         source, colours = dynamicpoints.vtkPointSequenceSource(), []
@@ -294,6 +295,10 @@ class TestPCACompressFilter(TempDirTestCase):
             frame.DeepCopy(self.source.GetOutput())
             n = frame.GetNumberOfPoints()
             values = (np.arange(n)[:, None] * [7, 13, 29, 31][:components] + 11 * t) % 256
+            if flicker:
+                noise = np.random.default_rng(t).integers(-2, 3, size=(n, components))
+                values = np.clip(20 + np.arange(n)[:, None] * [7, 13, 29, 31][:components] % 216
+                                 + noise, 0, 255)
             colours.append(values[:, :3].astype(np.uint8))
             if t != uncoloured_frame:
                 array = numpy_to_vtk(values.astype(np.uint8), deep=1)
@@ -333,6 +338,37 @@ class TestPCACompressFilter(TempDirTestCase):
             self.write(self.path("plain.dpz"))
             self.assertEqual(os.path.getsize(path),
                              os.path.getsize(self.path("plain.dpz")) + colour_bytes)
+
+    def test_a_colour_tolerance_holds_each_colour_and_shrinks_the_stream(self):
+        source, colours = self.coloured(flicker=True)
+        stored, sizes = {}, {}
+        for tolerance in (0, 4):  # 0: lossless; 4: the default
+            path = self.path(f"flicker{tolerance}.dpz")
+            settings = {"ColourTolerance": tolerance} if tolerance == 0 else {}
+            self.assertEqual(self.write(path, source, **settings).GetColourTolerance(), tolerance)
+            reader = dynamicpoints.vtkCompressedSequenceReader()
+            reader.SetFileName(path)
+            reader.UpdateInformation()
+            steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
+            stored[tolerance] = []
+            for t in range(FRAMES):
+                reader.UpdateTimeStep(steps[t])
+                stored[tolerance].append(np.array(dsa.WrapDataObject(reader.GetOutput())
+                                                  .PointData["Colors"]))
+            stored[tolerance] = np.stack(stored[tolerance])
+            sizes[tolerance] = dsa.WrapDataObject(reader.GetOutput()).FieldData["ColourBytes"][0]
+        np.testing.assert_array_equal(stored[0], colours)
+        error = np.abs(stored[4].astype(int) - colours.astype(int))
+        self.assertLessEqual(error.max(), 4)
+        np.testing.assert_array_equal(stored[4], stored[4][:1].repeat(FRAMES, axis=0))  # no flicker
+        self.assertLess(3 * sizes[4], sizes[0])
+        # The filter says the tolerance and shows the stored colours.
+        f = dynamicpoints.vtkPCACompressFilter()
+        f.SetInputConnection(source.GetOutputPort())
+        f.UpdateTimeStep(5)
+        out = dsa.WrapDataObject(f.GetOutput())
+        self.assertEqual(out.FieldData["ColourTolerance"][0], 4)
+        np.testing.assert_array_equal(out.PointData["Colors"], stored[4][5])
 
     def test_colour_in_some_frames_only_is_left_out(self):
         source, _ = self.coloured(uncoloured_frame=FRAMES // 2)

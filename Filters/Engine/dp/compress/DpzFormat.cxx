@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
@@ -321,11 +322,40 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   return out;
 }
 
-void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours)
+void holdColours(std::vector<std::uint8_t>& held, const std::vector<std::uint8_t>& colours,
+                 int tolerance)
+{
+  if (held.size() != colours.size())
+  {
+    held = colours;
+    return;
+  }
+  for (std::size_t i = 0; i < colours.size(); ++i)
+    if (std::abs(static_cast<int>(colours[i]) - static_cast<int>(held[i])) > tolerance)
+      held[i] = colours[i];
+}
+
+void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours, int tolerance)
 {
   const PcaModel& m = sequence.pca.model;
   checkColourCount(m, colours.size());
+  if (tolerance < 0 || tolerance > MaximumColourTolerance)
+    throw std::invalid_argument("the colour tolerance must be 0 to " +
+                                std::to_string(MaximumColourTolerance) + " levels, not " +
+                                std::to_string(tolerance));
+  if (tolerance > 0 && !colours.empty())
+  {
+    const std::size_t frameBytes = 3 * m.vertices;
+    std::vector<std::uint8_t> held;
+    for (std::size_t t = 0; t < m.frames; ++t)
+    {
+      const auto frame = colours.begin() + static_cast<std::ptrdiff_t>(t * frameBytes);
+      holdColours(held, std::vector<std::uint8_t>(frame, frame + frameBytes), tolerance);
+      std::copy(held.begin(), held.end(), frame);
+    }
+  }
   sequence.colours = std::move(colours);
+  sequence.report.colourTolerance = sequence.colours.empty() ? 0 : tolerance;
   sequence.report.colourBytes =
       sequence.colours.empty()
           ? 0

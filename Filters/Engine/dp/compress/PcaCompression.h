@@ -82,7 +82,12 @@ struct PcaOptions
   double target = 0.2;        // KG in %, max vertex error / diagonal, or RMS deviation
   std::size_t components = 0; // > 0: this many, and the target only sets the quantisation
   bool quantise = true;       // false: the paper's float PCA (no quantisation, no coding)
+  int colourTolerance = 4;    // colour levels (of 255) a stored colour may differ from the
+                              // tracked one (setColours); 0: lossless
 };
+
+/** The colour tolerances setColours takes, in levels of 255. */
+constexpr int MaximumColourTolerance = 64;
 
 /** A decomposed sequence: frame(t) = mean + basis x weights, in either layout. */
 struct PcaModel
@@ -123,6 +128,7 @@ struct PcaReport
   double quantisedPlainBits = 0; // the same integers in fixed-width fields, no coding
   std::size_t payloadBytes = 0;  // geometry, compressed (0 for float PCA)
   std::size_t colourBytes = 0;   // the colour stream, compressed (0: no colour)
+  int colourTolerance = 0;       // levels a stored colour may differ from the given one
 };
 
 struct CompressedSequence
@@ -131,7 +137,7 @@ struct CompressedSequence
   std::vector<std::int64_t> triangles; // connectivity, stored once
   std::vector<double> times;           // one per frame
   // Optional colour of every vertex in every frame: r g b bytes, frame-major (frame t starts at
-  // 3 * vertices * t); empty: no colour. Stored losslessly, beside the geometry.
+  // 3 * vertices * t); empty: no colour. Stored beside the geometry as setColours left them.
   std::vector<std::uint8_t> colours;
   PcaReport report;
 };
@@ -139,9 +145,22 @@ struct CompressedSequence
 /**
  * Gives `sequence` its colours (frames x vertices x 3 bytes, as CompressedSequence::colours) and
  * sets report.colourBytes to what they take in the file, so a caller can say it before writing.
- * Throws std::invalid_argument when the count is not frames * vertices * 3.
+ * With a `tolerance` over 0 the colours are first made cheaper to store: each channel of each
+ * vertex keeps its value from frame to frame while the given colour stays within `tolerance`
+ * levels of it, and takes the given value when it departs further. Every stored byte is then
+ * within `tolerance` of the given one; the tracked colour's frame-to-frame noise (a vertex's
+ * colour is read anew from each frame's points) mostly becomes repeats, which the stream's
+ * differences from the previous frame store as zeros, and the colour stops flickering. A real
+ * change of colour (a shadow, a turn of the material to the light) still passes, in one step.
+ * Throws std::invalid_argument when the count is not frames * vertices * 3 or the tolerance is
+ * outside [0, MaximumColourTolerance].
  */
-void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours);
+void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours, int tolerance = 0);
+
+/** One frame of setColours' hold: `held`, the colours stored for the frame before (empty, or
+ *  another size, for the first frame), becomes the colours stored for this frame's `colours`. */
+void holdColours(std::vector<std::uint8_t>& held, const std::vector<std::uint8_t>& colours,
+                 int tolerance);
 
 /**
  * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at
