@@ -83,6 +83,9 @@ struct Settings
   // Each frame given as a mesh of about this many vertices reconstructed from its points, with
   // a capture's defects in frame 0 (dynamicpoints-sample --per-frame-mesh); 0: the points.
   std::size_t perFrameMesh = 0;
+  // Each frame given as its true mesh (the sequence's own connectivity): a capture without
+  // error, to tell what reading a mesh costs from what a capture mesh's error costs.
+  bool trueMeshes = false;
 };
 Settings S;
 
@@ -115,6 +118,14 @@ dp::SamplerOptions samplingFor(const Condition& c, std::size_t points)
 dp::PointCloud frameData(const dp::AnimatedMesh& mesh, const dp::SamplerOptions& sampling,
                          std::size_t f)
 {
+  if (S.trueMeshes)
+  {
+    dp::PointCloud truth;
+    truth.points = mesh.positions(f);
+    for (std::size_t t = 0; t < mesh.triangles().size(); t += 3)
+      truth.addFace(&mesh.triangles()[t], 3);
+    return truth;
+  }
   dp::PointCloud cloud = dp::sampleSurface(mesh.positions(f), mesh.triangles(), sampling, f);
   return S.perFrameMesh ? dp::cli::perFrameMesh(cloud, S.perFrameMesh, f == 0) : cloud;
 }
@@ -377,7 +388,8 @@ const char* Usage =
     "  data:      [--height M (0: as stored)] [--points N] [--seed S] [--condition clean,noisy]\n"
     "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
     "             [--per-frame-mesh N (each frame a mesh of about N vertices reconstructed\n"
-    "             from its points, with a capture's defects in frame 0)]\n"
+    "             from its points, with a capture's defects in frame 0)] [--true-meshes (each\n"
+    "             frame its true mesh)]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--set NAME=VALUE (repeatable; every option of dp::TrackerOptionTable,\n"
@@ -439,6 +451,8 @@ bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan
     S.givenNormals = true;
   else if (arg == "--per-frame-mesh")
     S.perFrameMesh = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
+  else if (arg == "--true-meshes")
+    S.trueMeshes = true;
   else if (arg == "--template")
   {
     plan.kinds.clear();

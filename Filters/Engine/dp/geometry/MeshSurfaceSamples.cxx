@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -66,6 +67,16 @@ std::vector<Vec3> vertexNormalSums(const MeshSurface& mesh)
 }
 
 // The k-th point of the R2 low-discrepancy sequence in the unit square.
+// FNV-1a over the mesh's coordinates: where the sample sequence starts (see the header).
+std::uint64_t coordinateHash(const MeshSurface& mesh)
+{
+  std::uint64_t h = 14695981039346656037ull;
+  const auto* bytes = reinterpret_cast<const unsigned char*>(mesh.positions);
+  for (std::size_t i = 0; i < 3 * mesh.vertices * sizeof(double); ++i)
+    h = (h ^ bytes[i]) * 1099511628211ull;
+  return h;
+}
+
 void r2Point(std::size_t k, double& u, double& v)
 {
   const double g = 1.32471795724474602596; // the plastic number
@@ -164,8 +175,11 @@ PointCloud sampleMeshSurface(const MeshSurface& mesh, std::size_t count)
   out.normals.reserve(3 * count + 3);
   SampleWriter writer(mesh, out);
   const double perArea = static_cast<double>(count) / area;
-  double carry = 0.5; // the fraction of a sample owed so far, started half way
-  std::size_t k = 0;
+  // The fraction of a sample owed so far and the R2 index, both started where the mesh's
+  // coordinates say.
+  const std::uint64_t start = coordinateHash(mesh);
+  double carry = static_cast<double>(start & 0xFFFFF) / 0x100000;
+  std::size_t k = static_cast<std::size_t>((start >> 20) & 0xFFFFFF);
   for (std::size_t t = 0; t < mesh.triangleCount; ++t)
   {
     carry += 0.5 * detail::norm(areaVector(mesh, t)) * perArea;
