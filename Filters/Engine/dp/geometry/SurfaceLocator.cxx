@@ -151,18 +151,25 @@ double closestPointOnTriangle(const double p[3], const double a[3], const double
   return finish(1 - v - s, v, s);
 }
 
-SurfaceLocator::SurfaceLocator(const TriangleMesh& mesh, const double* positions) : Mesh(&mesh)
+SurfaceLocator::SurfaceLocator(const TriangleMesh& mesh, const double* positions)
+    : SurfaceLocator(mesh.triangles(), mesh.numberOfVertices(), positions)
+{
+}
+
+SurfaceLocator::SurfaceLocator(const std::vector<std::int64_t>& triangles, std::size_t vertices,
+                               const double* positions)
+    : Triangles(&triangles), VertexCount(vertices)
 {
   build(positions);
 }
 
 void SurfaceLocator::build(const double* positions)
 {
-  const std::size_t nt = Mesh->numberOfTriangles();
-  const std::size_t nv = Mesh->numberOfVertices();
+  const std::size_t nt = Triangles->size() / 3;
+  const std::size_t nv = VertexCount;
   Copy.assign(positions, positions + 3 * nv);
   Positions = Copy.data();
-  std::vector<double> centres = triangleCentres(Mesh->triangles(), Positions);
+  std::vector<double> centres = triangleCentres(*Triangles, Positions);
   Order.resize(nt);
   std::iota(Order.begin(), Order.end(), 0);
   Nodes.clear();
@@ -181,7 +188,7 @@ void SurfaceLocator::build(const double* positions)
         LeafOf[static_cast<std::size_t>(Order[static_cast<std::size_t>(i)])] =
             static_cast<std::int32_t>(n);
   }
-  const auto& tri = Mesh->triangles();
+  const auto& tri = *Triangles;
   trianglesAroundVertices(tri, nv, AroundStart, Around);
   Across = trianglesAcross(tri, AroundStart, Around);
   Wide.reserve(Nodes.size() / 3 + 1);
@@ -287,7 +294,7 @@ void SurfaceLocator::split(std::int32_t self, std::int32_t begin, std::int32_t e
 void SurfaceLocator::refit(const double* positions)
 {
   if (positions != Copy.data())
-    Copy.assign(positions, positions + 3 * Mesh->numberOfVertices());
+    Copy.assign(positions, positions + 3 * VertexCount);
   Positions = Copy.data();
   // Children are stored after their parents: a reverse sweep sees children first.
   for (auto n = static_cast<std::int32_t>(Nodes.size()) - 1; n >= 0; --n)
@@ -303,7 +310,7 @@ void SurfaceLocator::refit(const double* positions)
       }
   // Each triangle's bounding sphere, in the leaves' order: centre rounded to float, radius
   // measured from that centre and rounded up, so the sphere still holds the triangle.
-  const auto& tri = Mesh->triangles();
+  const auto& tri = *Triangles;
   Spheres.resize(Order.size());
   for (std::size_t i = 0; i < Order.size(); ++i)
   {
@@ -333,7 +340,7 @@ void SurfaceLocator::boxOf(std::int32_t n)
   double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
   if (node.count > 0)
   {
-    const auto& tri = Mesh->triangles();
+    const auto& tri = *Triangles;
     for (std::int32_t i = node.first; i < node.first + node.count; ++i)
       for (int c = 0; c < 3; ++c)
         for (int k = 0; k < 3; ++k)
@@ -373,7 +380,7 @@ bool SurfaceLocator::outside(const Sphere& s, const double p[3], double reach)
 void SurfaceLocator::visitLeaf(std::int32_t first, std::int32_t count, const double p[3],
                                Search& search) const
 {
-  const auto& tri = Mesh->triangles();
+  const auto& tri = *Triangles;
   // The bound's distance with a relative margin for the rounding of outside(): never skip a
   // triangle that might win. (Kept as a distance, so a sphere's test needs no square root.)
   double reach = std::sqrt(search.bound * (1 + 1e-9));
@@ -449,7 +456,7 @@ SurfaceLocator::Hit SurfaceLocator::closest(const double p[3], double maxDistanc
   search.bound = maxDistance * maxDistance;
   if (Wide.empty())
     return search.best;
-  if (hint < 0 || static_cast<std::size_t>(hint) >= Mesh->numberOfTriangles())
+  if (hint < 0 || static_cast<std::size_t>(hint) >= Triangles->size() / 3)
   {
     descend(0, -1, p, search);
     return search.best;
@@ -470,9 +477,9 @@ SurfaceLocator::Hit SurfaceLocator::follow(const double p[3], std::int64_t from,
                                            double maxDistance) const
 {
   Hit best;
-  if (from < 0 || static_cast<std::size_t>(from) >= Mesh->numberOfTriangles())
+  if (from < 0 || static_cast<std::size_t>(from) >= Triangles->size() / 3)
     return best;
-  const auto& tri = Mesh->triangles();
+  const auto& tri = *Triangles;
   auto measure = [&](std::int64_t t, Hit& hit)
   {
     hit.triangle = t;

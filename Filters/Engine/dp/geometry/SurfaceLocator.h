@@ -56,6 +56,10 @@ public:
   SurfaceLocator() = default;
   /** The tree over `mesh`'s triangles at `positions` (3 per vertex). The mesh must outlive it. */
   SurfaceLocator(const TriangleMesh& mesh, const double* positions);
+  /** The same over `triangles` (3 indices each, none repeating a vertex) of `vertices` vertices,
+   *  without a TriangleMesh's topology; `triangles` must outlive it. */
+  SurfaceLocator(const std::vector<std::int64_t>& triangles, std::size_t vertices,
+                 const double* positions);
 
   /** Rebuilds the tree for new positions (O(n log n)). */
   void build(const double* positions);
@@ -72,8 +76,6 @@ public:
    *  comment); triangle = -1 when it is not within `maxDistance`. */
   Hit follow(const double p[3], std::int64_t from,
              double maxDistance = std::numeric_limits<double>::infinity()) const;
-
-  const TriangleMesh* mesh() const { return Mesh; }
 
 private:
   struct Node
@@ -142,7 +144,8 @@ private:
     int slot = 0;
   };
 
-  const TriangleMesh* Mesh = nullptr;
+  const std::vector<std::int64_t>* Triangles = nullptr;
+  std::size_t VertexCount = 0;
   const double* Positions = nullptr; // the positions of the last build/refit (caller's memory)
   std::vector<double> Copy;          // ... copied, so the caller's array may change
   std::vector<Node> Nodes;

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <stdexcept>
 #include <string>
 
@@ -36,9 +35,14 @@ TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vert
   if (Triangles.size() % 3 != 0)
     throw std::invalid_argument("triangle indices are not a multiple of 3");
   const auto n = static_cast<std::int64_t>(vertexCount);
-  // Directed edge (a, b) -> opposite vertex c of the triangle (a, b, c).
-  std::map<std::pair<std::int64_t, std::int64_t>, std::int64_t> directed;
-  Neighbours.assign(vertexCount, {});
+  // Directed edges (a, b) with the opposite vertex c of their triangle (a, b, c), sorted by
+  // (a, b); where a directed edge repeats (a non-manifold fan) the last triangle's is kept.
+  struct Directed
+  {
+    std::int64_t a, b, opposite;
+  };
+  std::vector<Directed> directed;
+  directed.reserve(Triangles.size());
   for (std::size_t t = 0; t < numberOfTriangles(); ++t)
   {
     const std::int64_t* v = &Triangles[3 * t];
@@ -49,20 +53,33 @@ TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vert
     if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
       throw std::invalid_argument("triangle " + std::to_string(t) + " repeats a vertex");
     for (int k = 0; k < 3; ++k)
-      directed[{v[k], v[(k + 1) % 3]}] = v[(k + 2) % 3];
+      directed.push_back({v[k], v[(k + 1) % 3], v[(k + 2) % 3]});
   }
-  for (const auto& [edge, opposite] : directed)
+  auto before = [](const Directed& x, const Directed& y)
+  { return x.a != y.a ? x.a < y.a : x.b < y.b; };
+  std::stable_sort(directed.begin(), directed.end(), before);
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < directed.size(); ++i)
   {
-    const auto [a, b] = edge;
-    const auto reverse = directed.find({b, a});
-    if (reverse == directed.end() || a < b)
+    const bool last = i + 1 == directed.size() || before(directed[i], directed[i + 1]);
+    if (last)
+      directed[kept++] = directed[i];
+  }
+  directed.resize(kept);
+  Neighbours.assign(vertexCount, {});
+  for (const Directed& e : directed)
+  {
+    const Directed key{e.b, e.a, 0};
+    const auto reverse = std::lower_bound(directed.begin(), directed.end(), key, before);
+    const bool paired = reverse != directed.end() && reverse->a == e.b && reverse->b == e.a;
+    if (!paired || e.a < e.b)
     {
-      Edges.push_back({std::min(a, b), std::max(a, b)});
-      Neighbours[a].push_back(b);
-      Neighbours[b].push_back(a);
+      Edges.push_back({std::min(e.a, e.b), std::max(e.a, e.b)});
+      Neighbours[e.a].push_back(e.b);
+      Neighbours[e.b].push_back(e.a);
     }
-    if (reverse != directed.end() && a < b)
-      Hinges.push_back({a, b, opposite, reverse->second});
+    if (paired && e.a < e.b)
+      Hinges.push_back({e.a, e.b, e.opposite, reverse->opposite});
   }
   for (auto& ring : Neighbours)
   {
@@ -103,16 +120,22 @@ double TriangleMesh::totalArea(const double* positions) const
 
 void TriangleMesh::vertexNormals(const double* positions, double* normals) const
 {
-  std::fill(normals, normals + 3 * VertexCount, 0.0);
-  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  vertexNormalsOf(Triangles, positions, VertexCount, normals);
+}
+
+void vertexNormalsOf(const std::vector<std::int64_t>& triangles, const double* positions,
+                     std::size_t vertices, double* normals)
+{
+  std::fill(normals, normals + 3 * vertices, 0.0);
+  for (std::size_t t = 0; t < triangles.size() / 3; ++t)
   {
     double n[3];
-    faceNormal(Triangles, t, positions, n);
+    faceNormal(triangles, t, positions, n);
     for (int k = 0; k < 3; ++k)
       for (int c = 0; c < 3; ++c)
-        normals[3 * Triangles[3 * t + k] + c] += n[c];
+        normals[3 * triangles[3 * t + k] + c] += n[c];
   }
-  for (std::size_t v = 0; v < VertexCount; ++v)
+  for (std::size_t v = 0; v < vertices; ++v)
   {
     double* n = normals + 3 * v;
     const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);

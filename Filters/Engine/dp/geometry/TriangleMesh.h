@@ -54,4 +54,10 @@ private:
   std::vector<std::vector<std::int64_t>> Neighbours;
 };
 
+/** Area-weighted unit vertex normals of `triangles` (3 indices each) at `positions` (3 per
+ *  vertex), into `normals` (3 per vertex; 0 0 0 for a vertex without area around it). Summed in
+ *  triangle order: the same bits every time. */
+void vertexNormalsOf(const std::vector<std::int64_t>& triangles, const double* positions,
+                     std::size_t vertices, double* normals);
+
 } // namespace dp

@@ -2,7 +2,7 @@
 #include "dp/track/ColourTerm.h"
 
 #include "dp/detail/KdTree.h"
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -3,7 +3,7 @@
 
 #include "dp/track/RobustKernel.h"
 
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

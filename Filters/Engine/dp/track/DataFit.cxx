@@ -2,7 +2,7 @@
 #include "dp/track/DataFit.h"
 
 #include "dp/geometry/SurfaceLocator.h"
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 
 #include <cmath>
 #include <stdexcept>

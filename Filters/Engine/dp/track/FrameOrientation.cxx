@@ -4,7 +4,7 @@
 #include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/FrameData.h"
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

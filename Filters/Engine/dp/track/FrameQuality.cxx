@@ -2,7 +2,7 @@
 #include "dp/track/FrameQuality.h"
 
 #include "dp/geometry/SurfaceLocator.h"
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

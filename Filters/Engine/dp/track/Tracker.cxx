@@ -18,7 +18,7 @@
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
 #include "dp/track/MotionPredictor.h"
-#include "dp/track/Parallel.h"
+#include "dp/detail/Parallel.h"
 #include "dp/track/RecoveryPolicy.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"

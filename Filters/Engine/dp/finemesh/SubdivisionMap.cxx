@@ -1,0 +1,221 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/finemesh/SubdivisionMap.h"
+
+#include "dp/detail/Parallel.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace dp
+{
+namespace
+{
+
+// One side of an edge: the triangle corner it faces and the vertex opposite it.
+struct EdgeSide
+{
+  std::int64_t a, b;     // a < b
+  std::int64_t opposite; // the third vertex of the triangle
+  std::size_t corner;    // 3 t + k: triangle t's edge from its corner k to k + 1
+};
+
+// The level's edges: for each unique edge its ends and the opposite vertices of its triangles.
+struct Edges
+{
+  std::vector<std::array<std::int64_t, 2>> ends;
+  std::vector<std::array<std::int64_t, 2>> opposite; // both set only for an interior edge
+  std::vector<std::uint8_t> sharp;                   // one triangle, or more than two
+  std::vector<std::size_t> ofCorner;                 // edge index of each triangle corner's edge
+};
+
+Edges edgesOf(const std::vector<std::int64_t>& triangles)
+{
+  std::vector<EdgeSide> sides;
+  sides.reserve(triangles.size());
+  for (std::size_t c = 0; c < triangles.size(); ++c)
+  {
+    const std::size_t t = c / 3, k = c % 3;
+    const std::int64_t u = triangles[c], v = triangles[3 * t + (k + 1) % 3];
+    sides.push_back({std::min(u, v), std::max(u, v), triangles[3 * t + (k + 2) % 3], c});
+  }
+  std::sort(sides.begin(), sides.end(),
+            [](const EdgeSide& x, const EdgeSide& y) {
+              return x.a != y.a ? x.a < y.a : x.b != y.b ? x.b < y.b : x.corner < y.corner;
+            });
+  Edges e;
+  e.ofCorner.resize(triangles.size());
+  for (std::size_t i = 0; i < sides.size();)
+  {
+    std::size_t j = i;
+    while (j < sides.size() && sides[j].a == sides[i].a && sides[j].b == sides[i].b)
+      ++j;
+    const std::size_t index = e.ends.size();
+    e.ends.push_back({sides[i].a, sides[i].b});
+    const bool interior = j - i == 2;
+    e.opposite.push_back({sides[i].opposite, interior ? sides[i + 1].opposite : -1});
+    e.sharp.push_back(interior ? 0 : 1);
+    for (std::size_t s = i; s < j; ++s)
+      e.ofCorner[sides[s].corner] = index;
+    i = j;
+  }
+  return e;
+}
+
+// Loop's weight of each neighbour of a smooth vertex of valence n (Warren's simplification).
+double loopBeta(std::size_t n)
+{
+  return n > 3 ? 3.0 / (8.0 * static_cast<double>(n)) : 3.0 / 16.0;
+}
+
+} // namespace
+
+SubdivisionMap::SubdivisionMap(const std::vector<std::int64_t>& baseTriangles,
+                               std::size_t baseVertices, int levels)
+    : BaseVertices(baseVertices)
+{
+  if (levels < 0 || levels > MaximumDetailLevels)
+    throw std::invalid_argument("detail levels must be 0 to " +
+                                std::to_string(MaximumDetailLevels) + ", not " +
+                                std::to_string(levels));
+  if (baseTriangles.size() % 3 != 0)
+    throw std::invalid_argument("triangle indices are not a multiple of 3");
+  for (std::size_t t = 0; t < baseTriangles.size(); t += 3)
+  {
+    const std::int64_t* v = &baseTriangles[t];
+    for (int k = 0; k < 3; ++k)
+      if (v[k] < 0 || static_cast<std::size_t>(v[k]) >= baseVertices)
+        throw std::invalid_argument("triangle " + std::to_string(t / 3) + " uses vertex " +
+                                    std::to_string(v[k]) + " of " + std::to_string(baseVertices));
+    if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2])
+      throw std::invalid_argument("triangle " + std::to_string(t / 3) + " repeats a vertex");
+  }
+  Triangles = baseTriangles;
+  Counts.push_back(baseVertices);
+  for (int l = 0; l < levels; ++l)
+    subdivide(Triangles, Counts.back());
+}
+
+void SubdivisionMap::subdivide(std::vector<std::int64_t>& triangles, std::size_t vertices)
+{
+  const Edges e = edgesOf(triangles);
+  const std::size_t edgeCount = e.ends.size();
+  // Each vertex's edges (CSR), to find its neighbours and its sharp edges.
+  std::vector<std::size_t> first(vertices + 1, 0);
+  for (const auto& ab : e.ends)
+  {
+    ++first[static_cast<std::size_t>(ab[0]) + 1];
+    ++first[static_cast<std::size_t>(ab[1]) + 1];
+  }
+  for (std::size_t v = 0; v < vertices; ++v)
+    first[v + 1] += first[v];
+  std::vector<std::size_t> incident(first.back()), fill(first.begin(), first.end() - 1);
+  for (std::size_t i = 0; i < edgeCount; ++i)
+    for (const std::int64_t end : e.ends[i])
+      incident[fill[static_cast<std::size_t>(end)]++] = i;
+
+  Level level;
+  level.start.push_back(0);
+  auto add = [&level](std::int64_t column, double weight)
+  {
+    level.column.push_back(column);
+    level.weight.push_back(weight);
+  };
+  for (std::size_t v = 0; v < vertices; ++v)
+  {
+    const std::size_t n = first[v + 1] - first[v];
+    std::vector<std::int64_t> sharpNeighbours;
+    for (std::size_t k = first[v]; k < first[v + 1]; ++k)
+    {
+      const auto& ab = e.ends[incident[k]];
+      if (e.sharp[incident[k]])
+        sharpNeighbours.push_back(ab[0] == static_cast<std::int64_t>(v) ? ab[1] : ab[0]);
+    }
+    const auto self = static_cast<std::int64_t>(v);
+    if (n == 0 || (!sharpNeighbours.empty() && sharpNeighbours.size() != 2))
+      add(self, 1.0); // unused, or a corner
+    else if (sharpNeighbours.size() == 2)
+    {
+      add(self, 0.75);
+      add(sharpNeighbours[0], 0.125);
+      add(sharpNeighbours[1], 0.125);
+    }
+    else
+    {
+      const double beta = loopBeta(n);
+      add(self, 1.0 - static_cast<double>(n) * beta);
+      for (std::size_t k = first[v]; k < first[v + 1]; ++k)
+      {
+        const auto& ab = e.ends[incident[k]];
+        add(ab[0] == self ? ab[1] : ab[0], beta);
+      }
+    }
+    level.start.push_back(level.column.size());
+  }
+  for (std::size_t i = 0; i < edgeCount; ++i)
+  {
+    const auto& ab = e.ends[i];
+    if (e.sharp[i])
+    {
+      add(ab[0], 0.5);
+      add(ab[1], 0.5);
+    }
+    else
+    {
+      add(ab[0], 0.375);
+      add(ab[1], 0.375);
+      add(e.opposite[i][0], 0.125);
+      add(e.opposite[i][1], 0.125);
+    }
+    level.start.push_back(level.column.size());
+    Parents.push_back(ab);
+  }
+  Levels.push_back(std::move(level));
+  Counts.push_back(vertices + edgeCount);
+
+  std::vector<std::int64_t> children;
+  children.reserve(4 * triangles.size());
+  const auto offset = static_cast<std::int64_t>(vertices);
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const std::int64_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
+    const std::int64_t ab = offset + static_cast<std::int64_t>(e.ofCorner[t]);
+    const std::int64_t bc = offset + static_cast<std::int64_t>(e.ofCorner[t + 1]);
+    const std::int64_t ca = offset + static_cast<std::int64_t>(e.ofCorner[t + 2]);
+    children.insert(children.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+  }
+  triangles = std::move(children);
+}
+
+void SubdivisionMap::apply(const double* base, double* fine) const
+{
+  std::vector<double> from(base, base + 3 * BaseVertices), to;
+  for (std::size_t l = 0; l < Levels.size(); ++l)
+  {
+    const Level& level = Levels[l];
+    const std::size_t rows = Counts[l + 1];
+    double* out = l + 1 == Levels.size() ? fine : (to.assign(3 * rows, 0.0), to.data());
+    forEachIndex(rows,
+                 [&](std::size_t r)
+                 {
+                   double x = 0, y = 0, z = 0;
+                   for (std::size_t k = level.start[r]; k < level.start[r + 1]; ++k)
+                   {
+                     const double* p = &from[3 * static_cast<std::size_t>(level.column[k])];
+                     x += level.weight[k] * p[0];
+                     y += level.weight[k] * p[1];
+                     z += level.weight[k] * p[2];
+                   }
+                   out[3 * r] = x;
+                   out[3 * r + 1] = y;
+                   out[3 * r + 2] = z;
+                 });
+    if (l + 1 < Levels.size())
+      from.swap(to);
+  }
+  if (Levels.empty())
+    std::copy(base, base + 3 * BaseVertices, fine);
+}
+
+} // namespace dp
