@@ -11,6 +11,7 @@
 
 #include "dp/compress/PcaCompression.h"
 #include "dp/field/TemplateMesh.h"
+#include "dp/geometry/SubdivisionMap.h"
 #include "dp/track/FrameFigures.h"
 
 #include <nlohmann/json.hpp>
@@ -48,8 +49,10 @@ the N processes, largest first; each input's files are the same as from one proc
 
 Written to OUTPUT:
   tracked.pvd, tracked/*.vtp  the tracked mesh, one file per frame (open the .pvd in
-                              ParaView); brought up to date after every frame; where the
-                              points carry colour, each vertex's colour (Colors)
+                              ParaView), at the fine level of its detail layer where the
+                              data hold detail (--detail-levels); brought up to date after
+                              every frame; where the points carry colour, each vertex's
+                              colour (Colors)
   tracked.dpz                 the compressed sequence (ParaView or vtkCompressedSequenceReader),
                               as close to the points as --fit-growth allows
   tracked.glb                 glTF 2.0 animation: morph targets, 24 frames per second
@@ -66,6 +69,12 @@ Options:
                       (a capture's per-frame mesh: repaired and remeshed to --vertices),
                       else a surface reconstructed from its points; mesh; points
   --vertices N        vertex count of a template made from the first frame (default: 1000)
+  --detail-levels N   the detail layer: the tracked mesh subdivided N times (0 to 6; each
+                      level has 4x the triangles) and displaced onto each frame's data,
+                      coded through the take in tracked.dpz; 0: the tracked mesh alone;
+                      auto (default): measured on the first frame, the level that
+                      matches the capture's vertex count (half its point count), kept
+                      where it brings the mesh a fifth closer to the data
   --frames N          track only the first N frames (default: all; they are listed
                       with their times in OUTPUT/first-frames.series)
   --fit-growth P      compression judged against the data (default): the decompressed
@@ -84,9 +93,9 @@ Options:
   --quiet             no per-frame table and no progress bar
   --describe-report   print the per-frame figures of report.json (and of the track
                       filter's field data) as a Markdown table, and exit
-  --describe-limits   print the ranges of --vertices, --error-target, --fit-growth and
-                      --colour-tolerance (also the ParaView properties') as JSON, and
-                      exit
+  --describe-limits   print the ranges of --vertices, --error-target, --fit-growth,
+                      --colour-tolerance and --detail-levels (also the ParaView
+                      properties') as JSON, and exit
 )";
 
 const char* const UsageEnd = R"(  -h, --help          show this help
@@ -106,22 +115,25 @@ extern "C" void onInterrupt(int)
 // options (--describe-limits; a test checks the plugin's XML against them).
 std::string limitsJson()
 {
-  const nlohmann::json limits = {{"templateVertices",
-                                  {{"default", dp::TemplateOptions{}.targetVertices},
-                                   {"minimum", dp::MinimumTemplateVertices},
-                                   {"maximum", dp::MaximumTemplateVertices}}},
-                                 {"karniGotsmanTarget",
-                                  {{"default", dp::PcaOptions{}.target},
-                                   {"minimum", dp::MinimumKarniGotsmanTarget},
-                                   {"maximum", dp::MaximumKarniGotsmanTarget}}},
-                                 {"fitGrowth",
-                                  {{"default", Settings{}.fitGrowth},
-                                   {"minimum", dp::MinimumFitGrowth},
-                                   {"maximum", dp::MaximumFitGrowth}}},
-                                 {"colourTolerance",
-                                  {{"default", Settings{}.colourTolerance},
-                                   {"minimum", 0},
-                                   {"maximum", dp::MaximumColourTolerance}}}};
+  const nlohmann::json limits = {
+      {"templateVertices",
+       {{"default", dp::TemplateOptions{}.targetVertices},
+        {"minimum", dp::MinimumTemplateVertices},
+        {"maximum", dp::MaximumTemplateVertices}}},
+      {"karniGotsmanTarget",
+       {{"default", dp::PcaOptions{}.target},
+        {"minimum", dp::MinimumKarniGotsmanTarget},
+        {"maximum", dp::MaximumKarniGotsmanTarget}}},
+      {"fitGrowth",
+       {{"default", Settings{}.fitGrowth},
+        {"minimum", dp::MinimumFitGrowth},
+        {"maximum", dp::MaximumFitGrowth}}},
+      {"colourTolerance",
+       {{"default", Settings{}.colourTolerance},
+        {"minimum", 0},
+        {"maximum", dp::MaximumColourTolerance}}},
+      {"detailLevels",
+       {{"default", "auto"}, {"minimum", 0}, {"maximum", dp::MaximumDetailLevels}}}};
   return limits.dump(2) + "\n";
 }
 
@@ -174,6 +186,13 @@ Settings parse(int argc, char** argv, bool& help)
       s.vertices =
           static_cast<int>(parseCount(arg, optionValue(argc, argv, i), dp::MinimumTemplateVertices,
                                       dp::MaximumTemplateVertices));
+    else if (arg == "--detail-levels")
+    {
+      const std::string value = optionValue(argc, argv, i);
+      s.detailLevels = value == "auto"
+                           ? vtkSurfaceDetailFilter::AUTOMATIC
+                           : static_cast<int>(parseCount(arg, value, 0, dp::MaximumDetailLevels));
+    }
     else if (arg == "--frames")
       s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
     else if (arg == "--error-target")

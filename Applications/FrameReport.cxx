@@ -57,6 +57,7 @@ nlohmann::json frameJson(const FrameRecord& r)
                           {"maxResidual", r.maxResidual}};
   for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
     frame[dp::FrameFigures::reportKey(field.name)] = figureJson(r.figures, field);
+  frame["detailSeconds"] = r.detailSeconds;
   return frame;
 }
 
@@ -70,6 +71,10 @@ nlohmann::json stageMediansJson(const std::vector<FrameRecord>& records)
       seconds.push_back(r.figures.*stage.value);
     medians[dp::FrameFigures::reportKey(stage.name)] = medianOf(std::move(seconds));
   }
+  std::vector<double> detail;
+  for (const FrameRecord& r : records)
+    detail.push_back(r.detailSeconds);
+  medians["detailSeconds"] = medianOf(std::move(detail));
   return medians;
 }
 

@@ -21,8 +21,10 @@ struct FrameRecord
   int frame;
   double time, rmsResidual, maxResidual;
   dp::FrameFigures figures;
+  double detailSeconds = 0; // the detail layer's fit (vtkSurfaceDetailFilter), 0 without one
   bool failed() const { return figures.failed > 0; }
-  double milliseconds() const { return 1000 * figures.seconds; }
+  /** The frame's time: its tracking and its detail layer. */
+  double milliseconds() const { return 1000 * (figures.seconds + detailSeconds); }
 };
 
 /** The one-value field-data array `name` of `data` (NaN when absent). */

@@ -2,8 +2,9 @@
 // The main job on one input. A point sequence in; out: the tracked mesh sequence (.pvd + .vtp,
 // written frame by frame so an interrupted run keeps what it finished), the compressed file
 // (.dpz), the glTF animation (.glb) and a report (JSON + PNG plot). The work is done by the
-// VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkPCACompressFilter;
-// this file only drives it, writes the files and talks to the user.
+// VTK pipeline vtkPointSequenceSource -> vtkDeformableTrackFilter -> vtkSurfaceDetailFilter (its
+// data from a second vtkPointSequenceSource on the same files) -> vtkPCACompressFilter; this
+// file only drives it, writes the files and talks to the user.
 #include "MainJob.h"
 #include "MeshFidelity.h"
 
@@ -31,6 +32,7 @@
 #include "vtkPointSequenceSource.h"
 #include "vtkPolyData.h"
 #include "vtkStringArray.h"
+#include "vtkSurfaceDetailFilter.h"
 #include "vtkXMLPolyDataWriter.h"
 
 #include <nlohmann/json.hpp>
@@ -143,6 +145,11 @@ private:
         return false;
     }
     std::cout << "Sequence: " << Frames << " frame(s) from " << InputName << "\n";
+    // The detail layer reads the same frames through a source of its own, so that neither
+    // source re-reads a frame the other asked for.
+    DataSource->SetFileName(Source->GetFileName());
+    DataSource->SetDirectoryName(Source->GetDirectoryName());
+    DataSource->SetFilePattern(Source->GetFilePattern());
     return true;
   }
 
@@ -173,6 +180,11 @@ private:
     }
     TrackProgress->Bar = &Bar;
     Tracker->AddObserver(vtkCommand::ProgressEvent, TrackProgress);
+    watch(Detail);
+    watch(DataSource);
+    Detail->SetInputConnection(0, Tracker->GetOutputPort());
+    Detail->SetDataConnection(DataSource->GetOutputPort());
+    Detail->SetDetailLevels(S.detailLevels);
     return true;
   }
 
@@ -225,9 +237,15 @@ private:
       }
       if (f == 0)
         describeMesh(mesh);
-      if (!writeFrame(writer, folder, f, time, mesh))
+      vtkPolyData* detailed = detailOf(f, time);
+      if (!detailed)
+      {
+        stopAt(f);
         break;
-      record(f, time, mesh);
+      }
+      if (!writeFrame(writer, folder, f, time, detailed))
+        break;
+      record(f, time, mesh, fieldValue(detailed, "DetailSeconds"));
       if (nextFailed)
       {
         stopAt(f + 1);
@@ -236,6 +254,35 @@ private:
     }
     Bar.clear();
     summariseTracking();
+  }
+
+  // Frame f's detail layer (the tracked mesh itself with none), or null when it failed (the
+  // printer has said why). The first frame's says what was chosen.
+  vtkPolyData* detailOf(int f, double time)
+  {
+    const int errorsBefore = Printer->Errors;
+    Detail->UpdateTimeStep(time);
+    vtkPolyData* detailed = Detail->GetOutput();
+    if (Printer->Errors > errorsBefore || detailed->GetNumberOfPoints() == 0)
+      return nullptr;
+    if (f == 0)
+      describeDetail(detailed);
+    return detailed;
+  }
+
+  // The detail layer chosen, from its first frame, for the summary and the report.
+  void describeDetail(vtkPolyData* detailed)
+  {
+    DetailLevels = Detail->GetLevelsUsed();
+    FineVertices = detailed->GetNumberOfPoints();
+    auto* choice =
+        vtkStringArray::SafeDownCast(detailed->GetFieldData()->GetAbstractArray("DetailChoice"));
+    DetailChoice = choice && choice->GetNumberOfValues() > 0 ? choice->GetValue(0) : std::string();
+    if (!S.quiet)
+    {
+      Bar.clear();
+      std::printf("Detail: %s\n", DetailChoice.c_str());
+    }
   }
 
   // OUTPUT/tracked, without a previous run's frames.
@@ -305,6 +352,10 @@ private:
     if (Interrupted)
       std::cerr << "interrupted: " << Written.size() << " of " << Frames << " frame(s) tracked, in "
                 << Pvd.string() << "; nothing compressed\n";
+    else if (DetailLevels > 0)
+      std::cout << Written.size() << " of " << Frames << " frame(s) tracked: " << Pvd.string()
+                << " (" << FineVertices << " vertices: " << DetailLevels
+                << " level(s) of detail over the tracked mesh's " << MeshVertices << ")\n";
     else
       std::cout << Written.size() << " of " << Frames << " frame(s) tracked: " << Pvd.string()
                 << " (" << MeshVertices << " vertices, " << MeshTriangles << " triangles)\n";
@@ -319,7 +370,7 @@ private:
   }
 
   // The frame's line of the table and of the report.
-  void record(int f, double time, vtkPolyData* mesh)
+  void record(int f, double time, vtkPolyData* mesh, double detailSeconds)
   {
     vtkDataArray* residual = mesh->GetPointData()->GetArray("Residual");
     double sum = 0, largest = 0;
@@ -330,7 +381,12 @@ private:
       largest = std::max(largest, r);
     }
     const double n = std::max<double>(1, static_cast<double>(mesh->GetNumberOfPoints()));
-    const FrameRecord r{f, time, std::sqrt(sum / n), largest, figuresOf(mesh)};
+    const FrameRecord r{f,
+                        time,
+                        std::sqrt(sum / n),
+                        largest,
+                        figuresOf(mesh),
+                        std::isfinite(detailSeconds) ? detailSeconds : 0.0};
     Records.push_back(r);
     if (!S.quiet)
     {
@@ -351,7 +407,7 @@ private:
     const bool againstData = !(S.errorTarget > 0);
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
-    compressor->SetInputConnection(Tracker->GetOutputPort());
+    compressor->SetInputConnection(Detail->GetOutputPort());
     compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
     compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
                                             : vtkPCACompressFilter::KARNI_GOTSMAN);
@@ -380,12 +436,53 @@ private:
     if (!writeCompressed(*sequence))
       return;
     recordCompression(compressor->GetOutput());
+    if (DetailLevels > 0)
+      sayDetail(compressor->GetOutput(), *sequence);
     if (againstData)
       sayDataFit(compressor->GetOutput());
     else
       sayMotionFit(*sequence);
     sayAgainstInputMeshes(*sequence);
-    std::printf("glTF: %s\n", Glb.string().c_str());
+    sayGlb();
+  }
+
+  // What the .glb holds: the tracked mesh, or a level of the detail layer.
+  void sayGlb() const
+  {
+    if (GlbWritten.level == 0)
+      std::printf("glTF: %s (the tracked mesh, %zu morph targets)\n", Glb.string().c_str(),
+                  GlbWritten.shapes);
+    else
+      std::printf("glTF: %s (detail level %d of %d: %zu vertices, %zu morph targets, %.1f MB)\n",
+                  Glb.string().c_str(), GlbWritten.level, DetailLevels, GlbWritten.vertices,
+                  GlbWritten.shapes, static_cast<double>(fs::file_size(Glb)) / 1e6);
+  }
+
+  // The detail layer's share of the file and what it costs in fit.
+  void sayDetail(vtkPolyData* result, const dp::CompressedSequence& sequence)
+  {
+    nlohmann::json d = {{"levels", DetailLevels},
+                        {"bytes", sequence.report.detailBytes},
+                        {"step", sequence.detail.step},
+                        {"fineVertices", FineVertices}};
+    const double before = fieldValue(result, "DetailDistanceToDataInput");
+    const double after = fieldValue(result, "DetailDistanceToDataDecompressed");
+    if (std::isfinite(before))
+    {
+      d["distanceToPointsFitted"] = before;
+      d["distanceToPointsDecompressed"] = after;
+      d["fitGrowthPercent"] = fieldValue(result, "DetailDistanceToDataGrowth");
+    }
+    Compression["detail"] = d;
+    std::printf(
+        "Detail layer: %zu of the file's %lld bytes (%d level(s), %lld vertices, step %.3g)",
+        sequence.report.detailBytes, static_cast<long long>(fs::file_size(Dpz)), DetailLevels,
+        FineVertices, sequence.detail.step);
+    if (std::isfinite(before))
+      std::printf("; the decompressed fine mesh lies %.3g from the points (RMS), the fitted one "
+                  "%.3g (%+.1f %%)",
+                  after, before, d["fitGrowthPercent"].get<double>());
+    std::printf("\n");
   }
 
   // Per-frame mesh input: each decompressed frame against the frame's own mesh, as
@@ -512,7 +609,7 @@ private:
       dp::writeCompressedSequence(Dpz.string(), sequence);
       dp::GlbOptions glb;
       glb.meshopt = S.meshopt;
-      dp::writeGlb(Glb.string(), sequence, glb);
+      GlbWritten = dp::writeGlb(Glb.string(), sequence, glb);
       return true;
     }
     catch (const std::exception& e)
@@ -535,6 +632,12 @@ private:
                           {"made", TemplateMade},
                           {"vertices", MeshVertices},
                           {"triangles", MeshTriangles}};
+    report["detail"] = {
+        {"levels", DetailLevels},
+        {"asked", S.detailLevels < 0 ? std::string("automatic") : std::to_string(S.detailLevels)},
+        {"choice", DetailChoice},
+        {"fineVertices", DetailLevels > 0 ? FineVertices : MeshVertices},
+        {"glbLevel", GlbWritten.level}};
     report["boundingBoxDiagonal"] = Diagonal;
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
     std::vector<double> ms;
@@ -579,6 +682,8 @@ private:
   vtkNew<vtkPointSequenceSource> TemplateReader;
   vtkNew<vtkDeformableTrackFilter> Tracker;
   vtkNew<ProgressWatcher> TrackProgress;
+  vtkNew<vtkPointSequenceSource> DataSource;
+  vtkNew<vtkSurfaceDetailFilter> Detail;
 
   std::string InputName;
   int Frames = 0;
@@ -588,6 +693,10 @@ private:
   double Diagonal = 0;
   long long MeshVertices = 0, MeshTriangles = 0;
   std::string TemplateMade; // what the template was made from, and how
+  int DetailLevels = 0;
+  long long FineVertices = 0;
+  std::string DetailChoice; // what the detail layer's levels were chosen from
+  dp::GlbSummary GlbWritten;
   nlohmann::json Compression;
 };
 

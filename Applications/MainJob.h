@@ -7,6 +7,7 @@
 #include "dp/track/TrackerOptions.h"
 
 #include "vtkDeformableTrackFilter.h"
+#include "vtkSurfaceDetailFilter.h"
 
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@ struct Settings
   std::vector<std::string> inputs; // as given; a batch when more than one
   std::string input, pattern = "*", output = "dynamicpoints-output", templateFile;
   int vertices = static_cast<int>(dp::TemplateOptions{}.targetVertices);
+  int detailLevels = vtkSurfaceDetailFilter::AUTOMATIC; // --detail-levels; -1: from the data
   int templateFrom = vtkDeformableTrackFilter::TEMPLATE_AUTO;
   long long frames = 0;   // 0: all
   double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "MeshFidelity.h"
 
+#include "dp/compress/DetailCoding.h"
 #include "dp/geometry/MeshDistortion.h"
+#include "dp/geometry/SubdivisionMap.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 
 namespace dp::cli
 {
@@ -18,18 +21,23 @@ nlohmann::json decibels(double value)
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json();
 }
 
-// Frame t's decompressed mesh against its input mesh `frame`.
-MeshDistortion measureFrame(const CompressedSequence& sequence, std::size_t t,
-                            const PointCloud& frame, std::vector<double>& positions)
+// Frame t's decompressed mesh (at its detail layer's fine level when it has one: `fine`) against
+// its input mesh `frame`.
+MeshDistortion measureFrame(const CompressedSequence& sequence, const SubdivisionMap* fine,
+                            std::size_t t, const PointCloud& frame, std::vector<double>& positions)
 {
-  sequence.pca.model.frame(t, positions.data());
+  if (fine)
+    detailedFrame(sequence, *fine, t, positions.data());
+  else
+    sequence.pca.model.frame(t, positions.data());
+  const std::vector<std::int64_t>& triangles = fine ? fine->fineTriangles() : sequence.triangles;
   const std::vector<std::int64_t> inputTriangles = triangleFans(frame);
   const MeshSurface input = meshSurfaceOf(frame, inputTriangles);
   MeshSurface decoded;
   decoded.positions = positions.data();
   decoded.vertices = positions.size() / 3;
-  decoded.triangles = sequence.triangles.data();
-  decoded.triangleCount = sequence.triangles.size() / 3;
+  decoded.triangles = triangles.data();
+  decoded.triangleCount = triangles.size() / 3;
   // Enough samples that each of the input's triangles is visited about twice.
   const std::size_t samples = std::max<std::size_t>(20000, 2 * inputTriangles.size() / 3);
   return meshDistortion(input, decoded, samples);
@@ -45,7 +53,11 @@ nlohmann::json measureAgainstInputMeshes(const CompressedSequence& sequence,
   if (frames == 0 || frames != framePaths.size() ||
       readPointCloud(framePaths[0]).numberOfFaces() == 0)
     return nullptr;
-  std::vector<double> positions(3 * sequence.pca.model.vertices);
+  std::unique_ptr<SubdivisionMap> fine;
+  if (sequence.detail.levels > 0)
+    fine = std::make_unique<SubdivisionMap>(sequence.triangles, sequence.pca.model.vertices,
+                                            sequence.detail.levels);
+  std::vector<double> positions(3 * (fine ? fine->fineVertices() : sequence.pca.model.vertices));
   nlohmann::json perFrame = nlohmann::json::array();
   double sum1 = 0, sum2 = 0, inputVertices = 0;
   double worst1 = std::numeric_limits<double>::infinity(), worst2 = worst1;
@@ -53,7 +65,7 @@ nlohmann::json measureAgainstInputMeshes(const CompressedSequence& sequence,
   for (std::size_t t = 0; t < frames; ++t)
   {
     const PointCloud frame = readPointCloud(framePaths[t]);
-    const MeshDistortion d = measureFrame(sequence, t, frame, positions);
+    const MeshDistortion d = measureFrame(sequence, fine.get(), t, frame, positions);
     // A frame decoded exactly counts as the finest the doubles resolve.
     const double p1 = std::min(d.d1Psnr(), 300.0), p2 = std::min(d.d2Psnr(), 300.0);
     sum1 += p1;
@@ -77,6 +89,8 @@ nlohmann::json measureAgainstInputMeshes(const CompressedSequence& sequence,
           {"bitsPerInputVertexFrame", 8.0 * static_cast<double>(fileBytes) / inputVertices},
           {"geometryBitsPerInputVertexFrame",
            8.0 * static_cast<double>(fileBytes - sequence.report.colourBytes) / inputVertices},
+          {"detailBitsPerInputVertexFrame",
+           8.0 * static_cast<double>(sequence.report.detailBytes) / inputVertices},
           {"inputVertices", inputVertices},
           {"samplesPerSurface", samples},
           {"perFrame", perFrame}};

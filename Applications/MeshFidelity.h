@@ -17,10 +17,12 @@ namespace dp::cli
 {
 
 /**
- * The decompressed `sequence` (frame t) against the mesh in `framePaths[t]`, for every frame:
+ * The decompressed `sequence` (frame t; the fine mesh of its detail layer when it has one)
+ * against the mesh in `framePaths[t]`, for every frame:
  * {"d1PsnrDb", "d2PsnrDb" (means over frames), "worstD1PsnrDb", "worstD2PsnrDb",
  *  "bitsPerInputVertexFrame" (the whole file), "geometryBitsPerInputVertexFrame" (without the
- *  colour stream), "inputVertices", "samplesPerSurface", "perFrame": [...]}.
+ *  colour stream), "detailBitsPerInputVertexFrame" (the detail layer's share),
+ *  "inputVertices", "samplesPerSurface", "perFrame": [...]}.
  * Null when frame 0's file has no polygons (point input: nothing to compare surfaces with) or
  * the counts differ. `progress` is told each frame measured. Throws what the readers throw.
  */

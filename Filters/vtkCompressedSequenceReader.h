@@ -11,6 +11,10 @@
  * multiply-adds). Field data: "Components". A file with a colour stream (format version 2) gives
  * each frame's "Colors" (unsigned char, r g b, exactly as written) as the active scalars, so
  * ParaView shows them by default, and field data "ColourBytes" (the stream's size in the file).
+ * A file with a detail layer (format version 3, vtkSurfaceDetailFilter's output compressed) gives
+ * the fine mesh by default: the base subdivided and displaced along its normals
+ * (dp::detailedFrame), with point data "Normals" (smooth shading), the colours carried to the
+ * fine mesh, and field data "DetailLevels" and "DetailBytes"; ReadDetail off gives the base.
  */
 #ifndef vtkCompressedSequenceReader_h
 #define vtkCompressedSequenceReader_h
@@ -31,6 +35,13 @@ public:
   vtkGetStringMacro(FileName);
   ///@}
 
+  ///@{
+  /** With a detail layer in the file: the fine mesh (on, default) or the tracked base (off). */
+  vtkSetMacro(ReadDetail, vtkTypeBool);
+  vtkGetMacro(ReadDetail, vtkTypeBool);
+  vtkBooleanMacro(ReadDetail, vtkTypeBool);
+  ///@}
+
   /** 1 if `name` starts like a compressed sequence (for ParaView's reader choice). */
   int CanReadFile(const char* name);
 
@@ -42,6 +53,7 @@ protected:
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
   char* FileName = nullptr;
+  vtkTypeBool ReadDetail = 1;
 
 private:
   vtkCompressedSequenceReader(const vtkCompressedSequenceReader&) = delete;

@@ -1,7 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPCACompressFilter.h"
 
+#include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
+#include "dp/finemesh/DetailCompression.h"
+#include "dp/geometry/SubdivisionMap.h"
 #include "dp/track/DataFit.h"
 #include "vtkDPPointSetAccess.h"
 
@@ -56,6 +59,14 @@ struct vtkPCACompressFilter::Internals
   std::vector<dp::FrameSamples> Samples;
   double Reach = 0;
   dp::DataFit Before, After;
+  // A detail layer (DetailLevels > 0): the fine mesh's connectivity, its map from the base
+  // (Positions and Triangles then hold the base), the fitted displacements, frame-major.
+  int DetailLevels = 0;
+  vtkIdType FineVertices = 0;
+  vtkSmartPointer<vtkCellArray> FinePolys;
+  std::unique_ptr<dp::SubdivisionMap> Map;
+  std::vector<double> Displacements;
+  dp::DetailCompression DetailFit;
 
   std::size_t collected() const
   {
@@ -73,6 +84,12 @@ struct vtkPCACompressFilter::Internals
     Samples.clear();
     Reach = 0;
     Before = After = dp::DataFit{};
+    DetailLevels = 0;
+    FineVertices = 0;
+    FinePolys = nullptr;
+    Map.reset();
+    Displacements.clear();
+    DetailFit = dp::DetailCompression{};
   }
 
   // The properties' defaults are the engine's (one source: the plugin's XML is checked against
@@ -143,6 +160,17 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
   Internals& in = *this->Internal;
   if (!input || input->GetNumberOfPoints() == 0)
     return "frame " + std::to_string(frame) + ": the input has no points";
+  vtkDataArray* levels = input->GetFieldData()->GetArray("DetailLevels");
+  if (frame == 0)
+    in.DetailLevels =
+        levels && levels->GetNumberOfTuples() > 0 ? static_cast<int>(levels->GetTuple1(0)) : 0;
+  if (in.DetailLevels > 0)
+  {
+    const std::string error = this->CollectDetail(input, frame);
+    if (!error.empty() || this->ErrorMeasure != DISTANCE_TO_DATA)
+      return error;
+    return this->CollectData(input, frame);
+  }
   if (frame == 0)
   {
     std::vector<double> positions;
@@ -177,6 +205,91 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
   }
   this->CollectColours(input);
   return this->ErrorMeasure == DISTANCE_TO_DATA ? this->CollectData(input, frame) : std::string();
+}
+
+std::string vtkPCACompressFilter::CollectDetail(vtkPolyData* input, std::size_t frame)
+{
+  Internals& in = *this->Internal;
+  const std::string at = "frame " + std::to_string(frame) + ": ";
+  vtkFieldData* fd = input->GetFieldData();
+  vtkDataArray* base = fd->GetArray("BasePoints");
+  vtkDataArray* triangles = fd->GetArray("BaseTriangles");
+  vtkDataArray* detail = input->GetPointData()->GetArray("Detail");
+  if (!base || base->GetNumberOfComponents() != 3 || !triangles ||
+      triangles->GetNumberOfComponents() != 3 || !detail ||
+      detail->GetNumberOfTuples() != input->GetNumberOfPoints())
+    return at + "a detail layer needs field data BasePoints and BaseTriangles and point data "
+                "Detail (Surface Detail's output carries them)";
+  if (frame == 0)
+  {
+    in.Vertices = base->GetNumberOfTuples();
+    in.Triangles.resize(3 * static_cast<std::size_t>(triangles->GetNumberOfTuples()));
+    for (std::size_t i = 0; i < in.Triangles.size(); ++i)
+      in.Triangles[i] = static_cast<std::int64_t>(
+          triangles->GetComponent(static_cast<vtkIdType>(i / 3), static_cast<int>(i % 3)));
+    try
+    {
+      in.Map = std::make_unique<dp::SubdivisionMap>(
+          in.Triangles, static_cast<std::size_t>(in.Vertices), in.DetailLevels);
+    }
+    catch (const std::exception& e)
+    {
+      return at + "the base mesh cannot be subdivided: " + e.what();
+    }
+    in.FineVertices = input->GetNumberOfPoints();
+    in.FinePolys = input->GetPolys();
+    if (static_cast<std::size_t>(in.FineVertices) != in.Map->fineVertices())
+      return at + std::to_string(in.FineVertices) + " fine points, but " +
+             std::to_string(in.DetailLevels) + " levels over the base make " +
+             std::to_string(in.Map->fineVertices());
+  }
+  else if (base->GetNumberOfTuples() != in.Vertices ||
+           input->GetNumberOfPoints() != in.FineVertices)
+    return at + "its base or fine mesh differs in size from frame 0's: the detail layer needs "
+                "one connectivity through the take";
+  for (vtkIdType i = 0; i < in.Vertices; ++i)
+  {
+    double p[3];
+    base->GetTuple(i, p);
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      return at + "base point " + std::to_string(i) + " is not finite";
+    in.Positions.insert(in.Positions.end(), p, p + 3);
+  }
+  for (vtkIdType i = 0; i < in.FineVertices; ++i)
+  {
+    const double d = detail->GetTuple1(i);
+    if (!std::isfinite(d))
+      return at + "the detail of point " + std::to_string(i) + " is not finite";
+    in.Displacements.push_back(d);
+  }
+  auto* colours = vtkUnsignedCharArray::SafeDownCast(fd->GetArray("BaseColors"));
+  if (!in.ColoursInEveryFrame || !colours || colours->GetNumberOfComponents() != 3 ||
+      colours->GetNumberOfTuples() != in.Vertices)
+  {
+    in.ColoursInEveryFrame = false;
+    in.Colours.clear();
+  }
+  else
+    in.Colours.insert(in.Colours.end(), colours->GetPointer(0),
+                      colours->GetPointer(0) + 3 * in.Vertices);
+  return {};
+}
+
+void vtkPCACompressFilter::CompressDetail(std::size_t frames,
+                                          const std::function<bool(double)>& progress)
+{
+  Internals& in = *this->Internal;
+  const dp::FittedDetail fitted{*in.Map, in.Positions.data(), in.Displacements.data(), frames};
+  if (this->ErrorMeasure == DISTANCE_TO_DATA)
+  {
+    std::vector<const dp::FrameSamples*> samples;
+    for (const dp::FrameSamples& s : in.Samples)
+      samples.push_back(&s);
+    in.DetailFit = dp::compressDetailAgainstData(*in.Result, fitted, samples, in.Reach,
+                                                 this->ErrorTarget / 100, progress);
+  }
+  else
+    dp::compressDetailAtDeviation(*in.Result, fitted, std::max(in.Result->report.rmsError, 1e-12));
 }
 
 void vtkPCACompressFilter::CollectColours(vtkPolyData* input)
@@ -252,6 +365,11 @@ std::string vtkPCACompressFilter::Compress()
                                in.Triangles, times, progress));
     if (in.ColoursInEveryFrame && !in.Colours.empty())
       dp::setColours(*in.Result, std::move(in.Colours), this->ColourTolerance);
+    if (in.DetailLevels > 0)
+    {
+      this->SetProgressText("PCA Compress: compressing the detail layer");
+      this->CompressDetail(frames, progress);
+    }
   }
   catch (const std::exception& e)
   {
@@ -267,28 +385,25 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
 {
   const Internals& in = *this->Internal;
   const dp::CompressedSequence& result = *in.Result;
-  const auto n = in.Vertices;
-  vtkNew<vtkDoubleArray> coordinates;
-  coordinates->SetNumberOfComponents(3);
-  coordinates->SetNumberOfTuples(n);
-  result.pca.model.frame(frame, coordinates->GetPointer(0));
-  vtkNew<vtkFloatArray> error;
-  error->SetName("CompressionError");
-  error->SetNumberOfTuples(n);
-  const double* original = in.Positions.data() + 3 * static_cast<std::size_t>(n) * frame;
-  const double* rebuilt = coordinates->GetPointer(0);
-  for (vtkIdType i = 0; i < n; ++i)
-    error->SetValue(
-        i, static_cast<float>(std::sqrt(std::pow(original[3 * i] - rebuilt[3 * i], 2) +
-                                        std::pow(original[3 * i + 1] - rebuilt[3 * i + 1], 2) +
-                                        std::pow(original[3 * i + 2] - rebuilt[3 * i + 2], 2))));
   output->Initialize();
-  vtkNew<vtkPoints> points;
-  points->SetData(coordinates);
-  output->SetPoints(points);
-  output->SetPolys(in.Polys);
-  output->GetPointData()->SetScalars(error);
-  addColours(result, frame, output);
+  if (in.DetailLevels > 0)
+    this->FillDetail(frame, output);
+  else
+  {
+    const auto n = in.Vertices;
+    vtkNew<vtkDoubleArray> coordinates;
+    coordinates->SetNumberOfComponents(3);
+    coordinates->SetNumberOfTuples(n);
+    result.pca.model.frame(frame, coordinates->GetPointer(0));
+    const double* original = in.Positions.data() + 3 * static_cast<std::size_t>(n) * frame;
+    vtkNew<vtkPoints> points;
+    points->SetData(coordinates);
+    output->SetPoints(points);
+    output->SetPolys(in.Polys);
+    output->GetPointData()->SetScalars(
+        vtkDP::distancesArray("CompressionError", original, coordinates->GetPointer(0), n));
+    addColours(result, frame, output);
+  }
   const dp::PcaReport& r = result.report;
   vtkDP::addFieldValue(output, "Components", static_cast<double>(r.components));
   vtkDP::addFieldValue(output, "PaperD0", r.paperD0);
@@ -311,9 +426,51 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
     vtkDP::addFieldValue(output, "DistanceToDataDecompressed", in.After.rms);
     vtkDP::addFieldValue(output, "DistanceToDataGrowth", 100 * (in.After.rms / in.Before.rms - 1));
   }
+  if (in.DetailLevels > 0)
+  {
+    vtkDP::addFieldValue(output, "DetailLevels", in.DetailLevels);
+    vtkDP::addFieldValue(output, "DetailBytes", static_cast<double>(r.detailBytes));
+    vtkDP::addFieldValue(output, "DetailStep", result.detail.step);
+    if (in.DetailFit.fitted.samples > 0)
+    {
+      vtkDP::addFieldValue(output, "DetailDistanceToDataInput", in.DetailFit.fitted.rms);
+      vtkDP::addFieldValue(output, "DetailDistanceToDataDecompressed",
+                           in.DetailFit.decompressed.rms);
+      vtkDP::addFieldValue(output, "DetailDistanceToDataGrowth", 100 * in.DetailFit.growth);
+    }
+  }
   vtkDP::addFieldValue(output, "ComponentsPerFrame",
                        static_cast<double>(r.components) /
                            static_cast<double>(this->GetNumberOfInputFrames()));
+}
+
+void vtkPCACompressFilter::FillDetail(std::size_t frame, vtkPolyData* output)
+{
+  const Internals& in = *this->Internal;
+  const dp::CompressedSequence& result = *in.Result;
+  const dp::SubdivisionMap& map = *in.Map;
+  const std::size_t n = map.fineVertices(), nb = map.baseVertices();
+  vtkNew<vtkDoubleArray> coordinates;
+  coordinates->SetNumberOfComponents(3);
+  coordinates->SetNumberOfTuples(static_cast<vtkIdType>(n));
+  dp::detailedFrame(result, map, frame, coordinates->GetPointer(0));
+  // The input's fine positions: its tracked base subdivided and displaced as fitted.
+  std::vector<double> smooth(3 * n), normals(3 * n), fitted(3 * n);
+  map.subdivide(in.Positions.data() + 3 * nb * frame, smooth.data(), normals.data());
+  dp::displaceAlongNormals(smooth.data(), normals.data(), in.Displacements.data() + n * frame, n,
+                           fitted.data());
+  vtkNew<vtkPoints> points;
+  points->SetData(coordinates);
+  output->SetPoints(points);
+  output->SetPolys(in.FinePolys);
+  output->GetPointData()->SetScalars(vtkDP::distancesArray(
+      "CompressionError", fitted.data(), coordinates->GetPointer(0), static_cast<vtkIdType>(n)));
+  if (!result.colours.empty())
+  {
+    const std::vector<std::uint8_t> fine =
+        dp::subdividedColours(map, result.colours.data() + 3 * nb * frame);
+    output->GetPointData()->AddArray(vtkDP::colorsArray(fine.data(), static_cast<vtkIdType>(n)));
+  }
 }
 
 int vtkPCACompressFilter::RequestFrameData(vtkInformation* request,

@@ -32,6 +32,18 @@
  * frames: above 1/2, with a target of the motion's, the compression is weak and a warning says
  * so; so does an input without polygons, which is unlikely to be one mesh moving).
  *
+ * A detail layer (an input from vtkSurfaceDetailFilter: a fine mesh with field data
+ * "DetailLevels" > 0, "BasePoints", "BaseTriangles", point data "Detail"): the tracked (base)
+ * mesh it carries is compressed as above, then the fine mesh's displacements are carried over to
+ * the decompressed base and coded through the take (dp::compressDetailAgainstData: with
+ * DISTANCE_TO_DATA the decompressed fine mesh's distance to the data grows by at most
+ * ErrorTarget percent over the input's; with a motion target the displacements take the base's
+ * RMS error). The output is then the decompressed fine mesh, "CompressionError" its vertices'
+ * distance to the input's, and field data "DetailLevels", "DetailBytes", "DetailStep" and, with
+ * DISTANCE_TO_DATA, "DetailDistanceToDataInput", "DetailDistanceToDataDecompressed",
+ * "DetailDistanceToDataGrowth"; colour ("BaseColors") is stored per base vertex and carried to
+ * the fine mesh by the subdivision.
+ *
  * The filter writes no file: vtkCompressedSequenceWriter writes .dpz (read back by
  * vtkCompressedSequenceReader) and glTF 2.0 binaries (.glb, morph targets); C++ callers holding
  * this filter can write its result with the engine's writers (GetCompressedSequence, the main
@@ -47,7 +59,8 @@
 #include "DynamicPointsFiltersModule.h" // for export macro
 #include "vtkDPTemporalFilter.h"
 
-#include <string> // for std::string
+#include <functional> // for std::function
+#include <string>     // for std::string
 
 namespace dp
 {
@@ -151,6 +164,12 @@ private:
   void CollectColours(vtkPolyData* input);
   /** DISTANCE_TO_DATA: the frame's data samples and reach from the input's field data. */
   std::string CollectData(vtkPolyData* input, std::size_t frame);
+  /** A detail layer's frame: its base's positions and colours, its displacements. */
+  std::string CollectDetail(vtkPolyData* input, std::size_t frame);
+  /** The detail layer coded after the base. */
+  void CompressDetail(std::size_t frames, const std::function<bool(double)>& progress);
+  /** The decompressed fine mesh of `frame` with its error and colours. */
+  void FillDetail(std::size_t frame, vtkPolyData* output);
   /** Compresses the frames collected and warns when the compression is weak. */
   std::string Compress();
   /** Warns when most of the frames' worth of components were kept (weak compression). */

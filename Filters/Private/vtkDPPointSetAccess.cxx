@@ -7,6 +7,7 @@
 #include "vtkDataObject.h"
 #include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
+#include "vtkFloatArray.h"
 #include "vtkInformation.h"
 #include "vtkNew.h"
 #include "vtkPointData.h"
@@ -166,6 +167,19 @@ vtkSmartPointer<vtkUnsignedCharArray> colorsArray(const std::uint8_t* rgb, vtkId
   colours->SetNumberOfTuples(n);
   std::copy(rgb, rgb + 3 * n, colours->GetPointer(0));
   return colours;
+}
+
+vtkSmartPointer<vtkFloatArray> distancesArray(const char* name, const double* a, const double* b,
+                                              vtkIdType n)
+{
+  auto out = vtkSmartPointer<vtkFloatArray>::New();
+  out->SetName(name);
+  out->SetNumberOfTuples(n);
+  for (vtkIdType i = 0; i < n; ++i)
+    out->SetValue(i, static_cast<float>(std::sqrt(std::pow(a[3 * i] - b[3 * i], 2) +
+                                                  std::pow(a[3 * i + 1] - b[3 * i + 1], 2) +
+                                                  std::pow(a[3 * i + 2] - b[3 * i + 2], 2))));
+  return out;
 }
 
 void addFieldValue(vtkDataObject* data, const char* name, double value)

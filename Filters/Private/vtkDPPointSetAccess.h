@@ -10,6 +10,7 @@
 #include <vector>
 
 class vtkDataObject;
+class vtkFloatArray;
 class vtkInformation;
 class vtkPointSet;
 class vtkPolyData;
@@ -53,6 +54,11 @@ std::size_t requestedFrame(const std::vector<double>& steps, vtkInformation* out
 /** A "Colors" array of `n` r g b byte triples copied from `rgb` (the mesh colours the tracker,
  *  the compressor and the reader give; ParaView shows such bytes as they are). */
 vtkSmartPointer<vtkUnsignedCharArray> colorsArray(const std::uint8_t* rgb, vtkIdType n);
+
+/** A float array `name` of the distances between the points of `a` and `b` (x y z each, `n`
+ *  points): how far each vertex moved (a compression's error). */
+vtkSmartPointer<vtkFloatArray> distancesArray(const char* name, const double* a, const double* b,
+                                              vtkIdType n);
 
 /** Adds a one-value double array `name` to `data`'s field data (per-frame figures). */
 void addFieldValue(vtkDataObject* data, const char* name, double value);

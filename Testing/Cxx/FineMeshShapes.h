@@ -3,8 +3,8 @@
 // the sphere), a bumpy sphere around it, and a flat grid with a boundary.
 #pragma once
 
-#include "dp/finemesh/SubdivisionMap.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
+#include "dp/geometry/SubdivisionMap.h"
 
 #include <cmath>
 #include <cstdint>

@@ -38,7 +38,7 @@ struct Fixture
 
   Fixture() : positions(3 * map.fineVertices()), normals(positions.size())
   {
-    fitter.fineFrame(base.positions.data(), positions.data(), normals.data());
+    map.subdivide(base.positions.data(), positions.data(), normals.data());
     options.reach = 0.2; // about the base's edge length
   }
 
@@ -47,8 +47,8 @@ struct Fixture
     Mesh m;
     m.triangles = map.fineTriangles();
     m.positions.resize(positions.size());
-    dp::displace(positions.data(), normals.data(), d.data(), map.fineVertices(),
-                 m.positions.data());
+    dp::displaceAlongNormals(positions.data(), normals.data(), d.data(), map.fineVertices(),
+                             m.positions.data());
     return m;
   }
 };

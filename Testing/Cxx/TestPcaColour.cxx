@@ -200,8 +200,12 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
   relabelled[8] = 1;
   EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
                std::runtime_error);
-  // A version this reader does not know.
+  // Version 3 reads a byte of flags where the colour section starts: refused, not misread.
   relabelled[8] = 3;
+  EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
+               std::runtime_error);
+  // A version this reader does not know.
+  relabelled[8] = 4;
   try
   {
     dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "new.dpz");
@@ -209,7 +213,7 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
   }
   catch (const std::runtime_error& e)
   {
-    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 3"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 4"), std::string::npos)
         << e.what();
   }
 }

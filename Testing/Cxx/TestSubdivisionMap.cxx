@@ -2,7 +2,7 @@
 // SubdivisionMap: Loop subdivision as a fixed linear map from the base mesh to the fine mesh.
 #include "FineMeshShapes.h"
 
-#include "dp/finemesh/SubdivisionMap.h"
+#include "dp/geometry/SubdivisionMap.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>

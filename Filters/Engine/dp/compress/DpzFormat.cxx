@@ -4,6 +4,7 @@
 // version 2, colour), each with its sizes and CRC-32. Every count is checked against what the bytes
 // can hold before anything is allocated, so a corrupt or hostile file is refused with its name and
 // the reason.
+#include "dp/compress/DetailCoding.h"
 #include "dp/compress/IntegerCodec.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/detail/FileText.h"
@@ -33,10 +34,14 @@ namespace
 {
 
 constexpr char Magic[8] = {'\x89', 'D', 'P', 'Z', '\r', '\n', '\x1a', '\n'};
-// Version 1: connectivity and geometry. Version 2 adds the colour section after them; a
-// sequence without colour is still written as version 1, so earlier readers keep reading it.
+// Version 1: connectivity and geometry. Version 2 adds the colour section after them. Version 3
+// adds a byte of flags after the geometry (ColourFlag, DetailFlag) and the detail section. A
+// sequence is written in the earliest version that holds it, so earlier readers keep reading
+// what they can.
 constexpr std::uint32_t PlainVersion = 1;
-constexpr std::uint32_t FormatVersion = 2;
+constexpr std::uint32_t ColourVersion = 2;
+constexpr std::uint32_t DetailVersion = 3;
+constexpr std::uint8_t ColourFlag = 1, DetailFlag = 2;
 
 // A fuzzing build (Testing/Fuzz) computes the checksums but does not enforce them, so mutated
 // inputs reach the decoder behind them.
@@ -283,6 +288,112 @@ void dequantise(const Counts& n, QuantisedPca& q)
     m.weights.data()[i] = static_cast<double>(q.weightIntegers[i]) * q.step;
 }
 
+// The fine mesh's vertex count of the sequence's base subdivided `levels` times (a corrupt
+// connectivity or level count is refused as a std::invalid_argument).
+std::size_t fineVerticesOf(const CompressedSequence& s, int levels)
+{
+  return SubdivisionMap(s.triangles, s.pca.model.vertices, levels).fineVertices();
+}
+
+// A detail layer the writer can store: levels in range, a step, and a payload beside
+// displacements of the fine mesh's size.
+void checkDetail(const CompressedSequence& s)
+{
+  const DetailLayer& d = s.detail;
+  if (d.levels < 1 || d.levels > MaximumDetailLevels)
+    throw std::invalid_argument("the detail layer's levels must be 1 to " +
+                                std::to_string(MaximumDetailLevels) + ", not " +
+                                std::to_string(d.levels));
+  const std::size_t expected = fineVerticesOf(s, d.levels) * s.pca.model.frames;
+  if (d.displacements.size() != expected || d.payload.empty() || !(d.step > 0))
+    throw std::invalid_argument("the detail layer holds " + std::to_string(d.displacements.size()) +
+                                " displacements and " + std::to_string(d.payload.size()) +
+                                " coded bytes; its fine mesh needs " + std::to_string(expected) +
+                                " displacements, coded (dp::setDetail)");
+}
+
+// The detail section: levels, step, fine vertex count, the range coder's bytes (already
+// entropy-coded: no zstd) with their size, then a CRC-32 of all of these, then the bytes.
+constexpr std::size_t DetailFieldsBytes = 1 + 8 + 8 + 8;
+
+std::uint32_t detailChecksum(const std::uint8_t* fields, const std::uint8_t* payload,
+                             std::size_t size)
+{
+  std::vector<std::uint8_t> all(fields, fields + DetailFieldsBytes);
+  all.insert(all.end(), payload, payload + size);
+  return crc(all.data(), all.size());
+}
+
+void putDetail(std::vector<std::uint8_t>& out, const DetailLayer& d, std::size_t fineVertices)
+{
+  const std::size_t fields = out.size();
+  putRaw<std::uint8_t>(out, static_cast<std::uint8_t>(d.levels));
+  putRaw<double>(out, d.step);
+  putRaw<std::uint64_t>(out, fineVertices);
+  putRaw<std::uint64_t>(out, d.payload.size());
+  putRaw<std::uint32_t>(out,
+                        detailChecksum(out.data() + fields, d.payload.data(), d.payload.size()));
+  out.insert(out.end(), d.payload.begin(), d.payload.end());
+}
+
+// The detail section back: its header checked against the base, its displacements decoded.
+void readDetail(ByteReader& in, const std::uint8_t* bytes, const std::string& name, const Counts& n,
+                CompressedSequence& s)
+{
+  const std::size_t start = in.position();
+  DetailLayer& d = s.detail;
+  const std::uint8_t* fields = bytes + start;
+  d.levels = in.raw<std::uint8_t>();
+  d.step = in.raw<double>();
+  const auto fine = in.raw<std::uint64_t>();
+  const auto size = in.raw<std::uint64_t>();
+  const auto expected = in.raw<std::uint32_t>();
+  if (d.levels < 1 || d.levels > MaximumDetailLevels)
+    in.fail("detail layer of " + std::to_string(d.levels) + " levels (1 to " +
+            std::to_string(MaximumDetailLevels) + " are possible)");
+  if (!(d.step > 0) || !std::isfinite(d.step))
+    in.fail("invalid detail step");
+  if (size > in.remaining())
+    in.fail("detail layer is truncated (" + std::to_string(in.remaining()) + " of " +
+            std::to_string(size) + " bytes)");
+  // The range coder spends at least 0.022 bits a value (its likeliest bit): more values than
+  // that allows cannot be in the bytes, and are refused before anything is allocated; and a
+  // subdivision of more triangles than the fine vertices claimed is not made.
+  if (static_cast<double>(fine) * static_cast<double>(n.frames) >
+      400.0 * static_cast<double>(size) + 1e6)
+    in.fail("detail layer claims more values than its " + std::to_string(size) + " bytes can hold");
+  if (std::ldexp(static_cast<double>(n.triangles), 2 * d.levels) >
+      8.0 * static_cast<double>(fine) + 1e6)
+    in.fail("detail layer claims " + std::to_string(fine) + " fine vertices, too few for " +
+            std::to_string(d.levels) + " levels over " + std::to_string(n.triangles) +
+            " triangles");
+  std::size_t computed = 0;
+  try
+  {
+    computed = fineVerticesOf(s, d.levels);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    in.fail(std::string("the connectivity cannot be subdivided: ") + e.what());
+  }
+  if (fine != computed)
+    in.fail("detail layer claims " + std::to_string(fine) + " fine vertices; the base's " +
+            std::to_string(d.levels) + " levels make " + std::to_string(computed));
+  const std::uint8_t* payload = bytes + in.position();
+  if (detailChecksum(fields, payload, size) != expected && EnforceChecksums)
+    in.fail("detail layer: checksum mismatch (the file is corrupt)");
+  d.payload.assign(payload, payload + size);
+  for (std::uint64_t i = 0; i < size; ++i)
+    in.byte();
+  const SubdivisionMap map(s.triangles, n.vertices, d.levels);
+  d.displacements = decodeDetail(map, n.frames, d.step, d.payload.data(), d.payload.size(),
+                                 name + " (detail layer)");
+  for (double v : d.displacements)
+    if (!std::isfinite(v))
+      in.fail("detail layer: displacements out of range");
+  s.report.detailBytes = in.position() - start;
+}
+
 } // namespace
 
 std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
@@ -305,8 +416,14 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   for (std::size_t t = 0; t < m.frames; ++t)
     putRaw<double>(header, t < s.times.size() ? s.times[t] : static_cast<double>(t));
 
+  const bool detailed = s.detail.levels > 0;
+  if (detailed)
+    checkDetail(s);
+  const std::uint32_t version = detailed            ? DetailVersion
+                                : s.colours.empty() ? PlainVersion
+                                                    : ColourVersion;
   std::vector<std::uint8_t> out(Magic, Magic + sizeof(Magic));
-  putRaw<std::uint32_t>(out, s.colours.empty() ? PlainVersion : FormatVersion);
+  putRaw<std::uint32_t>(out, version);
   putRaw<std::uint64_t>(out, header.size());
   out.insert(out.end(), header.begin(), header.end());
   putRaw<std::uint32_t>(out, crc(header.data(), header.size()));
@@ -317,8 +434,13 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   std::vector<std::uint8_t> geometry;
   compress::putGeometry(geometry, q, EarlierNeighbours(s.triangles, m.vertices));
   putSection(out, geometry);
+  if (version == DetailVersion)
+    putRaw<std::uint8_t>(out, static_cast<std::uint8_t>((s.colours.empty() ? 0 : ColourFlag) |
+                                                        (detailed ? DetailFlag : 0)));
   if (!s.colours.empty())
     putSection(out, colourResiduals(s.colours, m.vertices, m.frames));
+  if (detailed)
+    putDetail(out, s.detail, fineVerticesOf(s, s.detail.levels));
   return out;
 }
 
@@ -373,9 +495,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   for (std::size_t i = 0; i < sizeof(Magic); ++i)
     in.byte();
   const auto version = in.raw<std::uint32_t>();
-  if (version != PlainVersion && version != FormatVersion)
+  if (version < PlainVersion || version > DetailVersion)
     in.fail("format version " + std::to_string(version) + " is not supported (this reader: " +
-            std::to_string(PlainVersion) + " to " + std::to_string(FormatVersion) + ")");
+            std::to_string(PlainVersion) + " to " + std::to_string(DetailVersion) + ")");
   const auto headerSize = in.raw<std::uint64_t>();
   if (headerSize > in.remaining())
     in.fail("header truncated");
@@ -390,8 +512,17 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   const Counts n = readHeader(header, s);
   readConnectivity(in, bytes, name, n, s);
   readGeometry(in, bytes, name, n, s);
-  if (version == FormatVersion)
+  std::uint8_t flags = version == ColourVersion ? ColourFlag : 0;
+  if (version == DetailVersion)
+  {
+    flags = in.byte();
+    if (flags & ~(ColourFlag | DetailFlag))
+      in.fail("unknown sections (flags " + std::to_string(flags) + ")");
+  }
+  if (flags & ColourFlag)
     readColours(in, bytes, n, s);
+  if (flags & DetailFlag)
+    readDetail(in, bytes, name, n, s);
   if (in.remaining() != 0)
     in.fail("unexpected bytes after the last section");
   dequantise(n, s.pca);

@@ -128,7 +128,23 @@ struct PcaReport
   double quantisedPlainBits = 0; // the same integers in fixed-width fields, no coding
   std::size_t payloadBytes = 0;  // geometry, compressed (0 for float PCA)
   std::size_t colourBytes = 0;   // the colour stream, compressed (0: no colour)
+  std::size_t detailBytes = 0;   // the detail layer's section (0: no detail layer)
   int colourTolerance = 0;       // levels a stored colour may differ from the given one
+};
+
+/**
+ * The optional detail layer over the compressed (base) mesh: the base subdivided `levels` times
+ * (SubdivisionMap) and each fine vertex moved along the subdivided surface's normal by its
+ * displacement (dp::detailedFrame). `displacements` are the decoded values, frame-major (frame t
+ * starts at fine vertices * t); `payload` the range coder's bytes the file stores
+ * (dp::encodeDetail), made from them at `step`.
+ */
+struct DetailLayer
+{
+  int levels = 0; // 0: no detail layer
+  double step = 0;
+  std::vector<double> displacements;
+  std::vector<std::uint8_t> payload;
 };
 
 struct CompressedSequence
@@ -139,6 +155,7 @@ struct CompressedSequence
   // Optional colour of every vertex in every frame: r g b bytes, frame-major (frame t starts at
   // 3 * vertices * t); empty: no colour. Stored beside the geometry as setColours left them.
   std::vector<std::uint8_t> colours;
+  DetailLayer detail;
   PcaReport report;
 };
 
@@ -186,14 +203,18 @@ double maxVertexError(const Eigen::Ref<const Eigen::MatrixXd>& original,
                       const Eigen::Ref<const Eigen::MatrixXd>& approx);
 
 /**
- * The compressed file (.dpz): magic, version, a header with its CRC-32, and zstd sections, each
- * with its CRC-32: the connectivity, the geometry (mean, basis, weights as predicted zigzag
- * varints) and, in version 2, the colours (each frame's bytes as differences from the previous
- * frame's, so colour fixed to the surface costs little). A sequence without colour is written as
- * version 1, which earlier readers read; this reader reads both. The reader checks every length,
- * count and checksum and throws std::runtime_error naming the file and what is wrong; it never
- * returns partial geometry or colour. Writing throws std::invalid_argument when the colours'
- * count is neither 0 nor frames * vertices * 3.
+ * The compressed file (.dpz): magic, version, a header with its CRC-32, and sections, each with
+ * its CRC-32: the connectivity, the geometry (mean, basis, weights as predicted zigzag varints,
+ * zstd), in version 2 the colours (each frame's bytes as differences from the previous frame's,
+ * zstd, so colour fixed to the surface costs little), and in version 3 a byte of flags saying
+ * which of the colours and the detail layer (its levels, step and range-coded displacements,
+ * DetailCoding.h) follow. A sequence is written in the earliest version that holds what it has
+ * (1 without colour or detail, 2 with colour alone), so earlier readers keep reading what they
+ * can; this reader reads all three. The reader checks every length, count and checksum and
+ * throws std::runtime_error naming the file and what is wrong; it never returns partial
+ * geometry, colour or detail. Writing throws std::invalid_argument when the colours' count is
+ * neither 0 nor frames * vertices * 3, or the detail layer's displacements do not match its
+ * levels.
  */
 void writeCompressedSequence(const std::string& path, const CompressedSequence& sequence);
 CompressedSequence readCompressedSequence(const std::string& path);

@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/export/GltfExport.h"
+#include "dp/compress/DetailCoding.h"
 #include "dp/detail/FileText.h"
+#include "dp/geometry/SubdivisionMap.h"
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
@@ -390,9 +392,75 @@ void writeMeshoptGlb(const std::string& file, const std::string& path, tinygltf:
 
 } // namespace
 
-void writeGlb(const std::string& path, const CompressedSequence& sequence,
-              const GlbOptions& options)
+namespace
 {
+// Level `level` of a sequence's detail layer as a sequence of its own: that level's vertices of
+// the decoded fine mesh on that level's triangles, decomposed again into shapes within the
+// layer's coding error, with their colours.
+CompressedSequence detailLevelSequence(const CompressedSequence& s, int level)
+{
+  const std::size_t nb = s.pca.model.vertices, frames = s.pca.model.frames;
+  const SubdivisionMap fine(s.triangles, nb, s.detail.levels), at(s.triangles, nb, level);
+  const std::size_t n = at.fineVertices();
+  std::vector<double> positions(3 * n * frames), all(3 * fine.fineVertices());
+  for (std::size_t t = 0; t < frames; ++t)
+  {
+    detailedFrame(s, fine, t, all.data());
+    std::copy(all.begin(), all.begin() + static_cast<std::ptrdiff_t>(3 * n),
+              positions.begin() + static_cast<std::ptrdiff_t>(3 * n * t));
+  }
+  PcaOptions o;
+  o.layout = PcaLayout::Shapes;
+  o.measure = PcaErrorMeasure::RmsDeviation;
+  o.target = std::max({s.detail.step / std::sqrt(12.0), s.report.rmsError, 1e-9});
+  o.quantise = false;
+  CompressedSequence out =
+      compressSequence(positions.data(), n, frames, o, at.fineTriangles(), s.times);
+  for (std::size_t t = 0; t < frames && !s.colours.empty(); ++t)
+  {
+    const std::vector<std::uint8_t> c = subdividedColours(fine, s.colours.data() + 3 * nb * t);
+    out.colours.insert(out.colours.end(), c.begin(),
+                       c.begin() + static_cast<std::ptrdiff_t>(3 * n));
+  }
+  return out;
+}
+
+// About what writeGlb stores for `s`: float positions and targets, weights, indices, colour.
+double glbBytes(const CompressedSequence& s)
+{
+  const auto n = static_cast<double>(s.pca.model.vertices);
+  const auto k = static_cast<double>(s.pca.model.components());
+  const auto frames = static_cast<double>(s.pca.model.frames);
+  const double colour = s.colours.empty() ? 0.0 : 4 * n + 8 * n * (frames - 1);
+  return 12 * n * (k + 1) + 4 * k * frames + 4 * static_cast<double>(s.triangles.size()) + colour;
+}
+} // namespace
+
+GlbLevel glbLevelOf(const CompressedSequence& sequence, const GlbOptions& options)
+{
+  GlbLevel out;
+  const int levels = sequence.detail.levels;
+  if (levels == 0 || options.detailLevel == 0)
+    return out;
+  const bool automatic = options.detailLevel < 0;
+  for (int level = automatic ? levels : std::min(options.detailLevel, levels); level >= 1; --level)
+  {
+    CompressedSequence written = detailLevelSequence(sequence, level);
+    if (!automatic || glbBytes(written) <= static_cast<double>(options.maximumBytes))
+    {
+      out.level = level;
+      out.written = std::move(written);
+      return out;
+    }
+  }
+  return out;
+}
+
+GlbSummary writeGlb(const std::string& path, const CompressedSequence& given,
+                    const GlbOptions& options)
+{
+  const GlbLevel level = glbLevelOf(given, options);
+  const CompressedSequence& sequence = level.written ? *level.written : given;
   const PcaModel& m = sequence.pca.model;
   if (m.layout != PcaLayout::Shapes)
     throw std::invalid_argument("glTF morph targets need the shape layout (basis = shapes)");
@@ -421,6 +489,7 @@ void writeGlb(const std::string& path, const CompressedSequence& sequence,
                                             &model, partial, true, true, false, true))
                                  throw std::runtime_error(path + ": cannot write the glTF file");
                              });
+  return {level.level, m.vertices, m.components()};
 }
 
 } // namespace dp

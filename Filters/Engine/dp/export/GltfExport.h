@@ -28,6 +28,14 @@
  * move nothing; VTK 9.2 reads COLOR_0 as point data and warns once per target that it ignores
  * the targets' COLOR_0.
  *
+ * A sequence with a detail layer is written at one level of its fine mesh: the vertices of that
+ * level (the base's, then those each subdivision made, displaced as decoded: dp::detailedFrame)
+ * on that level's triangles, with their colours, decomposed again into morph targets (float PCA
+ * of the shapes, as many components as keep them within the layer's own coding error:
+ * max(step / sqrt(12), the base's RMS error)). By default the finest level whose file stays
+ * within GlbOptions::maximumBytes; the detail is mostly per-frame capture noise that no few
+ * shapes hold, so the finest level can need a component for most frames.
+ *
  * Limits: only the shape layout maps onto morph targets (the trajectory layout is refused);
  * no normals (viewers compute them).
  */
@@ -35,6 +43,8 @@
 
 #include "dp/compress/PcaCompression.h"
 
+#include <cstddef>
+#include <optional>
 #include <string>
 
 namespace dp
@@ -43,12 +53,32 @@ namespace dp
 struct GlbOptions
 {
   bool meshopt = false; // EXT_meshopt_compression on every buffer view
+  // A sequence with a detail layer: the level of its fine mesh written (0: the base), or -1: the
+  // finest whose file stays within maximumBytes.
+  int detailLevel = -1;
+  std::size_t maximumBytes = std::size_t{64} << 20;
+};
+
+/** The level writeGlb writes of a sequence's detail layer (0 without one), and the sequence it
+ *  writes for it (the detail level as its own base, decomposed again: see the file comment). */
+struct GlbLevel
+{
+  int level = 0;
+  std::optional<CompressedSequence> written; // unset: the sequence itself (level 0)
+};
+GlbLevel glbLevelOf(const CompressedSequence& sequence, const GlbOptions& options = {});
+
+/** What writeGlb wrote: the detail level (0: the base), its vertices and its shape targets. */
+struct GlbSummary
+{
+  int level = 0;
+  std::size_t vertices = 0, shapes = 0;
 };
 
 /** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout,
  *  a sequence without triangles or colours of the wrong count, std::runtime_error when the file
  *  cannot be written. */
-void writeGlb(const std::string& path, const CompressedSequence& sequence,
-              const GlbOptions& options = {});
+GlbSummary writeGlb(const std::string& path, const CompressedSequence& sequence,
+                    const GlbOptions& options = {});
 
 } // namespace dp

@@ -2,7 +2,6 @@
 #include "dp/finemesh/DisplacementFit.h"
 
 #include "dp/detail/Parallel.h"
-#include "dp/geometry/TriangleMesh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -78,13 +77,6 @@ DisplacementFitter::DisplacementFitter(const SubdivisionMap& map) : Map(map)
   Neighbours.reserve(pairs.size());
   for (const auto& [a, b] : pairs)
     Neighbours.push_back(b);
-}
-
-void DisplacementFitter::fineFrame(const double* basePositions, double* finePositions,
-                                   double* fineNormals) const
-{
-  Map.apply(basePositions, finePositions);
-  vertexNormalsOf(Map.fineTriangles(), finePositions, Map.fineVertices(), fineNormals);
 }
 
 int DisplacementFitter::solve(const std::vector<double>& w, const std::vector<double>& wo,
@@ -172,8 +164,12 @@ DisplacementFit DisplacementFitter::fit(const double* finePositions, const doubl
                });
   DisplacementFit out;
   out.displacement = observation;
+  out.met.resize(n);
   for (std::size_t i = 0; i < n; ++i)
-    out.observed += weight[i] > 0 ? 1 : 0;
+  {
+    out.met[i] = weight[i] > 0 ? 1 : 0;
+    out.observed += out.met[i];
+  }
   std::vector<double> w = weight, wo(n);
   for (int round = 0; round <= options.robustRounds; ++round)
   {
@@ -200,18 +196,6 @@ DisplacementFit DisplacementFitter::fit(const double* finePositions, const doubl
   for (std::size_t i = 0; i < n; ++i)
     out.downweighted += weight[i] > 0 && w[i] < 0.5 * weight[i] ? 1 : 0;
   return out;
-}
-
-void displace(const double* finePositions, const double* fineNormals, const double* displacement,
-              std::size_t fineVertices, double* out)
-{
-  forEachIndex(fineVertices,
-               [&](std::size_t i)
-               {
-                 for (int c = 0; c < 3; ++c)
-                   out[3 * i + c] =
-                       finePositions[3 * i + c] + displacement[i] * fineNormals[3 * i + c];
-               });
 }
 
 } // namespace dp

@@ -29,7 +29,7 @@
 #pragma once
 
 #include "dp/finemesh/FrameSurface.h"
-#include "dp/finemesh/SubdivisionMap.h"
+#include "dp/geometry/SubdivisionMap.h"
 
 #include <cstddef>
 #include <vector>
@@ -52,6 +52,7 @@ struct DisplacementFitOptions
 struct DisplacementFit
 {
   std::vector<double> displacement; // per fine vertex (world units)
+  std::vector<std::uint8_t> met;    // per fine vertex: 1 where its normal line met the data
   std::size_t observed = 0;         // fine vertices whose normal line met the data
   std::size_t downweighted = 0;     // of them, those the robust rounds gave under half weight
   int iterations = 0;               // conjugate-gradient iterations, all solves
@@ -63,10 +64,8 @@ class DisplacementFitter
 public:
   explicit DisplacementFitter(const SubdivisionMap& map);
 
-  /** The subdivided base's positions and unit normals of a frame (3 per fine vertex each). */
-  void fineFrame(const double* basePositions, double* finePositions, double* fineNormals) const;
-
-  /** The frame's displacements against `data` (see the file comment). Throws
+  /** The frame's displacements against `data` (see the file comment), from the subdivided
+   *  base's positions and normals (SubdivisionMap::subdivide). Throws
    *  std::invalid_argument for a reach that is not positive and finite. */
   DisplacementFit fit(const double* finePositions, const double* fineNormals,
                       const FrameSurface& data, const DisplacementFitOptions& options) const;
@@ -82,9 +81,5 @@ private:
   std::vector<std::size_t> NeighbourStart; // fine vertex i's neighbours:
   std::vector<std::int64_t> Neighbours;    //   Neighbours[NeighbourStart[i] .. [i + 1])
 };
-
-/** The fine positions x_i = p_i + d_i n_i (3 per fine vertex). */
-void displace(const double* finePositions, const double* fineNormals, const double* displacement,
-              std::size_t fineVertices, double* out);
 
 } // namespace dp

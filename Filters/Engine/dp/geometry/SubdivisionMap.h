@@ -63,6 +63,8 @@ public:
 
   /** The fine positions (3 per fine vertex) of base positions (3 per base vertex). */
   void apply(const double* base, double* fine) const;
+  /** The same, and the fine mesh's unit area-weighted vertex normals there (vertexNormalsOf). */
+  void subdivide(const double* base, double* fine, double* normals) const;
 
 private:
   // One level's masks: row r of the level's output is sum of weight[k] * input[column[k]],
@@ -83,5 +85,13 @@ private:
   std::vector<std::int64_t> Triangles;
   std::vector<std::array<std::int64_t, 2>> Parents;
 };
+
+/** r g b bytes per base vertex carried to the fine vertices by the map (each channel as a
+ *  coordinate, rounded): 3 bytes per fine vertex. */
+std::vector<std::uint8_t> subdividedColours(const SubdivisionMap& map, const std::uint8_t* rgb);
+
+/** A detail layer's fine positions: out_i = fine_i + displacement_i normal_i (3 per vertex). */
+void displaceAlongNormals(const double* fine, const double* normals, const double* displacements,
+                          std::size_t vertices, double* out);
 
 } // namespace dp

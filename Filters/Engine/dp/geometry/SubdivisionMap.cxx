@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/finemesh/SubdivisionMap.h"
+#include "dp/geometry/SubdivisionMap.h"
 
 #include "dp/detail/Parallel.h"
+#include "dp/geometry/TriangleMesh.h"
 
 #include <algorithm>
 #include <cmath>
@@ -216,6 +217,34 @@ void SubdivisionMap::apply(const double* base, double* fine) const
   }
   if (Levels.empty())
     std::copy(base, base + 3 * BaseVertices, fine);
+}
+
+void SubdivisionMap::subdivide(const double* base, double* fine, double* normals) const
+{
+  apply(base, fine);
+  vertexNormalsOf(Triangles, fine, fineVertices(), normals);
+}
+
+std::vector<std::uint8_t> subdividedColours(const SubdivisionMap& map, const std::uint8_t* rgb)
+{
+  const std::vector<double> base(rgb, rgb + 3 * map.baseVertices());
+  std::vector<double> fine(3 * map.fineVertices());
+  map.apply(base.data(), fine.data());
+  std::vector<std::uint8_t> out(fine.size());
+  for (std::size_t i = 0; i < fine.size(); ++i)
+    out[i] = static_cast<std::uint8_t>(std::clamp(std::lround(fine[i]), 0L, 255L));
+  return out;
+}
+
+void displaceAlongNormals(const double* fine, const double* normals, const double* displacements,
+                          std::size_t vertices, double* out)
+{
+  forEachIndex(vertices,
+               [&](std::size_t i)
+               {
+                 for (int c = 0; c < 3; ++c)
+                   out[3 * i + c] = fine[3 * i + c] + displacements[i] * normals[3 * i + c];
+               });
 }
 
 } // namespace dp
