@@ -610,6 +610,10 @@ private:
       dp::GlbOptions glb;
       glb.meshopt = S.meshopt;
       GlbWritten = dp::writeGlb(Glb.string(), sequence, glb);
+      Compression["glb"] = {{"detailLevel", GlbWritten.level},
+                            {"vertices", GlbWritten.vertices},
+                            {"morphTargetShapes", GlbWritten.shapes},
+                            {"bytes", fs::file_size(Glb)}};
       return true;
     }
     catch (const std::exception& e)

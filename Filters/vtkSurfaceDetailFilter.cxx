@@ -45,6 +45,7 @@ struct FrameDetail
 {
   std::vector<double> displacement;
   std::vector<std::uint8_t> observed;
+  std::vector<float> residual;
   double seconds = 0;
 };
 
@@ -280,6 +281,7 @@ bool vtkSurfaceDetailFilter::FitFrame(std::size_t frame, vtkPolyData* base, vtkP
     dp::DisplacementFit fit = in.Fitter->fit(fine.data(), normals.data(), *d.surface, in.Options);
     detail.displacement = std::move(fit.displacement);
     detail.observed = std::move(fit.met);
+    detail.residual.assign(fit.residual.begin(), fit.residual.end());
   }
   else
   {
@@ -288,6 +290,7 @@ bool vtkSurfaceDetailFilter::FitFrame(std::size_t frame, vtkPolyData* base, vtkP
                     << "); the subdivided tracked mesh is given");
     detail.displacement.assign(n, 0.0);
     detail.observed.assign(n, 0);
+    detail.residual.assign(n, -1.0f);
   }
   detail.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
@@ -320,6 +323,8 @@ void vtkSurfaceDetailFilter::FillOutput(std::size_t frame, vtkPolyData* base, vt
   auto displacement = namedArray<vtkFloatArray>("Detail", 1, nv);
   auto shading = namedArray<vtkFloatArray>("Normals", 3, nv);
   auto observed = namedArray<vtkUnsignedCharArray>("Observed", 1, nv);
+  auto residual = namedArray<vtkFloatArray>("Residual", 1, nv);
+  std::copy(detail.residual.begin(), detail.residual.end(), residual->GetPointer(0));
   for (std::size_t i = 0; i < n; ++i)
   {
     displacement->SetValue(static_cast<vtkIdType>(i), static_cast<float>(detail.displacement[i]));
@@ -331,6 +336,7 @@ void vtkSurfaceDetailFilter::FillOutput(std::size_t frame, vtkPolyData* base, vt
   vtkPointData* pd = output->GetPointData();
   pd->SetNormals(shading);
   pd->AddArray(observed);
+  pd->AddArray(residual);
   vtkFieldData* fd = output->GetFieldData();
   fd->ShallowCopy(base->GetFieldData());
   if (vtkUnsignedCharArray* colours = vtkDP::pointColours(base))

@@ -23,7 +23,8 @@
  *
  * The output at each time: the fine mesh with point data "Detail" (the displacement), "Normals"
  * (of the displaced mesh: smooth shading), "Observed" (1 where the normal line met the data,
- * 0 where the membrane spanned a gap), and "Colors" (the tracked mesh's, carried by the same
+ * 0 where the membrane spanned a gap), "Residual" (how far along its normal the vertex lies from
+ * the data it met; -1 where it met none), and "Colors" (the tracked mesh's, carried by the same
  * map) where the input has them; field data: the input's (the tracker's per-frame figures,
  * "DataSamples", "DataReach", ...), and "DetailLevels", "DetailObserved" (the share observed),
  * "DetailSeconds", and the tracked mesh itself: "BasePoints" (its positions), "BaseTriangles"

@@ -8,7 +8,8 @@ own engine). Every rank runs this script (--symmetric); the takes are handed out
         OUTPUT TAKE...
 
 TAKE: a folder of point files, a .series file or one point file; --vertices: of the template
-reconstructed from each take's first frame (default 1000, as the main job's). Written:
+reconstructed from each take's first frame (default 1000, as the main job's); the detail layer
+as the main job chooses it. Written:
 OUTPUT/<name>/tracked.dpz and tracked.glb (<name>: the folder's name, a .series file's
 folder's, a file's stem; repeated names get -2, -3), the same bytes as the main job writes for
 that take; one line per take. The exit status is 1 when a take failed (named on stderr), after
@@ -64,10 +65,18 @@ def track(path, output, vertices):
     tracker = dynamicpoints.vtkDeformableTrackFilter()
     tracker.SetInputConnection(source.GetOutputPort())
     tracker.SetTemplateVertices(vertices)
+    # The detail layer, as the main job makes it (levels measured on the first frame); its data
+    # through a source of its own, so that neither source re-reads what the other asked for.
+    data = dynamicpoints.vtkPointSequenceSource()
+    data.SetDirectoryName(source.GetDirectoryName())
+    data.SetFileName(source.GetFileName())
+    detail = dynamicpoints.vtkSurfaceDetailFilter()
+    detail.SetInputConnection(0, tracker.GetOutputPort())
+    detail.SetInputConnection(1, data.GetOutputPort())
     os.makedirs(output, exist_ok=True)
     for name in ("tracked.dpz", "tracked.glb"):
         writer = dynamicpoints.vtkCompressedSequenceWriter()
-        writer.SetInputConnection(tracker.GetOutputPort())
+        writer.SetInputConnection(detail.GetOutputPort())
         # The main job's target: the distance to the points may grow by 10 %.
         writer.SetErrorMeasure(dynamicpoints.vtkPCACompressFilter.DISTANCE_TO_DATA)
         writer.SetErrorTarget(10)

@@ -21,10 +21,12 @@ PARAVIEW_EXAMPLE = os.path.join(EXAMPLES, "ParaView", "track_and_compress.py")
 FRAMES = 12
 
 
-def read_dpz(path):
-    """All frames of a .dpz file, frames x vertices x 3."""
+def read_dpz(path, detail=True):
+    """All frames of a .dpz file, frames x vertices x 3 (of its detail layer's fine mesh, or with
+    `detail` False of its tracked mesh)."""
     reader = dynamicpoints.vtkCompressedSequenceReader()
     reader.SetFileName(path)
+    reader.SetReadDetail(detail)
     reader.UpdateInformation()
     frames = []
     for t in reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS()):
@@ -100,6 +102,14 @@ class TestExamples(TempDirTestCase):
         centred = tracked - tracked.mean(axis=1, keepdims=True)
         kg = 100 * np.linalg.norm(tracked - decoded) / np.linalg.norm(centred)
         self.assertLessEqual(kg, 0.2 * 1.001)
+        # The detail layer's file: the same base, byte for byte as decoded, under a fine mesh of
+        # two levels (about 16 times the triangles).
+        self.assertIn("detail layer: ", result.stdout)
+        detailed = self.path("out", "detailed.dpz")
+        np.testing.assert_array_equal(read_dpz(detailed, detail=False), decoded)
+        fine = read_dpz(detailed)
+        self.assertEqual(fine.shape[0], FRAMES)
+        self.assertGreater(fine.shape[1], 15 * tracked.shape[1])
 
     def test_paraview_example_gives_the_same_result_in_pvpython_and_pvbatch(self):
         result = self.paraview_example("pvpython", self.path("pvpython"))

@@ -193,8 +193,12 @@ DisplacementFit DisplacementFitter::fit(const double* finePositions, const doubl
       w[i] = weight[i] / (1 + r * r);
     }
   }
+  out.residual.resize(n);
   for (std::size_t i = 0; i < n; ++i)
+  {
     out.downweighted += weight[i] > 0 && w[i] < 0.5 * weight[i] ? 1 : 0;
+    out.residual[i] = out.met[i] ? std::abs(observation[i] - out.displacement[i]) : -1.0;
+  }
   return out;
 }
 

@@ -53,6 +53,8 @@ struct DisplacementFit
 {
   std::vector<double> displacement; // per fine vertex (world units)
   std::vector<std::uint8_t> met;    // per fine vertex: 1 where its normal line met the data
+  std::vector<double> residual;     // per fine vertex: |observation - displacement| where met
+                                    // (how far the fitted surface lies from the data), else -1
   std::size_t observed = 0;         // fine vertices whose normal line met the data
   std::size_t downweighted = 0;     // of them, those the robust rounds gave under half weight
   int iterations = 0;               // conjugate-gradient iterations, all solves
