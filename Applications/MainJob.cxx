@@ -640,8 +640,7 @@ private:
         {"levels", DetailLevels},
         {"asked", S.detailLevels < 0 ? std::string("automatic") : std::to_string(S.detailLevels)},
         {"choice", DetailChoice},
-        {"fineVertices", DetailLevels > 0 ? FineVertices : MeshVertices},
-        {"glbLevel", GlbWritten.level}};
+        {"fineVertices", DetailLevels > 0 ? FineVertices : MeshVertices}};
     report["boundingBoxDiagonal"] = Diagonal;
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
     std::vector<double> ms;

@@ -31,18 +31,22 @@ MeshDistortion measureFrame(const CompressedSequence& sequence, const Subdivisio
   else
     sequence.pca.model.frame(t, positions.data());
   const std::vector<std::int64_t>& triangles = fine ? fine->fineTriangles() : sequence.triangles;
-  const std::vector<std::int64_t> inputTriangles = triangleFans(frame);
-  const MeshSurface input = meshSurfaceOf(frame, inputTriangles);
   MeshSurface decoded;
   decoded.positions = positions.data();
   decoded.vertices = positions.size() / 3;
   decoded.triangles = triangles.data();
   decoded.triangleCount = triangles.size() / 3;
-  // Enough samples that each of the input's triangles is visited about twice.
-  const std::size_t samples = std::max<std::size_t>(20000, 2 * inputTriangles.size() / 3);
-  return meshDistortion(input, decoded, samples);
+  return distortionAgainstInput(decoded, frame);
 }
 } // namespace
+
+MeshDistortion distortionAgainstInput(const MeshSurface& decoded, const PointCloud& input)
+{
+  const std::vector<std::int64_t> inputTriangles = triangleFans(input);
+  // Enough samples that each of the input's triangles is visited about twice.
+  const std::size_t samples = std::max<std::size_t>(20000, 2 * inputTriangles.size() / 3);
+  return meshDistortion(meshSurfaceOf(input, inputTriangles), decoded, samples);
+}
 
 nlohmann::json measureAgainstInputMeshes(const CompressedSequence& sequence,
                                          const std::vector<std::string>& framePaths,

@@ -5,6 +5,8 @@
 #pragma once
 
 #include "dp/compress/PcaCompression.h"
+#include "dp/geometry/MeshDistortion.h"
+#include "dp/io/PointCloud.h"
 
 #include <nlohmann/json.hpp>
 
@@ -15,6 +17,12 @@
 
 namespace dp::cli
 {
+
+/** A decoded frame against its input mesh, as the codecs are measured (D1 and D2, both
+ *  directions, the worse kept; peak = the input's diagonal), on enough samples that each of the
+ *  input's triangles is visited about twice (at least 20 000). The report's measure, and the
+ *  rate-distortion benchmark's for Draco's frames. */
+MeshDistortion distortionAgainstInput(const MeshSurface& decoded, const PointCloud& input);
 
 /**
  * The decompressed `sequence` (frame t; the fine mesh of its detail layer when it has one)

@@ -58,7 +58,8 @@ struct FrameData
   dp::FrameSamples samples; // for the automatic choice
 };
 
-FrameData frameDataOf(vtkPointSet* input, std::string& error)
+// `withSamples`: also the samples the automatic choice measures on (its first frame only).
+FrameData frameDataOf(vtkPointSet* input, std::string& error, bool withSamples)
 {
   FrameData d;
   auto* poly = vtkPolyData::SafeDownCast(input);
@@ -80,7 +81,8 @@ FrameData frameDataOf(vtkPointSet* input, std::string& error)
       d.surface.emplace(dp::FrameSurface::ofMesh(surface));
       d.count = vertices.numberOfPoints();
       d.mesh = true;
-      d.samples.points = dp::sampleMeshSurface(surface, ChoiceSamples).points;
+      if (withSamples)
+        d.samples.points = dp::sampleMeshSurface(surface, ChoiceSamples).points;
       return d;
     }
     const vtkDP::TargetPoints points = vtkDP::finitePoints(input);
@@ -89,7 +91,7 @@ FrameData frameDataOf(vtkPointSet* input, std::string& error)
                                    points.normals.empty() ? nullptr : points.normals.data()));
     d.count = points.ids.size();
     const std::size_t stride = std::max<std::size_t>(1, d.count / ChoiceSamples);
-    for (std::size_t i = 0; i < d.count; i += stride)
+    for (std::size_t i = 0; withSamples && i < d.count; i += stride)
       d.samples.points.insert(d.samples.points.end(), &points.xyz[3 * i], &points.xyz[3 * i] + 3);
   }
   catch (const std::exception& e)
@@ -218,7 +220,7 @@ bool vtkSurfaceDetailFilter::Prepare(vtkPolyData* base, vtkPointSet* data)
     if (levels == AUTOMATIC)
     {
       std::string error;
-      FrameData d = frameDataOf(data, error);
+      FrameData d = frameDataOf(data, error, true);
       if (!d.surface)
       {
         vtkErrorMacro(<< "the data (input 1) cannot be read as a surface: " << error);
@@ -274,7 +276,7 @@ bool vtkSurfaceDetailFilter::FitFrame(std::size_t frame, vtkPolyData* base, vtkP
   in.Map->subdivide(positions.data(), fine.data(), normals.data());
   FrameDetail detail;
   std::string error;
-  FrameData d = frameDataOf(data, error);
+  FrameData d = frameDataOf(data, error, false);
   if (d.surface)
   {
     d.surface->orientAgainst(fine.data(), normals.data(), n, in.Options.reach);

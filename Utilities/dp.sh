@@ -33,9 +33,11 @@ build_packages=(
 )
 # What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the
 # X server for the ParaView GUI and rendering tests with xdotool and xwd to drive and photograph
-# the GUI, Node.js for the glTF tools, Blender.
+# the GUI, Node.js for the glTF tools, Blender, Google Draco (the rate-distortion benchmark's
+# per-frame peer).
 test_packages=(
   clang python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri xdotool x11-apps nodejs blender
+  draco
 )
 # From the npm registry, for the tests of the .glb export: the Khronos glTF validator and
 # meshoptimizer's reference decoder (the version of Debian's libmeshoptimizer).

@@ -15,6 +15,9 @@ namespace
 {
 
 constexpr int MaxRounds = 5;
+// The search's rounds measure the fit on about this many frames spread over the take; the step
+// found is checked on every frame.
+constexpr std::size_t SearchFrames = 30;
 constexpr double Margin = 0.97;
 constexpr double Close = 0.03;
 // Below this cosine between the two normals the carried displacement is a plain projection.
@@ -43,12 +46,13 @@ void fittedFrame(const FittedDetail& d, std::size_t t, std::vector<double>& fine
   displaceAlongNormals(smooth.data(), normals.data(), d.displacements + n * t, n, fine.data());
 }
 
-// The take's fit to its samples with frame t's fine positions given by `frame`; the samples
-// `within` marks (empty: all within reach, recorded).
+// The take's fit to its samples with frame t's fine positions given by `frame`, on every
+// `stride`-th frame; the samples `within` marks (empty: all within reach, recorded).
 DataFit fineFit(const FittedDetail& d, const TriangleMesh& mesh,
                 const std::vector<const FrameSamples*>& samples, double reach,
                 std::vector<std::vector<bool>>& within,
-                const std::function<void(std::size_t, std::vector<double>&)>& frame)
+                const std::function<void(std::size_t, std::vector<double>&)>& frame,
+                std::size_t stride = 1)
 {
   const bool first = within.empty();
   if (first)
@@ -56,7 +60,7 @@ DataFit fineFit(const FittedDetail& d, const TriangleMesh& mesh,
   double sum = 0;
   DataFit total;
   std::vector<double> positions;
-  for (std::size_t t = 0; t < d.frames; ++t)
+  for (std::size_t t = 0; t < d.frames; t += stride)
   {
     if (!samples[t] || samples[t]->empty())
       continue;
@@ -143,28 +147,38 @@ DetailCompression compressDetailAgainstData(CompressedSequence& sequence,
       fineFit(detail, mesh, samples, reach, within,
               [&](std::size_t t, std::vector<double>& x) { fittedFrame(detail, t, x, scratch); });
   report(0.2);
-  // The decoded fine mesh of frame t for displacements `values`.
+  // The decoded fine mesh of frame t for displacements `values`, on every stride-th frame.
   std::vector<double> base(3 * map.baseVertices()), smooth(3 * n), normals(3 * n);
-  auto decodedFit = [&](const std::vector<double>& values)
+  auto decodedFit = [&](const std::vector<double>& values, std::size_t stride)
   {
-    return fineFit(detail, mesh, samples, reach, within,
-                   [&](std::size_t t, std::vector<double>& x)
-                   {
-                     sequence.pca.model.frame(t, base.data());
-                     map.subdivide(base.data(), smooth.data(), normals.data());
-                     x.resize(3 * n);
-                     displaceAlongNormals(smooth.data(), normals.data(), &values[n * t], n,
-                                          x.data());
-                   });
+    return fineFit(
+        detail, mesh, samples, reach, within,
+        [&](std::size_t t, std::vector<double>& x)
+        {
+          sequence.pca.model.frame(t, base.data());
+          map.subdivide(base.data(), smooth.data(), normals.data());
+          x.resize(3 * n);
+          displaceAlongNormals(smooth.data(), normals.data(), &values[n * t], n, x.data());
+        },
+        stride);
   };
-  const double f2 = out.fitted.rms * out.fitted.rms;
-  const double allowed = (1 + growth) * out.fitted.rms;
+  // The search measures every stride-th frame, against the fitted mesh's fit on the same frames.
+  const std::size_t stride = std::max<std::size_t>(1, detail.frames / SearchFrames);
+  const DataFit searched = stride == 1 ? out.fitted
+                                       : fineFit(
+                                             detail, mesh, samples, reach, within,
+                                             [&](std::size_t t, std::vector<double>& x)
+                                             { fittedFrame(detail, t, x, scratch); },
+                                             stride);
+  const double f2 = searched.rms * searched.rms;
+  const double allowed = (1 + growth) * searched.rms;
   double c = 1, best = 0, closest = HUGE_VAL, closestStep = 0;
-  for (int round = 0; round < MaxRounds && out.fitted.samples > 0; ++round)
+  for (int round = 0; round < MaxRounds && searched.samples > 0; ++round)
   {
     const double deviation2 = (allowed * allowed - f2) / c * (round == 0 ? 1.0 : Margin * Margin);
     const double step = std::sqrt(12 * deviation2);
-    const DataFit fit = decodedFit(quantiseDetail(map, carried.data(), detail.frames, step));
+    const DataFit fit =
+        decodedFit(quantiseDetail(map, carried.data(), detail.frames, step), stride);
     ++out.rounds;
     report(0.2 + 0.7 * (round + 1) / MaxRounds);
     if (fit.rms <= allowed && step > best)
@@ -187,7 +201,16 @@ DetailCompression compressDetailAgainstData(CompressedSequence& sequence,
     // No step kept the fit (the carrying over alone grew it): the closest one found, or for a
     // take without samples a step of a thousandth of the reach.
     best = closestStep > 0 ? closestStep : 1e-3 * reach;
-    out.decompressed.rms = closest;
+  }
+  // The step is checked on every frame; where the frames the search measured were kinder than
+  // the take, it is made smaller until the take keeps the fit.
+  for (int check = 0;; ++check)
+  {
+    const std::vector<double> decoded = quantiseDetail(map, carried.data(), detail.frames, best);
+    out.decompressed = decodedFit(decoded, 1);
+    if (out.decompressed.rms <= (1 + growth) * out.fitted.rms || check == MaxRounds)
+      break;
+    best *= Margin * Margin;
   }
   setDetail(sequence, map.levels(), carried, best);
   out.growth = out.fitted.rms > 0 ? out.decompressed.rms / out.fitted.rms - 1 : 0;

@@ -17,13 +17,14 @@
  * 1: the deviations are along the normals); the first step tried, sqrt(12) e, is the one that
  * would give the allowed growth with c = 1; each round measures c on its quantisation and asks
  * again (a little under: 0.97), at most five rounds; the largest step that keeps the fit wins
- * (the fewest bits). Only the kept step is range-coded (dp::setDetail); the rounds quantise
- * alone. With a motion target instead (KG), the detail is quantised to the base's own RMS
- * deviation (compressDetailAtDeviation).
+ * (the fewest bits). The rounds measure about 30 frames spread over the take (each measure
+ * builds a closest-point tree of the fine mesh per frame); the step found is then checked on
+ * every frame, and made smaller until the whole take keeps the fit. Only the kept step is
+ * range-coded (dp::setDetail); the rounds quantise alone. With a motion target instead (KG), the
+ * detail is quantised to the base's own RMS deviation (compressDetailAtDeviation).
  *
  * Limits: the take's fitted displacements and their carried-over copy are held in memory (16
- * bytes a fine vertex a frame); each measuring round builds a closest-point tree of the fine
- * mesh per frame.
+ * bytes a fine vertex a frame).
  */
 #pragma once
 
