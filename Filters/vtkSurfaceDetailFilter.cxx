@@ -50,7 +50,7 @@ struct FrameDetail
 };
 
 // The input frame as the fit reads it, and how many vertices or points it has.
-struct FrameData
+struct FrameInput
 {
   std::optional<dp::FrameSurface> surface;
   std::size_t count = 0;
@@ -59,9 +59,9 @@ struct FrameData
 };
 
 // `withSamples`: also the samples the automatic choice measures on (its first frame only).
-FrameData frameDataOf(vtkPointSet* input, std::string& error, bool withSamples)
+FrameInput frameInputOf(vtkPointSet* input, std::string& error, bool withSamples)
 {
-  FrameData d;
+  FrameInput d;
   auto* poly = vtkPolyData::SafeDownCast(input);
   try
   {
@@ -220,7 +220,7 @@ bool vtkSurfaceDetailFilter::Prepare(vtkPolyData* base, vtkPointSet* data)
     if (levels == AUTOMATIC)
     {
       std::string error;
-      FrameData d = frameDataOf(data, error, true);
+      FrameInput d = frameInputOf(data, error, true);
       if (!d.surface)
       {
         vtkErrorMacro(<< "the data (input 1) cannot be read as a surface: " << error);
@@ -276,7 +276,7 @@ bool vtkSurfaceDetailFilter::FitFrame(std::size_t frame, vtkPolyData* base, vtkP
   in.Map->subdivide(positions.data(), fine.data(), normals.data());
   FrameDetail detail;
   std::string error;
-  FrameData d = frameDataOf(data, error, false);
+  FrameInput d = frameInputOf(data, error, false);
   if (d.surface)
   {
     d.surface->orientAgainst(fine.data(), normals.data(), n, in.Options.reach);

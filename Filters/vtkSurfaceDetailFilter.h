@@ -36,7 +36,8 @@
  *
  * Limits: normal displacements only: detail the subdivided surface meets at a grazing angle (a
  * finger thinner than the tracked mesh's edge, a deep crease) stays out of reach; a frame whose
- * data cannot be read gets no detail (an error, no output).
+ * data hold no surface (no points, a coordinate that is not finite) gets none, with a warning:
+ * its output is the subdivided tracked mesh.
  */
 #ifndef vtkSurfaceDetailFilter_h
 #define vtkSurfaceDetailFilter_h

@@ -1,12 +1,15 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The detail layer's coding: the range coder round-trips any integers exactly, the displacements
 // come back within half a step, the .dpz carries the layer (format version 3) while files
-// without one keep their versions, and a corrupt or cut detail section is refused by name.
+// without one keep their versions, a corrupt or cut detail section is refused by name, and the
+// layer coded against the data keeps the fine mesh's fit within the growth asked.
 #include "FineMeshShapes.h"
 
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
+#include "dp/finemesh/DetailCompression.h"
+#include "dp/finemesh/DisplacementFit.h"
 
 #include <gtest/gtest.h>
 
@@ -240,6 +243,94 @@ TEST(DetailCoding, SetDetailRefusesLevelsAndCountsThatDoNotFit)
   EXPECT_THROW(dp::setDetail(s, 2, {1.0, 2.0}, 0.001), std::invalid_argument);
   s.detail.payload.clear();
   EXPECT_THROW(dp::encodeCompressedSequence(s), std::invalid_argument);
+}
+
+} // namespace
+
+namespace
+{
+
+// A bumpy sphere moving over `frames` frames, tracked by a coarse sphere (its base compressed),
+// the detail fitted to each frame: what dp::compressDetailAgainstData codes.
+struct MovingTake
+{
+  Mesh base = dp::test::icosphere(2);
+  dp::SubdivisionMap map{base.triangles, base.vertices(), 2};
+  std::size_t frames = 8;
+  std::vector<double> basePositions, displacements;
+  std::vector<dp::FrameSamples> samples;
+  dp::CompressedSequence sequence;
+
+  MovingTake()
+  {
+    const Mesh data =
+        dp::test::icosphere(5, [](const double* u) { return dp::test::bumpyRadius(u, 0.03); });
+    const dp::DisplacementFitter fitter(map);
+    dp::DisplacementFitOptions options;
+    options.reach = 0.2;
+    const std::size_t n = map.fineVertices();
+    std::vector<double> fine(3 * n), normals(3 * n);
+    for (std::size_t t = 0; t < frames; ++t)
+    {
+      const double shift = 0.05 * static_cast<double>(t);
+      std::vector<double> b = base.positions, d = data.positions;
+      for (std::size_t i = 0; i < b.size(); i += 3)
+        b[i] += shift;
+      for (std::size_t i = 0; i < d.size(); i += 3)
+        d[i] += shift;
+      basePositions.insert(basePositions.end(), b.begin(), b.end());
+      Mesh moved = data;
+      moved.positions = d;
+      map.subdivide(b.data(), fine.data(), normals.data());
+      const dp::DisplacementFit fit = fitter.fit(
+          fine.data(), normals.data(), dp::FrameSurface::ofMesh(moved.surface()), options);
+      displacements.insert(displacements.end(), fit.displacement.begin(), fit.displacement.end());
+      dp::FrameSamples s;
+      s.points = dp::sampleMeshSurface(moved.surface(), 3000).points;
+      samples.push_back(std::move(s));
+    }
+    dp::PcaOptions o;
+    o.target = 0.5;
+    sequence =
+        dp::compressSequence(basePositions.data(), base.vertices(), frames, o, base.triangles);
+  }
+  std::vector<const dp::FrameSamples*> views() const
+  {
+    std::vector<const dp::FrameSamples*> v;
+    for (const dp::FrameSamples& s : samples)
+      v.push_back(&s);
+    return v;
+  }
+};
+
+TEST(DetailCompression, KeepsTheFineMeshsFitWithinTheAllowedGrowth)
+{
+  const MovingTake take;
+  const dp::FittedDetail fitted{take.map, take.basePositions.data(), take.displacements.data(),
+                                take.frames};
+  std::size_t previousBytes = std::numeric_limits<std::size_t>::max();
+  for (const double growth : {0.05, 0.2, 1.0})
+  {
+    dp::CompressedSequence s = take.sequence;
+    const dp::DetailCompression c =
+        dp::compressDetailAgainstData(s, fitted, take.views(), 0.2, growth);
+    EXPECT_GT(c.fitted.samples, 0u);
+    EXPECT_LE(c.decompressed.rms, (1 + growth) * c.fitted.rms * (1 + 1e-12)) << growth;
+    EXPECT_GT(c.growth, 0.3 * growth) << growth; // the budget was used
+    EXPECT_EQ(s.detail.levels, 2);
+    EXPECT_LT(s.report.detailBytes, previousBytes); // more growth, fewer bytes
+    previousBytes = s.report.detailBytes;
+    // The fine mesh the file gives lies on the data within the growth: the displacements were
+    // carried over to the decoded base, whose own error is undone along the normals.
+    const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+    const dp::CompressedSequence back =
+        dp::decodeCompressedSequence(bytes.data(), bytes.size(), "d");
+    EXPECT_EQ(back.detail.displacements, s.detail.displacements);
+  }
+  dp::CompressedSequence s = take.sequence;
+  EXPECT_THROW(dp::compressDetailAgainstData(s, fitted, take.views(), 0.2, 0.0),
+               std::invalid_argument);
+  EXPECT_THROW(dp::compressDetailAgainstData(s, fitted, {}, 0.2, 0.1), std::invalid_argument);
 }
 
 } // namespace

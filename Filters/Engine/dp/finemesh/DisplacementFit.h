@@ -17,10 +17,10 @@
  * smoothest field that meets its rim (a hole's displacements stay between those around it:
  * bounded, no spike). Observations far from the fitted field (beyond three robust standard
  * deviations, and beyond a quarter of the reach: a stray part, a neighbour's surface) lose
- * weight, w_i / (1 + (r_i / width)^2), and the system is solved again (robustRounds). The system is
- * solved by conjugate gradients with a Jacobi preconditioner, matrix-free over the fine mesh's
- * edges: O(fine vertices) per iteration, multi-threaded, the same result for any thread count (sums
- * in a fixed order).
+ * weight, w_i / (1 + (r_i / width)^2), and the system is solved again (robustRounds). Each
+ * system is solved by conjugate gradients with a Jacobi preconditioner, matrix-free over the
+ * fine mesh's edges: O(fine vertices) per iteration, multi-threaded, the same result for any
+ * thread count (sums in a fixed order).
  *
  * Limits: a displacement is along the normal only, so detail the subdivided base meets at a
  * grazing angle (a finger thinner than the base's edge) is beyond its reach; observations beyond
