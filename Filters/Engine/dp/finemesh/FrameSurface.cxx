@@ -127,7 +127,7 @@ FrameSurface FrameSurface::ofPoints(const double* points, std::size_t count, con
   d->positions.assign(points, points + 3 * count);
   d->oriented = normals != nullptr;
   d->normals = normals ? std::vector<float>(normals, normals + 3 * count)
-                       : estimateNormals(d->positions.data(), count);
+                       : unorientedNormals(d->positions.data(), count);
   d->tree = std::make_unique<detail::KdTree>(d->positions.data(), count);
   return FrameSurface(std::move(d));
 }

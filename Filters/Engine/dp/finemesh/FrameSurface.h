@@ -47,9 +47,9 @@ public:
   /** A mesh frame (copied: `mesh` need not outlive it). Throws std::invalid_argument for an
    *  index out of range, a coordinate that is not finite, or no triangle with three corners. */
   static FrameSurface ofMesh(const MeshSurface& mesh);
-  /** Points with unit normals (nx ny nz each, pointing out of the surface) or null (estimated,
-   *  their orientation not trusted); copied. Throws std::invalid_argument for no points or a
-   *  coordinate that is not finite (naming the point). */
+  /** Points with unit normals (nx ny nz each, pointing out of the surface) or null (estimated
+   *  by local PCA, unoriented: the normal test then reads the lines); copied. Throws
+   * std::invalid_argument for no points or a coordinate that is not finite (naming the point). */
   static FrameSurface ofPoints(const double* points, std::size_t count, const float* normals);
 
   FrameSurface(FrameSurface&&) noexcept;

@@ -240,6 +240,15 @@ private:
 };
 } // namespace
 
+std::vector<float> unorientedNormals(const double* points, std::size_t count,
+                                     std::size_t neighbours)
+{
+  std::vector<float> normals(3 * count, 0.0f);
+  if (count > 0)
+    pcaNormals(points, count, std::max<std::size_t>(3, std::min(neighbours, count)), normals);
+  return normals;
+}
+
 std::vector<float> estimateNormals(const double* points, std::size_t count, std::size_t neighbours,
                                    std::vector<std::uint32_t>* parts, OrientationTree* tree)
 {

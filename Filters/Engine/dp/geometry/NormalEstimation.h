@@ -39,6 +39,11 @@ std::vector<float> estimateNormals(const double* points, std::size_t count,
                                    std::vector<std::uint32_t>* parts = nullptr,
                                    OrientationTree* tree = nullptr);
 
+/** The same normals before their orientation (each may point either way): local PCA over each
+ *  point's `neighbours` nearest points, for a caller that reads only the normal's line. */
+std::vector<float> unorientedNormals(const double* points, std::size_t count,
+                                     std::size_t neighbours = 16);
+
 /**
  * Turns around the branches of estimateNormals' tree that a reference surface disagrees with as
  * a whole. The tree can carry a wrong orientation across a sharp edge where PCA smears the
