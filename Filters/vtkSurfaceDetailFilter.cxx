@@ -223,8 +223,11 @@ bool vtkSurfaceDetailFilter::Prepare(vtkPolyData* base, vtkPointSet* data)
       FrameInput d = frameInputOf(data, error, true);
       if (!d.surface)
       {
-        vtkErrorMacro(<< "the data (input 1) cannot be read as a surface: " << error);
-        return false;
+        // Nothing to measure detail on: the tracked mesh is given as it is.
+        in.Choice = "none: the first frame's data (input 1) hold no surface (" + error + ")";
+        vtkWarningMacro(<< "no detail layer: " << in.Choice);
+        this->LevelsUsed = 0;
+        return true;
       }
       dp::FrameSamples samples;
       if (!samplesOf(base, samples))
