@@ -3,6 +3,7 @@
 
 #include "dp/field/TemplateMesh.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
+#include "dp/geometry/TriangleMesh.h"
 #include "dp/track/FrameFigures.h"
 #include "dp/track/Tracker.h"
 #include "dp/track/TrackerOptionTable.h"
@@ -47,8 +48,9 @@ namespace
 // What every frame's output shows beside the frame's own result.
 struct TakeContext
 {
-  vtkCellArray* polys;             // the template's triangles
-  const std::vector<double>* rest; // the template's positions
+  vtkCellArray* polys;                        // the template's triangles
+  const std::vector<std::int64_t>* triangles; // ... as the engine holds them
+  const std::vector<double>* rest;            // the template's positions
   double reach;                    // how far from the mesh a point still counts (DataReach)
   const std::string* templateMade; // how the template was made (field data "Template")
 };
@@ -76,7 +78,7 @@ struct vtkDeformableTrackFilter::Internals
 
   TakeContext context() const
   {
-    return {Polys, &Tracker->templatePositions(),
+    return {Polys, &Tracker->mesh().triangles(), &Tracker->templatePositions(),
             Tracker->options().recovery.reach * Tracker->voxelSize(), &TemplateSummary};
   }
 
@@ -209,10 +211,12 @@ void fillGeometry(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResul
   output->SetPolys(polys);
 }
 
-// Per vertex: Displacement (from the template), Residual, Frozen, Rejected, and Colors where the
-// points carry colour (then the active scalars, which ParaView shows as colours).
-void fillPointData(vtkPolyData* output, const std::vector<double>& rest, const dp::FrameResult& r)
+// Per vertex: Displacement (from the template), Residual, Frozen, Rejected, Normals (the active
+// normals: ParaView shades the mesh smoothly), and Colors where the points carry colour (then the
+// active scalars, which ParaView shows as colours).
+void fillPointData(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r)
 {
+  const std::vector<double>& rest = *take.rest;
   const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
   vtkNew<vtkFloatArray> displacement;
   displacement->SetName("Displacement");
@@ -237,6 +241,15 @@ void fillPointData(vtkPolyData* output, const std::vector<double>& rest, const d
   }
   vtkPointData* pd = output->GetPointData();
   pd->SetVectors(displacement);
+  std::vector<double> normals(r.positions.size());
+  dp::vertexNormalsOf(*take.triangles, r.positions.data(), static_cast<std::size_t>(n),
+                      normals.data());
+  vtkNew<vtkFloatArray> shading;
+  shading->SetName("Normals");
+  shading->SetNumberOfComponents(3);
+  shading->SetNumberOfTuples(n);
+  std::copy(normals.begin(), normals.end(), shading->GetPointer(0));
+  pd->SetNormals(shading);
   if (r.colours.size() == 3 * static_cast<std::size_t>(n))
   {
     pd->SetScalars(vtkDP::colorsArray(r.colours.data(), n));
@@ -273,7 +286,7 @@ void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameRes
                 std::size_t frame)
 {
   fillGeometry(output, take.polys, r);
-  fillPointData(output, *take.rest, r);
+  fillPointData(output, take, r);
   fillFieldData(output, take, r, frame);
 }
 

@@ -22,8 +22,9 @@
  * graph, CoarseLevel) and failure detection with retries (Recovery), and where the points carry
  * colour a colour term (ColourWeight). Point arrays: "Displacement" (from the template), "Residual"
  * (distance to the frame's points, -1 without data), "Frozen" (provisional determination),
- * "Rejected" (normal test or outlier cut-off), and "Colors" (the frame's colour at each vertex, the
- * active scalars) where the points carry colour. Field data: "FrameIndex", "Points" (the frame's),
+ * "Rejected" (normal test or outlier cut-off), "Normals" (area-weighted, the active normals: smooth
+ * shading), and "Colors" (the frame's colour at each vertex, the active scalars) where the points
+ * carry colour. Field data: "FrameIndex", "Points" (the frame's),
  * "Iterations", "CoarseIterations", "InternalEnergy", "DistanceEnergy", "Seconds" (the frame's wall
  * time) and where its work went
  * ("DataSeconds": field, normals, subsample, of which "OverlappedSeconds" ran beside the frame

@@ -71,6 +71,30 @@ class TestDeformableTrackFilter(TempDirTestCase):
             self.assertGreaterEqual(out.PointData["Residual"].min(), 0)
         self.assertEqual(f.GetNumberOfCachedFrames(), FRAMES)
 
+    def test_each_frame_carries_smooth_normals_that_follow_the_moved_mesh(self):
+        from vtkmodules.vtkFiltersCore import vtkPolyDataNormals
+        f = self.tracker()
+        for frame in (0, FRAMES - 1):
+            f.UpdateTimeStep(frame)
+            out = f.GetOutput()
+            self.assertEqual(out.GetPointData().GetNormals().GetName(), "Normals")
+            normals = np.asarray(dsa.WrapDataObject(out).PointData["Normals"])
+            np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1, atol=1e-5)
+            # VTK's own point normals of the frame's polygons (as wound, not split): the same
+            # directions up to the weights of the faces around a vertex.
+            geometry = vtkPolyData()
+            geometry.SetPoints(out.GetPoints())
+            geometry.SetPolys(out.GetPolys())
+            vtk_normals = vtkPolyDataNormals()
+            vtk_normals.SetInputData(geometry)
+            vtk_normals.SplittingOff()
+            vtk_normals.ConsistencyOff()
+            vtk_normals.Update()
+            expected = np.asarray(dsa.WrapDataObject(vtk_normals.GetOutput()).PointData["Normals"])
+            agreement = (normals * expected).sum(axis=1)
+            self.assertGreater(np.median(agreement), 0.99, f"frame {frame}")
+            self.assertGreater(agreement.min(), 0.5, f"frame {frame}")
+
     def test_colour_on_the_points_reaches_the_mesh_and_stays_on_its_material(self):
         # Points coloured by a pattern fixed to the material: each vertex carries the colour of
         # the points around it (Colors, the active scalars), the same from frame to frame.
