@@ -59,6 +59,10 @@ Written to OUTPUT:
   report.json, report.png     per frame: distance to the points, quality (share of the
                               points far from the mesh and of the mesh far from the
                               points; frames retried and failed), time; compression
+  view.html                   a page that plays the take in any browser (no server, no
+                              network), the report beside it
+  paraview-state.py           the tracked take over its points, coloured by the distance
+                              to them: paraview --state=OUTPUT/paraview-state.py
 
 Options:
   --pattern GLOB      files of an INPUT folder to read (default: *)
@@ -86,6 +90,7 @@ Options:
                       colour may differ from the tracked one; more holds each vertex's
                       colour while it stays within L (no flicker, a smaller colour
                       stream); 0: lossless (default: 4)
+  --no-view           write no view.html and no paraview-state.py
   --meshopt           store tracked.glb's buffers compressed by meshoptimizer
                       (EXT_meshopt_compression: smaller, for web viewers such as
                       three.js; Blender 3.4 and ParaView cannot open it)
@@ -208,6 +213,8 @@ Settings parse(int argc, char** argv, bool& help)
       s.quiet = true;
     else if (arg == "--meshopt")
       s.meshopt = true;
+    else if (arg == "--no-view")
+      s.view = false;
     else if (parsePrintFlag(arg, argc, argv, i, s))
       continue;
     else if (parseTrackerOptionFlag(arg, argc, argv, i, s.tracker))

@@ -7,6 +7,7 @@
 // file only drives it, writes the files and talks to the user.
 #include "MainJob.h"
 #include "MeshFidelity.h"
+#include "Viewer.h"
 
 #include "CommandLine.h"
 #include "Console.h"
@@ -47,6 +48,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <unistd.h>
 #include <utility>
@@ -76,7 +78,8 @@ class MainJob
 public:
   explicit MainJob(Settings settings)
       : S(std::move(settings)), Output(S.output), Pvd(Output / "tracked.pvd"),
-        Dpz(Output / "tracked.dpz"), Glb(Output / "tracked.glb"), Bar(!S.quiet)
+        Dpz(Output / "tracked.dpz"), Glb(Output / "tracked.glb"), Page(Output / "view.html"),
+        State(Output / "paraview-state.py"), Bar(!S.quiet)
   {
     Printer->ProgressShown = Bar.enabled();
   }
@@ -610,6 +613,8 @@ private:
       dp::GlbOptions glb;
       glb.meshopt = S.meshopt;
       GlbWritten = dp::writeGlb(Glb.string(), sequence, glb);
+      if (S.view)
+        keepPageGlb(sequence);
       Compression["glb"] = {{"detailLevel", GlbWritten.level},
                             {"vertices", GlbWritten.vertices},
                             {"morphTargetShapes", GlbWritten.shapes},
@@ -622,6 +627,21 @@ private:
       Failed = true;
       return false;
     }
+  }
+
+  // The plain .glb the page plays (the meshopt variant is for viewers that decode it).
+  void keepPageGlb(const dp::CompressedSequence& sequence)
+  {
+    fs::path plain = Glb;
+    if (S.meshopt)
+    {
+      plain = Output / "view.glb.partial";
+      dp::writeGlb(plain.string(), sequence);
+    }
+    std::ifstream in(plain, std::ios::binary);
+    PageGlb.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (S.meshopt)
+      fs::remove(plain);
   }
 
   // report.json and report.png.
@@ -666,6 +686,13 @@ private:
       outputs["compressed"] = Dpz.string();
       outputs["gltf"] = Glb.string();
     }
+    const bool viewed = S.view && !Records.empty();
+    if (viewed)
+    {
+      outputs["paraviewState"] = State.string();
+      if (!PageGlb.empty() && viewerAvailable())
+        outputs["page"] = Page.string();
+    }
     report["outputs"] = outputs;
     report["wallSeconds"] =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - Started).count();
@@ -673,10 +700,55 @@ private:
     writeReportPlot(plot.string(), "DynamicPoints: " + fs::path(InputName).filename().string(),
                     Records, Diagonal);
     std::cout << "Report: " << (Output / "report.json").string() << ", " << plot.string() << "\n";
+    if (viewed)
+      writeViews(report);
+  }
+
+  // The page (view.html: the take in any browser) and the ParaView state, each named on a line
+  // of its own, the last lines of the job; a failure is said and changes nothing else.
+  void writeViews(const nlohmann::json& report) const
+  {
+    try
+    {
+      StateInputs state;
+      state.tracked = fs::absolute(Pvd).string();
+      state.points = fs::absolute(Source->GetDirectoryName() ? Source->GetDirectoryName()
+                                                             : Source->GetFileName())
+                         .string();
+      state.pattern = Source->GetDirectoryName() ? S.pattern : std::string();
+      state.plugin = pluginPath();
+      state.largestResidual = Records.front().maxResidual;
+      writeParaViewState(State.string(), state);
+      if (!PageGlb.empty() && viewerAvailable())
+      {
+        writeViewerPage(Page.string(), PageGlb, report);
+        std::cout << "Page: " << Page.string()
+                  << " (the take in a browser, from the file system)\n";
+      }
+      else if (!PageGlb.empty())
+        std::cerr << "warning: no view.html: this build of dynamicpoints has no three.js "
+                     "(Utilities/dp.sh installs it from npm)\n";
+      std::cout << "ParaView: paraview --state=" << State.string() << "\n";
+    }
+    catch (const std::exception& e)
+    {
+      std::cerr << "warning: " << e.what() << "\n";
+    }
+  }
+
+  // The DynamicPoints ParaView plugin beside this program's build or install
+  // (bin/../lib/paraview-plugins/DynamicPoints/DynamicPoints.so), empty when there is none.
+  static std::string pluginPath()
+  {
+    std::error_code error;
+    const fs::path self = fs::read_symlink("/proc/self/exe", error);
+    const fs::path plugin = self.parent_path().parent_path() / "lib" / "paraview-plugins" /
+                            "DynamicPoints" / "DynamicPoints.so";
+    return !error && fs::exists(plugin) ? plugin.string() : std::string();
   }
 
   const Settings S;
-  const fs::path Output, Pvd, Dpz, Glb;
+  const fs::path Output, Pvd, Dpz, Glb, Page, State;
   const std::chrono::steady_clock::time_point Started = std::chrono::steady_clock::now();
   vtkNew<MessagePrinter> Printer;
   vtkNew<vtkCallbackCommand> Quiet;
@@ -700,6 +772,7 @@ private:
   long long FineVertices = 0;
   std::string DetailChoice; // what the detail layer's levels were chosen from
   dp::GlbSummary GlbWritten;
+  std::vector<unsigned char> PageGlb; // the plain .glb's bytes, for the page
   nlohmann::json Compression;
 };
 

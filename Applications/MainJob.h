@@ -29,6 +29,7 @@ struct Settings
                                                           // may differ from the tracked one
   bool quiet = false;
   bool meshopt = false;
+  bool view = true; // view.html and paraview-state.py (--no-view: neither)
   // What to print instead of running: "values" (--print-options), "json" or "markdown"
   // (--describe-options), "report" (--describe-report).
   std::string printOptions;

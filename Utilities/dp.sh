@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # DynamicPoints: install what the build needs (Debian bookworm, as root), build, and run.
 #
-#   bash Utilities/dp.sh main [ARGS...]   the main job (no ARGS: the built-in sample sequence)
+#   bash Utilities/dp.sh main [ARGS...]   the main job (no ARGS: the built-in sample sequence);
+#                                         builds only what it needs (it and the ParaView plugin)
 #   bash Utilities/dp.sh test             the whole test suite (ctest), with the tools it uses
-#   bash Utilities/dp.sh build            install what the build needs and build only
+#   bash Utilities/dp.sh build            install what the build needs and build everything
 #   bash Utilities/dp.sh install          install every Debian package (build and tests) only
 #
 # Idempotent: packages already installed are not fetched again, and an existing build
@@ -29,19 +30,22 @@ build_packages=(
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
   liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev libmetis-dev
-  libsuitesparse-dev libopenblas0-serial
+  libsuitesparse-dev libopenblas0-serial nodejs
 )
 # What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the
 # X server for the ParaView GUI and rendering tests with xdotool and xwd to drive and photograph
-# the GUI, Node.js for the glTF tools, Blender, Google Draco (the rate-distortion benchmark's
-# per-frame peer).
+# the GUI, Blender, Google Draco (the rate-distortion benchmark's per-frame peer), Chromium and
+# Firefox (the main job's page in real browsers).
 test_packages=(
-  clang python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri xdotool x11-apps nodejs blender
-  draco
+  clang python3-open3d python3-scipy xvfb xauth libgl1-mesa-dri xdotool x11-apps blender draco
+  chromium firefox-esr
 )
-# From the npm registry, for the tests of the .glb export: the Khronos glTF validator and
-# meshoptimizer's reference decoder (the version of Debian's libmeshoptimizer).
-node_tools=(gltf-validator@2.0.0-dev.3.10 meshoptimizer@0.18.1)
+# From the npm registry: three.js for the main job's page (built into dynamicpoints); for the
+# tests, the Khronos glTF validator, meshoptimizer's reference decoder (the version of Debian's
+# libmeshoptimizer) and Playwright's browser driver (it drives Debian's Chromium; it downloads
+# no browser).
+node_main_tools=(three@0.147.0)
+node_test_tools=(gltf-validator@2.0.0-dev.3.10 meshoptimizer@0.18.1 playwright-core@1.65.1)
 
 # install_packages PACKAGE...: installs those not installed yet (one apt run).
 install_packages() {
@@ -61,31 +65,52 @@ install_packages() {
   fi
 }
 
-install_test_tools() {
-  install_packages "${build_packages[@]}" "${test_packages[@]}"
+install_npm() {
   # npm comes with some nodejs builds and is Debian's package npm with others.
   if ! command -v npm >/dev/null; then
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends npm >/dev/null
   fi
 }
 
-install_node_tools() {
-  local folder="$build/tools/node"
-  [[ -f "$folder/.installed" && "$(cat "$folder/.installed")" == "${node_tools[*]}" ]] && return
-  echo "== installing ${node_tools[*]} (npm) in $folder"
-  mkdir -p "$folder"
-  npm install --prefix "$folder" --no-audit --no-fund --silent "${node_tools[@]}" >/dev/null
-  echo "${node_tools[*]}" >"$folder/.installed"
+install_test_tools() {
+  install_packages "${build_packages[@]}" "${test_packages[@]}"
+  install_npm
 }
 
-build_project() {
+# install_node_tools PACKAGE@VERSION...: those not installed yet into $build/tools/node (npm).
+install_node_tools() {
+  local folder="$build/tools/node" missing=()
+  for tool in "$@"; do
+    grep -qxF "$tool" "$folder/.installed" 2>/dev/null || missing+=("$tool")
+  done
+  ((${#missing[@]})) || return 0
+  echo "== installing ${missing[*]} (npm) in $folder"
+  mkdir -p "$folder"
+  npm install --prefix "$folder" --no-audit --no-fund --silent "${missing[@]}" >/dev/null
+  printf '%s\n' "${missing[@]}" >>"$folder/.installed"
+}
+
+configure_project() {
   if [[ ! -f "$build/CMakeCache.txt" ]]; then
     echo "== configuring in $build"
     cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
       -DPython3_EXECUTABLE=/usr/bin/python3 >/dev/null
   fi
-  echo "== building"
-  cmake --build "$build" -j "$(nproc)" -- --quiet
+}
+
+# build_project [TARGET...]: configures (once) and builds the targets (default: everything).
+build_project() {
+  configure_project
+  echo "== building${1:+ $*}"
+  cmake --build "$build" -j "$(nproc)" ${1:+--target "$@"} -- --quiet
+}
+
+# What the main job needs: the program, and the ParaView plugin its state file loads.
+main_targets() {
+  echo dynamicpoints
+  grep -q '^DYNAMICPOINTS_BUILD_PLUGIN:.*=ON' "$build/CMakeCache.txt" 2>/dev/null &&
+    echo DynamicPoints
+  true
 }
 
 command="${1:-}"
@@ -93,18 +118,24 @@ shift || true
 case "$command" in
   main)
     install_packages "${build_packages[@]}"
-    build_project
+    install_npm
+    install_node_tools "${node_main_tools[@]}"
+    configure_project
+    # shellcheck disable=SC2046 # one word per target
+    build_project $(main_targets)
     exec "$build/bin/dynamicpoints" "$@"
     ;;
   test)
     install_test_tools
+    install_node_tools "${node_main_tools[@]}" "${node_test_tools[@]}"
     build_project
-    install_node_tools
     cd "$build"
     exec ctest --output-on-failure -j "$(nproc)" "$@"
     ;;
   build)
     install_packages "${build_packages[@]}"
+    install_npm
+    install_node_tools "${node_main_tools[@]}"
     build_project
     ;;
   install)

@@ -35,15 +35,16 @@ def run_tool(name, *args, check=True):
     return result
 
 
-def run_node_tool(package, script, *args):
-    """Runs Utilities/gltf/SCRIPT with node, the npm PACKAGE found in DP_NODE_TOOLS."""
+def run_node_tool(package, script, *args, timeout=120):
+    """Runs Utilities/gltf/SCRIPT (or Utilities/SCRIPT when it names a folder) with node, the npm
+    PACKAGE found in DP_NODE_TOOLS; returns what it printed as JSON."""
     module = os.path.join(NODE_TOOLS, "node_modules")
     if not os.path.isdir(os.path.join(module, package)):
         raise AssertionError(f"npm package {package} not found in {NODE_TOOLS!r}: "
                              "Utilities/dp.sh test installs it")
-    result = subprocess.run(["node", os.path.join(UTILITIES, "gltf", script), *args],
-                            capture_output=True, text=True, timeout=120,
-                            env=dict(os.environ, NODE_PATH=module))
+    where = os.path.join(UTILITIES, script if os.sep in script else os.path.join("gltf", script))
+    result = subprocess.run(["node", where, *args], capture_output=True, text=True,
+                            timeout=timeout, env=dict(os.environ, NODE_PATH=module))
     if result.returncode != 0:
         raise AssertionError(f"{script} {args} failed:\n{result.stderr}")
     return json.loads(result.stdout)

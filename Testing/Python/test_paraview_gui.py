@@ -33,8 +33,14 @@ def wait_for_file(path, process, timeout=300):
 class ParaViewGuiCase(unittest.TestCase):
     """Starts the GUI as the README says (`paraview --dr --script=...`; --dr: no Welcome dialog
     on a fresh profile) on its own X server with a fresh HOME, with SCRIPT (a file of this
-    folder), and waits for the script's file DONE in cls.output."""
+    folder; none: no script) and what prepare() returns, and waits for the script's file DONE in
+    cls.output and for the main window."""
     SCRIPT = DONE = None
+
+    @classmethod
+    def prepare(cls):
+        """What a case makes before ParaView starts; returns its further arguments."""
+        return []
 
     @classmethod
     def setUpClass(cls):
@@ -53,13 +59,17 @@ class ParaViewGuiCase(unittest.TestCase):
         cls.paraview = None
         try:
             cls.x = XWindows(display)
+            arguments = cls.prepare()
+            if cls.SCRIPT:
+                arguments.append("--script=" + os.path.join(HERE, cls.SCRIPT))
             cls.paraview = subprocess.Popen(
-                [shutil.which("paraview"), "--dr", "--script=" + os.path.join(HERE, cls.SCRIPT)],
+                [shutil.which("paraview"), "--dr", *arguments],
                 env=dict(os.environ, DISPLAY=display, HOME=home, DP_PLUGIN=PLUGIN,
                          DP_SERIES=os.path.join(cls.frames, "points.series"),
                          DP_OUTPUT=cls.output),
                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
-            wait_for_file(os.path.join(cls.output, cls.DONE), cls.paraview)
+            if cls.DONE:
+                wait_for_file(os.path.join(cls.output, cls.DONE), cls.paraview)
             time.sleep(3)  # ParaView shows its Welcome dialog a second after start, if at all
             cls.main = cls.x.wait_for(r"^ParaView 5")
             cls.x.resize(cls.main, 1500, 950)
@@ -164,6 +174,36 @@ class TestParaViewGuiOpen(ParaViewGuiCase):
             if changed[250:, 300:].sum() > 1000 or time.monotonic() > end:
                 break
         self.assertGreater(changed[250:, 300:].sum(), 1000)
+
+
+class TestParaViewGuiState(ParaViewGuiCase):
+    """`paraview --state=OUTPUT/paraview-state.py`, as the main job's last line says (ParaView
+    takes no --script beside --state): the tracked take over its points, coloured by the
+    distance to them."""
+
+    @classmethod
+    def prepare(cls):
+        run_tool("dynamicpoints", "--output", os.path.join(cls.tmp, "job"), "--vertices", 300,
+                 os.path.join(cls.frames, "points.series"))
+        return ["--state=" + os.path.join(cls.tmp, "job", "paraview-state.py")]
+
+    def test_the_state_shows_the_coloured_take_over_its_points(self):
+        # The middle of the render view (right of the panels): beside its background, the mesh in
+        # the distance's colours and the dark points; photographed until the state has drawn
+        # them.
+        end = time.monotonic() + 120
+        while True:
+            shot = self.x.photograph(self.main, os.path.join(self.shots, "paraview-state.png"))
+            view = shot[300:850, 500:1350].reshape(-1, 3).astype(int)
+            values, counts = np.unique(view, axis=0, return_counts=True)
+            background = values[counts.argmax()]
+            drawn = view[np.abs(view - background).sum(axis=1) > 60]
+            colours = len(np.unique(drawn // 16, axis=0))
+            if (len(drawn) > 0.03 * len(view) and colours > 30) or time.monotonic() > end:
+                break
+            time.sleep(3)
+        self.assertGreater(len(drawn), 0.03 * len(view))
+        self.assertGreater(colours, 30)
 
 
 if __name__ == "__main__":
