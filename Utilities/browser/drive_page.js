@@ -70,8 +70,11 @@ function readCanvas() {
     await tab.mouse.click(point.x, point.y);
     report.plotClick = { asked: target, reached: await tab.evaluate(() => dpViewer.frame()) };
     const before = await tab.evaluate(() => dpViewer.frame());
+    // Playing moves on: the first frame shown after `before` (a fixed wait could land on the
+    // same frame again, a whole number of loops of a short take later).
     await tab.click('#play');
-    await tab.waitForTimeout(1500);
+    await tab.waitForFunction((b) => dpViewer.frame() !== b, before, { timeout: 20000 })
+      .catch(() => {});
     report.played = { from: before, to: await tab.evaluate(() => dpViewer.frame()) };
     await tab.click('#play');
   } finally {
