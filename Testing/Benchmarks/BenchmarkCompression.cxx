@@ -166,6 +166,29 @@ void printRow(double target, const char* layoutName, const char* coding, double 
               coding, report.components, bits, 96.0 / bits, report.kgError, median(ms), peakMiB());
 }
 
+// What a player pays: the file's bytes decoded (checked, range-decoded, dequantised) and every
+// frame reconstructed, per frame (median of the runs, one thread).
+void printDecoding(const dp::CompressedSequence& sequence, std::size_t repeats)
+{
+  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(sequence);
+  const dp::PcaModel& m = sequence.pca.model;
+  const tbb::global_control single(tbb::global_control::max_allowed_parallelism, 1);
+  std::vector<double> ms;
+  std::vector<double> frame(3 * m.vertices);
+  for (std::size_t r = 0; r < std::max<std::size_t>(repeats, 3); ++r)
+  {
+    const double start = now();
+    const dp::CompressedSequence back =
+        dp::decodeCompressedSequence(bytes.data(), bytes.size(), "benchmark");
+    for (std::size_t t = 0; t < m.frames; ++t)
+      back.pca.model.frame(t, frame.data());
+    ms.push_back(1000 * (now() - start) / static_cast<double>(m.frames));
+  }
+  std::printf("%6s %-12s decoding: %.3f ms a frame (the file's %zu bytes, then every frame; one "
+              "thread)\n",
+              "", "", median(ms), bytes.size());
+}
+
 // --segments: the take cut into `parts` runs of frames, each coded on its own at the RMS error
 // the whole take's coding reached; their bits against the whole's (components chosen per
 // segment pay where the motion changes character within a take).
@@ -227,6 +250,7 @@ void runLayout(const std::string& name, const dp::AnimatedMesh& mesh,
                       dp::encodeCompressedSequence(coded.oneThread)
                   ? "yes"
                   : "NO");
+  printDecoding(coded.sequence, plan.repeats);
   for (std::size_t parts : plan.segments)
     runSegments(mesh, positions, layout, report, parts);
   if (plan.glbFolder.empty() || layout != dp::PcaLayout::Shapes)

@@ -170,12 +170,12 @@ std::uint32_t versionOf(const std::vector<std::uint8_t>& bytes)
   return v;
 }
 
-TEST(DetailCoding, TheFileCarriesTheLayerAsVersion3)
+TEST(DetailCoding, TheFileCarriesTheLayer)
 {
   const Take take(5);
   dp::CompressedSequence s = detailed(take, 0.001);
   const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
-  EXPECT_EQ(versionOf(bytes), 3u);
+  EXPECT_EQ(versionOf(bytes), 4u);
   const dp::CompressedSequence back = dp::decodeCompressedSequence(bytes.data(), bytes.size(), "d");
   EXPECT_EQ(back.detail.levels, 2);
   EXPECT_EQ(back.detail.step, s.detail.step);
@@ -189,7 +189,7 @@ TEST(DetailCoding, TheFileCarriesTheLayerAsVersion3)
     dp::detailedFrame(back, take.map, t, b.data());
     EXPECT_EQ(a, b);
   }
-  // With colour too: still version 3, both sections back.
+  // With colour too: both sections back.
   std::vector<std::uint8_t> colours(3 * take.base.vertices() * take.frames);
   for (std::size_t i = 0; i < colours.size(); ++i)
     colours[i] = static_cast<std::uint8_t>(i * 7);
@@ -198,11 +198,12 @@ TEST(DetailCoding, TheFileCarriesTheLayerAsVersion3)
   const dp::CompressedSequence again = dp::decodeCompressedSequence(both.data(), both.size(), "c");
   EXPECT_EQ(again.colours, colours);
   EXPECT_EQ(again.detail.displacements, s.detail.displacements);
-  // Without the layer the file keeps the version earlier readers read.
+  // Without the layer the file ends after the colour.
   s.detail = dp::DetailLayer{};
-  EXPECT_EQ(versionOf(dp::encodeCompressedSequence(s)), 2u);
-  s.colours.clear();
-  EXPECT_EQ(versionOf(dp::encodeCompressedSequence(s)), 1u);
+  const std::vector<std::uint8_t> plain = dp::encodeCompressedSequence(s);
+  EXPECT_EQ(plain.size(), both.size() - s.report.detailBytes);
+  EXPECT_TRUE(
+      dp::decodeCompressedSequence(plain.data(), plain.size(), "p").detail.displacements.empty());
 }
 
 TEST(DetailCoding, ACutOrCorruptDetailSectionIsRefusedByName)

@@ -89,8 +89,8 @@ TEST(PcaColour, RoundTripIsExactThroughMemoryAndAFile)
   dp::setColours(s, colours(m.vertices, m.frames));
   ASSERT_EQ(s.colours.size(), 3 * m.vertices * m.frames);
   const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
-  EXPECT_EQ(versionOf(plain), 1u);
-  EXPECT_EQ(versionOf(bytes), 2u);
+  EXPECT_EQ(versionOf(plain), 4u);
+  EXPECT_EQ(versionOf(bytes), 4u);
   // The report says what the colour takes in the file: the file grows by exactly that.
   EXPECT_GT(s.report.colourBytes, 0u);
   EXPECT_EQ(bytes.size(), plain.size() + s.report.colourBytes);
@@ -144,26 +144,36 @@ TEST(PcaColour, AToleranceHoldsEachColourWithinItAndShrinksTheStream)
     EXPECT_THROW(dp::setColours(held, given, tolerance), std::invalid_argument);
 }
 
-TEST(PcaColour, VersionOneFilesStillRead)
+// Files of the earlier versions (the .dpz fuzzer's seeds: version 1 without colour, 2 with
+// colour, 3 with a detail layer and colour) still read, and written again (as version 4, the
+// geometry range-coded) they give back the same sequence.
+TEST(PcaColour, EarlierVersionsStillRead)
 {
-  // A file the writer before the colour stream wrote (the .dpz fuzzer's seed).
-  const dp::CompressedSequence old = dp::readCompressedSequence(DP_VERSION_1_DPZ);
+  for (const char* name : {"tracked.dpz", "tracked_colour.dpz", "detailed_colour.dpz"})
+  {
+    const std::string path = std::string(DP_DPZ_SEEDS) + "/" + name;
+    std::ifstream in(path, std::ios::binary);
+    const std::vector<std::uint8_t> file((std::istreambuf_iterator<char>(in)),
+                                         std::istreambuf_iterator<char>());
+    const dp::CompressedSequence old = dp::readCompressedSequence(path);
+    EXPECT_LT(versionOf(file), 4u) << name;
+    EXPECT_EQ(old.colours.empty(), std::string(name) == "tracked.dpz") << name;
+    const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(old);
+    EXPECT_EQ(versionOf(bytes), 4u);
+    const dp::CompressedSequence r = dp::decodeCompressedSequence(bytes.data(), bytes.size(), name);
+    EXPECT_EQ(r.pca.meanIntegers, old.pca.meanIntegers) << name;
+    EXPECT_EQ(r.pca.basisIntegers, old.pca.basisIntegers) << name;
+    EXPECT_EQ(r.pca.weightIntegers, old.pca.weightIntegers) << name;
+    EXPECT_EQ(r.pca.model.reconstruct(), old.pca.model.reconstruct()) << name;
+    EXPECT_EQ(r.colours, old.colours) << name;
+    EXPECT_EQ(r.detail.displacements, old.detail.displacements) << name;
+    EXPECT_EQ(r.triangles, old.triangles) << name;
+  }
+  const dp::CompressedSequence old =
+      dp::readCompressedSequence(std::string(DP_DPZ_SEEDS) + "/tracked.dpz");
   EXPECT_EQ(old.pca.model.vertices, 300u);
   EXPECT_EQ(old.pca.model.frames, 5u);
-  EXPECT_TRUE(old.colours.empty());
   EXPECT_EQ(old.report.colourBytes, 0u);
-  // ... and this writer writes it again byte for byte.
-  std::ifstream in(DP_VERSION_1_DPZ, std::ios::binary);
-  const std::vector<std::uint8_t> file((std::istreambuf_iterator<char>(in)),
-                                       std::istreambuf_iterator<char>());
-  EXPECT_EQ(dp::encodeCompressedSequence(old), file);
-  // A sequence without colour is still written as version 1, and reads back without colour.
-  const dp::CompressedSequence s = tube(6);
-  const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
-  EXPECT_EQ(versionOf(bytes), 1u);
-  const dp::CompressedSequence r = dp::decodeCompressedSequence(bytes.data(), bytes.size(), "v1");
-  EXPECT_TRUE(r.colours.empty());
-  EXPECT_EQ(r.pca.model.reconstruct(), s.pca.model.reconstruct());
 }
 
 TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
@@ -195,17 +205,16 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
                  std::runtime_error)
         << "byte " << i;
   }
-  // Version 1 with a colour section after the geometry: refused, not read without colour.
+  // Read as an earlier version (the geometry as a zstd section): refused, not misread.
   std::vector<std::uint8_t> relabelled = bytes;
-  relabelled[8] = 1;
-  EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
-               std::runtime_error);
-  // Version 3 reads a byte of flags where the colour section starts: refused, not misread.
-  relabelled[8] = 3;
-  EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
-               std::runtime_error);
+  for (std::uint8_t earlier : {1, 2, 3})
+  {
+    relabelled[8] = earlier;
+    EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
+                 std::runtime_error);
+  }
   // A version this reader does not know.
-  relabelled[8] = 4;
+  relabelled[8] = 5;
   try
   {
     dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "new.dpz");
@@ -213,7 +222,7 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
   }
   catch (const std::runtime_error& e)
   {
-    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 4"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 5"), std::string::npos)
         << e.what();
   }
 }

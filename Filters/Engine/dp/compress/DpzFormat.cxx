@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The .dpz file (declared in PcaCompression.h): a magic number and format version, a header of
-// counts, steps and times with its CRC-32, then zstd sections (connectivity, geometry and, in
-// version 2, colour), each with its sizes and CRC-32. Every count is checked against what the bytes
-// can hold before anything is allocated, so a corrupt or hostile file is refused with its name and
-// the reason.
+// counts, steps and times with its CRC-32, then sections each with its sizes and CRC-32: the
+// connectivity (zstd), the geometry (range-coded from version 4 on, zstd before), a byte of flags
+// (from version 3 on), the colour (zstd) and the detail layer (range-coded). Every count is checked
+// against what the bytes can hold before anything is allocated, so a corrupt or hostile file is
+// refused with its name and the reason.
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/IntegerCodec.h"
+#include "dp/compress/ModelCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/detail/FileText.h"
 
@@ -35,12 +37,13 @@ namespace
 
 constexpr char Magic[8] = {'\x89', 'D', 'P', 'Z', '\r', '\n', '\x1a', '\n'};
 // Version 1: connectivity and geometry. Version 2 adds the colour section after them. Version 3
-// adds a byte of flags after the geometry (ColourFlag, DetailFlag) and the detail section. A
-// sequence is written in the earliest version that holds it, so earlier readers keep reading
-// what they can.
+// adds a byte of flags after the geometry (ColourFlag, DetailFlag) and the detail section.
+// Version 4 codes the geometry over the mesh by the range coder (ModelCoding.h) instead of
+// predicted varints through zstd; it is what this writer writes, and this reader reads all four.
 constexpr std::uint32_t PlainVersion = 1;
 constexpr std::uint32_t ColourVersion = 2;
 constexpr std::uint32_t DetailVersion = 3;
+constexpr std::uint32_t CodedGeometryVersion = 4;
 constexpr std::uint8_t ColourFlag = 1, DetailFlag = 2;
 
 // A fuzzing build (Testing/Fuzz) computes the checksums but does not enforce them, so mutated
@@ -228,7 +231,8 @@ void readConnectivity(ByteReader& in, const std::uint8_t* bytes, const std::stri
       c.fail("triangle index " + std::to_string(v) + " out of range");
 }
 
-// The integers of the mean, the basis and the weights, in putGeometry's order.
+// Versions 1 to 3: the integers of the mean, the basis and the weights, as predicted varints
+// through zstd (IntegerCodec.h).
 void readGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
                   const Counts& n, CompressedSequence& s)
 {
@@ -254,6 +258,39 @@ void readGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& 
                n.shapes ? nullptr : &mesh);
   if (g.remaining() != 0)
     g.fail("unexpected bytes after the weights");
+}
+
+// Version 4's geometry: the range coder's bytes (ModelCoding.h) with their size and CRC-32.
+void putCodedGeometry(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>& coded)
+{
+  putRaw<std::uint64_t>(out, coded.size());
+  putRaw<std::uint32_t>(out, crc(coded.data(), coded.size()));
+  out.insert(out.end(), coded.begin(), coded.end());
+}
+
+void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                       const Counts& n, CompressedSequence& s)
+{
+  const auto size = in.raw<std::uint64_t>();
+  const auto expected = in.raw<std::uint32_t>();
+  if (size > in.remaining())
+    in.fail("geometry is truncated (" + std::to_string(in.remaining()) + " of " +
+            std::to_string(size) + " bytes)");
+  // The range coder spends at least 0.022 bits a value (its likeliest bit): more values (or
+  // vertices to visit) than that allows cannot be in the bytes, and are refused before anything
+  // is allocated.
+  const double numbers =
+      static_cast<double>(n.meanCount() + n.components * (n.basisRows() + n.weightRows()));
+  if (numbers + static_cast<double>(n.vertices) > 400.0 * static_cast<double>(size) + 1e6)
+    in.fail("geometry claims more values than its " + std::to_string(size) + " bytes can hold");
+  const std::uint8_t* coded = bytes + in.position();
+  if (crc(coded, size) != expected && EnforceChecksums)
+    in.fail("geometry: checksum mismatch (the file is corrupt)");
+  for (std::uint64_t i = 0; i < size; ++i)
+    in.byte();
+  const compress::VertexTraversal traversal(s.triangles, n.vertices);
+  compress::decodeModel(coded, size, name + " (geometry)", traversal, s.pca.model.layout, n.frames,
+                        n.components, s.pca);
 }
 
 // Version 2's colour section: exactly three bytes per vertex and frame.
@@ -419,11 +456,8 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   const bool detailed = s.detail.levels > 0;
   if (detailed)
     checkDetail(s);
-  const std::uint32_t version = detailed            ? DetailVersion
-                                : s.colours.empty() ? PlainVersion
-                                                    : ColourVersion;
   std::vector<std::uint8_t> out(Magic, Magic + sizeof(Magic));
-  putRaw<std::uint32_t>(out, version);
+  putRaw<std::uint32_t>(out, CodedGeometryVersion);
   putRaw<std::uint64_t>(out, header.size());
   out.insert(out.end(), header.begin(), header.end());
   putRaw<std::uint32_t>(out, crc(header.data(), header.size()));
@@ -431,12 +465,10 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   std::vector<std::uint8_t> connectivity;
   compress::putSequence(connectivity, s.triangles.data(), s.triangles.size(), 3);
   putSection(out, connectivity);
-  std::vector<std::uint8_t> geometry;
-  compress::putGeometry(geometry, q, EarlierNeighbours(s.triangles, m.vertices));
-  putSection(out, geometry);
-  if (version == DetailVersion)
-    putRaw<std::uint8_t>(out, static_cast<std::uint8_t>((s.colours.empty() ? 0 : ColourFlag) |
-                                                        (detailed ? DetailFlag : 0)));
+  putCodedGeometry(out,
+                   compress::encodeModel(q, compress::VertexTraversal(s.triangles, m.vertices)));
+  putRaw<std::uint8_t>(out, static_cast<std::uint8_t>((s.colours.empty() ? 0 : ColourFlag) |
+                                                      (detailed ? DetailFlag : 0)));
   if (!s.colours.empty())
     putSection(out, colourResiduals(s.colours, m.vertices, m.frames));
   if (detailed)
@@ -495,9 +527,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   for (std::size_t i = 0; i < sizeof(Magic); ++i)
     in.byte();
   const auto version = in.raw<std::uint32_t>();
-  if (version < PlainVersion || version > DetailVersion)
+  if (version < PlainVersion || version > CodedGeometryVersion)
     in.fail("format version " + std::to_string(version) + " is not supported (this reader: " +
-            std::to_string(PlainVersion) + " to " + std::to_string(DetailVersion) + ")");
+            std::to_string(PlainVersion) + " to " + std::to_string(CodedGeometryVersion) + ")");
   const auto headerSize = in.raw<std::uint64_t>();
   if (headerSize > in.remaining())
     in.fail("header truncated");
@@ -511,9 +543,12 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   CompressedSequence s;
   const Counts n = readHeader(header, s);
   readConnectivity(in, bytes, name, n, s);
-  readGeometry(in, bytes, name, n, s);
+  if (version >= CodedGeometryVersion)
+    readCodedGeometry(in, bytes, name, n, s);
+  else
+    readGeometry(in, bytes, name, n, s);
   std::uint8_t flags = version == ColourVersion ? ColourFlag : 0;
-  if (version == DetailVersion)
+  if (version >= DetailVersion)
   {
     flags = in.byte();
     if (flags & ~(ColourFlag | DetailFlag))

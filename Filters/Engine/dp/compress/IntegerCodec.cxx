@@ -102,11 +102,12 @@ EarlierNeighbours::EarlierNeighbours(const std::vector<std::int64_t>& triangles,
 }
 
 void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::size_t count,
-                 std::size_t stride, const EarlierNeighbours* mesh)
+                 std::size_t stride)
 {
+  const EarlierNeighbours* mesh = nullptr;
   int best = 0;
   double bestCost = std::numeric_limits<double>::infinity();
-  for (int order = 0; order <= (mesh ? MeshOrder : 2); ++order)
+  for (int order = 0; order <= 2; ++order)
   {
     double cost = 0;
     for (std::size_t i = 0; i < count; ++i)
@@ -161,22 +162,6 @@ void ByteReader::sequence(std::int64_t* v, std::size_t count, std::size_t stride
     fail("unknown prediction order " + std::to_string(order));
   for (std::size_t i = 0; i < count; ++i)
     v[i] = wrappingSum(unzigzag(varint()), predicted(v, i, stride, order, mesh));
-}
-
-void putGeometry(std::vector<std::uint8_t>& out, const QuantisedPca& q,
-                 const EarlierNeighbours& mesh)
-{
-  const PcaModel& m = q.model;
-  const bool shapes = m.layout == PcaLayout::Shapes;
-  const EarlierNeighbours* perVertex = shapes ? &mesh : nullptr;
-  putSequence(out, q.meanIntegers.data(), q.meanIntegers.size(), MeanStride, perVertex);
-  const std::size_t rows = static_cast<std::size_t>(m.basis.rows());
-  for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.basisIntegers.data() + j * rows, rows, BasisStride, perVertex);
-  const std::size_t wrows = static_cast<std::size_t>(m.weights.rows());
-  for (std::size_t j = 0; j < m.components(); ++j)
-    putSequence(out, q.weightIntegers.data() + j * wrows, wrows, WeightStride,
-                shapes ? nullptr : &mesh);
 }
 
 int storedLevel(std::size_t bytes)

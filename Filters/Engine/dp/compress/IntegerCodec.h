@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file IntegerCodec.h
- * @brief The lossless coding of the compressed sequence's integers (the quantised mean, basis and
- *        weights, and the triangles): each sequence is predicted (order 0 none, 1 the value one
- *        stride back, 2 linear from two strides back, 3 for per-vertex sequences the rounded mean
- *        of the same coordinate at the vertex's earlier mesh neighbours), the order with the
- *        smallest estimated cost is kept, and the residuals are written as zigzag varints; whole
- *        sections are then packed by zstd. This goes beyond the paper, which stores floats.
+ * @brief Predicted varints: the coding of the .dpz file's connectivity, and the reading of the
+ *        geometry of format versions 1 to 3 (since version 4 the geometry is range-coded,
+ *        ModelCoding.h). Each sequence is predicted (order 0 none, 1 the value one stride back, 2
+ *        linear from two strides back, 3 for per-vertex sequences the rounded mean of the same
+ *        coordinate at the vertex's earlier mesh neighbours), the order with the smallest
+ *        estimated cost is kept, and the residuals are written as zigzag varints; whole sections
+ *        are then packed by zstd.
  *
  * Internal to the compression; not installed API. Limits: a reader trusts nothing: ByteReader
  * throws std::runtime_error naming the file on truncation or malformed numbers, and sums wrap
@@ -34,10 +35,10 @@ struct EarlierNeighbours
   std::vector<std::size_t> index;
 };
 
-/** Writes v[0..count) predicted along `stride`; `mesh` is given for sequences of `stride` values
- *  per vertex, which may then be predicted from earlier mesh neighbours. */
+/** Writes v[0..count) predicted along `stride` (the connectivity; the geometry of versions 1 to 3
+ *  was written so too, with per-vertex sequences predicted from earlier mesh neighbours). */
 void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::size_t count,
-                 std::size_t stride, const EarlierNeighbours* mesh = nullptr);
+                 std::size_t stride);
 
 template <typename T>
 void putRaw(std::vector<std::uint8_t>& out, T v)
@@ -79,16 +80,8 @@ private:
 // basis (3: the same coordinate one frame or one vertex back), one value per row in the weights.
 constexpr std::size_t MeanStride = 3, BasisStride = 3, WeightStride = 1;
 
-/** The quantised model's integers: the mean, the basis, the weights. The per-vertex parts (the
- *  mean and the basis in the shape layout, the weights in the trajectory layout) may be
- *  predicted from mesh neighbours; the others run along time. */
-void putGeometry(std::vector<std::uint8_t>& out, const QuantisedPca& q,
-                 const EarlierNeighbours& mesh);
-
-/** zstd level of what is stored (19; 9 for big inputs, where 19 gets slow), and a quicker one
- *  that ranks candidate component counts about as well. */
+/** zstd level of what is stored (19; 9 for big inputs, where 19 gets slow). */
 int storedLevel(std::size_t bytes);
-constexpr int RankingLevel = 6;
 
 /** zstd at `level` (0: storedLevel). Throws std::runtime_error on a zstd error. */
 std::vector<std::uint8_t> zstdCompress(const std::vector<std::uint8_t>& raw, int level = 0);

@@ -4,6 +4,7 @@
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/Decomposition.h"
 #include "dp/compress/IntegerCodec.h"
+#include "dp/compress/ModelCoding.h"
 #include "dp/compress/Quantiser.h"
 
 #include <tbb/global_control.h>
@@ -108,7 +109,7 @@ public:
       counts.push_back(smallestK(1.0));
     else
     {
-      const std::size_t first = smallestK(0.97), last = std::max(first, smallestK(0.5));
+      const std::size_t first = smallestK(0.97), last = std::max(first, smallestK(0.3));
       const std::size_t stepK = std::max<std::size_t>(1, (last - first) / 10);
       for (std::size_t k = first; k <= last; k += stepK)
         counts.push_back(k);
@@ -117,7 +118,7 @@ public:
   }
 
   /** k components coded: float PCA, or quantised at the largest step meeting the target. */
-  Candidate code(std::size_t k, const compress::EarlierNeighbours& mesh, int zstdLevel) const
+  Candidate code(std::size_t k, const compress::VertexTraversal& mesh) const
   {
     MatrixXd basis, weights;
     D.factors(k, basis, weights);
@@ -131,9 +132,7 @@ public:
     }
     c.model = quantisedToTarget(k, basis, weights);
     const QuantisedPca& q = c.model;
-    std::vector<std::uint8_t> raw;
-    compress::putGeometry(raw, q, mesh);
-    c.payload = compress::zstdCompress(raw, zstdLevel);
+    c.payload = compress::encodeModel(q, mesh);
     c.bits = 8.0 * static_cast<double>(c.payload.size());
     c.plainBits = compress::fixedWidthBits(q.meanIntegers.data(), q.meanIntegers.size());
     for (std::size_t j = 0; j < k; ++j)
@@ -346,7 +345,7 @@ private:
  * abort) is called on the caller's thread only.
  */
 Candidate codeCandidates(const RateSearch& search, const std::vector<std::size_t>& candidates,
-                         const compress::EarlierNeighbours& mesh, int level, const Decomposition& d,
+                         const compress::VertexTraversal& mesh, const Decomposition& d,
                          const std::function<void(double)>& report, std::size_t& bestK)
 {
   BestCandidate best(candidates.size());
@@ -354,7 +353,7 @@ Candidate codeCandidates(const RateSearch& search, const std::vector<std::size_t
   const std::thread::id caller = std::this_thread::get_id();
   auto codeOne = [&](std::size_t c)
   {
-    best.offer(search.code(candidates[c], mesh, level), c);
+    best.offer(search.code(candidates[c], mesh), c);
     const std::size_t finished = ++done;
     if (std::this_thread::get_id() == caller)
       report(0.3 + 0.65 * static_cast<double>(finished) / static_cast<double>(candidates.size()));
@@ -379,25 +378,15 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
     if (progress && !progress(fraction))
       throw std::runtime_error("aborted");
   };
-  const compress::EarlierNeighbours mesh(triangles, vertices);
+  const compress::VertexTraversal mesh(triangles, vertices);
   const Eigen::Map<const MatrixXd> A(positions, 3 * vertices, frames);
   const Decomposition d = compress::decompose(A, options.layout);
   report(0.3);
   const PcaOptions searched = asSearched(options, A);
   const RateSearch search(A, d, searched);
 
-  // Candidates are ranked at a quicker zstd level; the winner is coded again as it is stored.
-  const std::vector<std::size_t> candidates = search.candidates();
-  const int level = candidates.size() > 1 ? compress::RankingLevel : 0;
   std::size_t bestK = 0;
-  Candidate best = codeCandidates(search, candidates, mesh, level, d, report, bestK);
-  if (options.quantise && candidates.size() > 1)
-  {
-    std::vector<std::uint8_t> raw;
-    compress::putGeometry(raw, best.model, mesh);
-    best.payload = compress::zstdCompress(raw);
-    best.bits = 8.0 * static_cast<double>(best.payload.size());
-  }
+  Candidate best = codeCandidates(search, search.candidates(), mesh, d, report, bestK);
 
   CompressedSequence out;
   out.triangles = triangles;

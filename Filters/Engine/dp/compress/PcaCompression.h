@@ -3,7 +3,7 @@
  * @file PcaCompression.h
  * @brief Compression of a mesh sequence of fixed connectivity by principal component analysis
  *        of its vertex positions (Shinya, Shioya & Shiraishi, section 8; Alexa & Mueller 2000),
- *        then quantisation, temporal prediction and entropy coding (zstd).
+ *        then quantisation, prediction over the mesh and along time, and adaptive range coding.
  *
  * The sequence is A, 3Nv x Nt (column t = frame t's x y z per vertex). Two layouts:
  *   Trajectories (the paper): rows are vertices, B = Nv x 3Nt (row i = vertex i's trajectory);
@@ -22,11 +22,12 @@
  *
  * The codec (quantise = true): one quantisation step q in position units; the weights use q,
  * basis vector j uses q / sigma_j and the mean q / sqrt(times it is repeated), so every stored
- * number adds about q^2 / 12 to ||A - A'||^2. Integers along time (weights of Shapes; basis of
- * Trajectories; the centroid trajectory) are predicted from the previous one or two values; the
- * per-vertex ones (mean and basis of Shapes, weights of Trajectories) from the previous vertex
- * or from the mean of the vertex's mesh neighbours of smaller index (which the decoder already
- * has); the predictor is chosen per sequence; residuals are zigzag varints compressed by zstd.
+ * number adds about q^2 / 12 to ||A - A'||^2. The integers are coded by ModelCoding.h: the
+ * per-vertex ones (mean and basis of Shapes, weights of Trajectories) in a decimation order of
+ * the mesh, each predicted from its ring (the mean, or a regression learnt from the vertex's
+ * stronger components); those along time (weights of Shapes; basis of Trajectories; the
+ * centroid trajectory) from the previous one or two values; the predictor chosen per column,
+ * the residuals range-coded under contexts of their neighbours' size.
  * The component count and q are chosen for the fewest bytes that meet the target: for the KG
  * error q is searched on an estimate computed from k x k blocks (no reconstruction), and the
  * chosen q is checked on the actual reconstruction (stepped down until it holds); the max
@@ -204,17 +205,16 @@ double maxVertexError(const Eigen::Ref<const Eigen::MatrixXd>& original,
 
 /**
  * The compressed file (.dpz): magic, version, a header with its CRC-32, and sections, each with
- * its CRC-32: the connectivity, the geometry (mean, basis, weights as predicted zigzag varints,
- * zstd), in version 2 the colours (each frame's bytes as differences from the previous frame's,
- * zstd, so colour fixed to the surface costs little), and in version 3 a byte of flags saying
+ * its CRC-32: the connectivity (zstd), the geometry (mean, basis, weights: range-coded over the
+ * mesh, ModelCoding.h, in version 4; predicted zigzag varints through zstd in versions 1 to 3),
+ * in version 2 the colours (each frame's bytes as differences from the previous frame's, zstd,
+ * so colour fixed to the surface costs little), and from version 3 on a byte of flags saying
  * which of the colours and the detail layer (its levels, step and range-coded displacements,
- * DetailCoding.h) follow. A sequence is written in the earliest version that holds what it has
- * (1 without colour or detail, 2 with colour alone), so earlier readers keep reading what they
- * can; this reader reads all three. The reader checks every length, count and checksum and
- * throws std::runtime_error naming the file and what is wrong; it never returns partial
- * geometry, colour or detail. Writing throws std::invalid_argument when the colours' count is
- * neither 0 nor frames * vertices * 3, or the detail layer's displacements do not match its
- * levels.
+ * DetailCoding.h) follow. This writer writes version 4; this reader reads all four. The reader
+ * checks every length, count and checksum and throws std::runtime_error naming the file and what is
+ * wrong; it never returns partial geometry, colour or detail. Writing throws std::invalid_argument
+ * when the colours' count is neither 0 nor frames * vertices * 3, or the detail layer's
+ * displacements do not match its levels.
  */
 void writeCompressedSequence(const std::string& path, const CompressedSequence& sequence);
 CompressedSequence readCompressedSequence(const std::string& path);
