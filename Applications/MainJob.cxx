@@ -411,7 +411,6 @@ private:
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
     compressor->SetInputConnection(Detail->GetOutputPort());
-    compressor->SetLayout(vtkPCACompressFilter::SHAPES); // the layout glTF morph targets need
     compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
                                             : vtkPCACompressFilter::KARNI_GOTSMAN);
     compressor->SetErrorTarget(againstData ? S.fitGrowth : S.errorTarget);
@@ -527,9 +526,10 @@ private:
   // The codec's figures in report.json's "compression".
   void recordCompression(vtkPolyData* result)
   {
-    for (const char* name : {"Components", "KGError", "RmsError", "MaxError", "MaxErrorRelative",
-                             "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0",
-                             "PaperD1", "PaperRatio", "ComponentsPerFrame"})
+    for (const char* name :
+         {"Components", "Layout", "KGError", "RmsError", "MaxError", "MaxErrorRelative",
+          "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1",
+          "PaperRatio", "ComponentsPerFrame"})
       Compression[name] = fieldValue(result, name);
     // The input as raw points: float32 x y z, and r g b bytes where the file keeps colour.
     const double colourBytes = fieldValue(result, "ColourBytes"); // NaN: no colour

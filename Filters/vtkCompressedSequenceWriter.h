@@ -42,10 +42,10 @@ public:
   ///@}
 
   ///@{
-  /** As vtkPCACompressFilter: Layout (default SHAPES; .glb is always SHAPES), ErrorMeasure
+  /** As vtkPCACompressFilter: Layout (default AUTOMATIC; .glb is always SHAPES), ErrorMeasure
    *  (default KARNI_GOTSMAN), ErrorTarget (default 0.2), NumberOfComponents (0: chosen for
    *  the target), ColourTolerance (0: colours lossless). */
-  vtkSetClampMacro(Layout, int, 0, 1);
+  vtkSetClampMacro(Layout, int, 0, 2);
   vtkGetMacro(Layout, int);
   vtkSetClampMacro(ErrorMeasure, int, 0, 2);
   vtkGetMacro(ErrorMeasure, int);

@@ -32,6 +32,13 @@ vtkStandardNewMacro(vtkPCACompressFilter);
 
 namespace
 {
+
+// How many components the frames allow: one per frame in the shape layout (a weight per frame),
+// three in the trajectory layout (x y z per frame in each basis vector).
+std::size_t timeDimensions(dp::PcaLayout layout, std::size_t frames)
+{
+  return layout == dp::PcaLayout::Trajectories ? 3 * frames : frames;
+}
 // Frame `frame`'s colours of `sequence` as point array "Colors" of `output` (none without colour).
 void addColours(const dp::CompressedSequence& sequence, std::size_t frame, vtkPolyData* output)
 {
@@ -97,7 +104,7 @@ struct vtkPCACompressFilter::Internals
   static void takeDefaults(vtkPCACompressFilter& f)
   {
     const dp::PcaOptions o;
-    f.Layout = o.layout == dp::PcaLayout::Shapes ? SHAPES : TRAJECTORIES;
+    f.Layout = static_cast<int>(o.layout); // TRAJECTORIES, SHAPES, AUTOMATIC as the engine's
     f.ErrorMeasure = o.measure == dp::PcaErrorMeasure::MaxVertexError ? MAX_VERTEX : KARNI_GOTSMAN;
     f.ErrorTarget = o.target;
     f.NumberOfComponents = static_cast<int>(o.components);
@@ -109,7 +116,7 @@ struct vtkPCACompressFilter::Internals
   static dp::PcaOptions optionsOf(const vtkPCACompressFilter& f)
   {
     dp::PcaOptions o;
-    o.layout = f.Layout == SHAPES ? dp::PcaLayout::Shapes : dp::PcaLayout::Trajectories;
+    o.layout = static_cast<dp::PcaLayout>(f.Layout);
     o.measure = f.ErrorMeasure == MAX_VERTEX ? dp::PcaErrorMeasure::MaxVertexError
                                              : dp::PcaErrorMeasure::KarniGotsman;
     o.target = f.ErrorTarget;
@@ -406,6 +413,7 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   }
   const dp::PcaReport& r = result.report;
   vtkDP::addFieldValue(output, "Components", static_cast<double>(r.components));
+  vtkDP::addFieldValue(output, "Layout", static_cast<double>(result.pca.model.layout));
   vtkDP::addFieldValue(output, "PaperD0", r.paperD0);
   vtkDP::addFieldValue(output, "PaperD1", r.paperD1);
   vtkDP::addFieldValue(output, "PaperRatio", r.paperRatio);
@@ -441,7 +449,8 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
   }
   vtkDP::addFieldValue(output, "ComponentsPerFrame",
                        static_cast<double>(r.components) /
-                           static_cast<double>(this->GetNumberOfInputFrames()));
+                           static_cast<double>(timeDimensions(result.pca.model.layout,
+                                                              this->GetNumberOfInputFrames())));
 }
 
 void vtkPCACompressFilter::FillDetail(std::size_t frame, vtkPolyData* output)
@@ -525,11 +534,12 @@ void vtkPCACompressFilter::WarnIfWeak(std::size_t frames)
   // PCA pays off when a few shapes explain the take; keeping most of the frames' worth of
   // components means the motion is not low-rank, or the tracking shakes.
   const dp::PcaReport& r = this->Internal->Result->report;
-  if (frames >= 8 && 2 * r.components > frames)
+  const std::size_t possible = timeDimensions(this->Internal->Result->pca.model.layout, frames);
+  if (frames >= 8 && 2 * r.components > possible)
   {
-    vtkWarningMacro(<< "kept " << r.components << " of " << frames
-                    << " components for the error target: the motion is not low-rank, or the "
-                       "tracking shakes; the compression is weak ("
+    vtkWarningMacro(<< "kept " << r.components << " of " << possible
+                    << " possible components for the error target: the motion is not low-rank, "
+                       "or the tracking shakes; the compression is weak ("
                     << r.bitsPerVertexFrame << " bits per vertex per frame)");
   }
 }

@@ -29,8 +29,10 @@
  * "MaxError" (world units), "MaxErrorRelative" (of the diagonal), "RmsError" (world units),
  * with DISTANCE_TO_DATA "DistanceToDataInput" and "DistanceToDataDecompressed" (RMS, world
  * units) and "DistanceToDataGrowth" (percent), and "ComponentsPerFrame" (components kept over
- * frames: above 1/2, with a target of the motion's, the compression is weak and a warning says
- * so; so does an input without polygons, which is unlikely to be one mesh moving).
+ * what the frames allow, one a frame in the shape layout and three in the trajectory layout;
+ * "Layout" says which was kept: above 1/2, with a target of the motion's, the compression is weak
+ * and a warning says so; so does an input without polygons, which is unlikely to be one mesh
+ * moving).
  *
  * A detail layer (an input from vtkSurfaceDetailFilter: a fine mesh with field data
  * "DetailLevels" > 0, "BasePoints", "BaseTriangles", point data "Detail"): the tracked (base)
@@ -77,7 +79,8 @@ public:
   enum LayoutType
   {
     TRAJECTORIES = 0, // the paper: basis = trajectories, weights per vertex
-    SHAPES = 1        // Alexa & Mueller: basis = shapes, weights per frame (glTF morph targets)
+    SHAPES = 1,       // Alexa & Mueller: basis = shapes, weights per frame (glTF morph targets)
+    AUTOMATIC = 2     // both coded, the one of fewer bits kept (field data "Layout" says which)
   };
   enum ErrorMeasureType
   {
@@ -87,8 +90,8 @@ public:
   };
 
   ///@{
-  /** Layout of the decomposition (default SHAPES). */
-  vtkSetClampMacro(Layout, int, TRAJECTORIES, SHAPES);
+  /** Layout of the decomposition (default AUTOMATIC). */
+  vtkSetClampMacro(Layout, int, TRAJECTORIES, AUTOMATIC);
   vtkGetMacro(Layout, int);
   ///@}
 

@@ -265,7 +265,7 @@ class TestPCACompressFilter(TempDirTestCase):
     def test_blender_imports_every_frame_and_morph_target(self):
         glb = self.path("tube.glb")
         self.write(glb, ErrorTarget=0.2)
-        f = self.compressor(ErrorTarget=0.2)
+        f = self.compressor(ErrorTarget=0.2, Layout=1)  # a .glb holds the shape layout
         f.Update()
         k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
         report = blender_report(glb, (0, 7, FRAMES - 1))
@@ -379,7 +379,11 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertIsNone(reader.GetOutput().GetPointData().GetArray("Colors"))
         self.assertIsNone(reader.GetOutput().GetFieldData().GetArray("ColourBytes"))
         with open(self.path("partly.dpz"), "rb") as f:
-            self.assertEqual(f.read(12)[8:], (1).to_bytes(4, "little"))  # format version 1
+            self.assertEqual(f.read(12)[8:], (4).to_bytes(4, "little"))  # format version 4
+        # No colour stream in it: the file is as large as the colourless sequence's.
+        self.write(self.path("plain.dpz"))
+        self.assertEqual(os.path.getsize(self.path("partly.dpz")),
+                         os.path.getsize(self.path("plain.dpz")))
 
     def test_the_gltf_export_plays_each_frames_colours(self):
         source, colours = self.coloured()
@@ -426,7 +430,9 @@ class TestPCACompressFilter(TempDirTestCase):
         rec = MessageRecorder(f)
         f.Update()
         fd = dsa.WrapDataObject(f.GetOutput()).FieldData
-        self.assertAlmostEqual(fd["ComponentsPerFrame"][0], fd["Components"][0] / FRAMES)
+        per_frame = 3 if fd["Layout"][0] == 0 else 1  # trajectories: x y z a frame
+        self.assertAlmostEqual(fd["ComponentsPerFrame"][0],
+                               fd["Components"][0] / (per_frame * FRAMES))
         self.assertLessEqual(fd["ComponentsPerFrame"][0], 0.5)
         self.assertEqual(rec.warnings, [])
 
@@ -448,7 +454,8 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertIn("Deformable Track", text)
         fd = dsa.WrapDataObject(f.GetOutput()).FieldData
         self.assertGreater(fd["ComponentsPerFrame"][0], 0.5)
-        self.assertIn(f"kept {int(fd['Components'][0])} of {FRAMES} components", text)
+        possible = 3 * FRAMES if fd["Layout"][0] == 0 else FRAMES
+        self.assertIn(f"kept {int(fd['Components'][0])} of {possible} possible components", text)
         self.assertIn("the compression is weak", text)
 
     def test_against_the_data_the_distance_to_the_points_grows_at_most_as_asked(self):

@@ -372,6 +372,24 @@ CompressedSequence compressSequence(const double* positions, std::size_t vertice
                                     const std::vector<double>& times,
                                     const std::function<bool(double)>& progress)
 {
+  if (options.layout == PcaLayout::Automatic)
+  {
+    // Each layout in turn, each with half of the progress.
+    PcaOptions o = options;
+    CompressedSequence kept;
+    for (PcaLayout layout : {PcaLayout::Shapes, PcaLayout::Trajectories})
+    {
+      o.layout = layout;
+      const double from = layout == PcaLayout::Shapes ? 0.0 : 0.5;
+      CompressedSequence coded =
+          compressSequence(positions, vertices, frames, o, triangles, times,
+                           [&](double f) { return !progress || progress(from + 0.5 * f); });
+      if (layout == PcaLayout::Shapes ||
+          coded.report.bitsPerVertexFrame < kept.report.bitsPerVertexFrame)
+        kept = std::move(coded);
+    }
+    return kept;
+  }
   validateInput(positions, vertices, frames, options, triangles, times);
   auto report = [&](double fraction)
   {

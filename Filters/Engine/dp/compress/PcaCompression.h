@@ -52,7 +52,9 @@ namespace dp
 enum class PcaLayout : std::uint8_t
 {
   Trajectories = 0, // the paper: basis = trajectories, weights per vertex
-  Shapes = 1        // Alexa & Mueller: basis = shapes, weights per frame
+  Shapes = 1,       // Alexa & Mueller: basis = shapes, weights per frame
+  Automatic = 2     // an option only: both are coded and the one of fewer bits is kept (a model
+                    // and a file always hold one of the two)
 };
 
 enum class PcaErrorMeasure
@@ -78,7 +80,7 @@ constexpr double MaximumFitGrowth = 1000;
 
 struct PcaOptions
 {
-  PcaLayout layout = PcaLayout::Shapes;
+  PcaLayout layout = PcaLayout::Automatic;
   PcaErrorMeasure measure = PcaErrorMeasure::KarniGotsman;
   double target = 0.2;        // KG in %, max vertex error / diagonal, or RMS deviation
   std::size_t components = 0; // > 0: this many, and the target only sets the quantisation
@@ -182,7 +184,8 @@ void holdColours(std::vector<std::uint8_t>& held, const std::vector<std::uint8_t
 
 /**
  * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at
- * 3 * vertices * t). Throws std::invalid_argument for empty or non-finite input or a target
+ * 3 * vertices * t); with PcaLayout::Automatic in both layouts, keeping the fewer bits (ties to
+ * the shapes). Throws std::invalid_argument for empty or non-finite input or a target
  * out of range. `progress` (may be empty) is called with a fraction in [0, 1], on the caller's
  * thread only; returning false aborts (std::runtime_error "aborted"). The candidate component
  * counts are coded on several threads (TBB; as many at once as fit in 1 GiB of working memory):

@@ -75,9 +75,10 @@ struct GlbSummary
   std::size_t vertices = 0, shapes = 0;
 };
 
-/** Writes `sequence` to `path` (.glb). Throws std::invalid_argument for the trajectory layout,
- *  a sequence without triangles or colours of the wrong count, std::runtime_error when the file
- *  cannot be written. */
+/** Writes `sequence` to `path` (.glb); one of the trajectory layout is decomposed again as
+ *  shapes (within a quarter of its coding error). Throws std::invalid_argument for a sequence
+ *  without triangles or colours of the wrong count, std::runtime_error when the file cannot be
+ *  written. */
 GlbSummary writeGlb(const std::string& path, const CompressedSequence& sequence,
                     const GlbOptions& options = {});
 
