@@ -187,31 +187,63 @@ private:
   std::vector<std::int64_t> Values;
 };
 
-// The cheapest predictor of each per-vertex column (the values are exact: every predictor sees
-// what the decoder will).
-std::vector<VertexPredictor> chooseVertexPredictors(const VertexRows& rows,
-                                                    const VertexTraversal& t)
+/** Each per-vertex column's cheapest predictor (the values are exact: every predictor sees what
+ *  the decoder will), and the regressions' predictions, kept for the coding pass (their solves
+ *  are most of the coder's time). Without regressions, the mean or nothing. */
+struct VertexPredictions
 {
-  std::vector<std::array<double, VertexPredictors>> cost(rows.columns);
-  for (std::size_t i = 0; i < t.vertices(); ++i)
+  std::vector<VertexPredictor> chosen;
+  std::vector<std::int64_t> light, heavy; // row-major by vertex index, as the rows
+
+  VertexPredictions(const VertexRows& rows, const VertexTraversal& t, bool regressions)
+      : light(regressions ? rows.values.size() : 0), heavy(light.size())
   {
-    const std::size_t v = t.order[i];
-    RowPredictor predictor(rows.values.data(), rows.columns, &t.earlier[t.start[i]],
-                           t.start[i + 1] - t.start[i], v);
-    for (std::size_t c = 0; c < rows.columns; ++c)
+    const int predictors = regressions ? VertexPredictors : 2;
+    std::vector<std::array<double, VertexPredictors>> cost(rows.columns);
+    for (auto& c : cost)
+      c.fill(std::numeric_limits<double>::infinity());
+    for (auto& c : cost)
+      std::fill(c.begin(), c.begin() + predictors, 0.0);
+    for (std::size_t i = 0; i < t.vertices(); ++i)
     {
-      const std::int64_t value = rows.values[v * rows.columns + c];
-      for (int p = 0; p < VertexPredictors; ++p)
-        cost[c][p] += costOf(value - predictor.predict(c, static_cast<VertexPredictor>(p)));
-      predictor.learn(c);
+      const std::size_t v = t.order[i];
+      RowPredictor predictor(rows.values.data(), rows.columns, &t.earlier[t.start[i]],
+                             t.start[i + 1] - t.start[i], v);
+      for (std::size_t c = 0; c < rows.columns; ++c)
+      {
+        const std::size_t at = v * rows.columns + c;
+        const std::int64_t value = rows.values[at];
+        cost[c][0] += costOf(value);
+        cost[c][1] += costOf(value - predictor.predict(c, VertexPredictor::Mean));
+        if (regressions)
+        {
+          light[at] = predictor.predict(c, VertexPredictor::LightRegression);
+          heavy[at] = predictor.predict(c, VertexPredictor::HeavyRegression);
+          cost[c][2] += costOf(value - light[at]);
+          cost[c][3] += costOf(value - heavy[at]);
+        }
+        predictor.learn(c);
+      }
+    }
+    for (const auto& c : cost)
+      chosen.push_back(
+          static_cast<VertexPredictor>(std::min_element(c.begin(), c.end()) - c.begin()));
+  }
+
+  /** Entry (v, c)'s prediction by its column's predictor (`predictor`: v's, at column c). */
+  std::int64_t operator()(RowPredictor& predictor, std::size_t at, std::size_t c) const
+  {
+    switch (chosen[c])
+    {
+    case VertexPredictor::LightRegression:
+      return light[at];
+    case VertexPredictor::HeavyRegression:
+      return heavy[at];
+    default:
+      return predictor.predict(c, chosen[c]);
     }
   }
-  std::vector<VertexPredictor> chosen;
-  for (const auto& c : cost)
-    chosen.push_back(
-        static_cast<VertexPredictor>(std::min_element(c.begin(), c.end()) - c.begin()));
-  return chosen;
-}
+};
 
 int chooseTimeOrder(const std::int64_t* v, const TimeColumn& c)
 {
@@ -244,7 +276,7 @@ int getChoice(RangeDecoder& d)
 }
 
 void encodeRows(RangeEncoder& e, Models& models, const VertexRows& rows,
-                const std::vector<VertexPredictor>& predictors, const VertexTraversal& t)
+                const VertexPredictions& predictions, const VertexTraversal& t)
 {
   RowResiduals residuals(rows);
   for (std::size_t i = 0; i < t.vertices(); ++i)
@@ -255,13 +287,12 @@ void encodeRows(RangeEncoder& e, Models& models, const VertexRows& rows,
     RowPredictor predictor(rows.values.data(), rows.columns, earlier, count, v);
     for (std::size_t c = 0; c < rows.columns; ++c)
     {
-      const std::int64_t r =
-          rows.values[v * rows.columns + c] - predictor.predict(c, predictors[c]);
+      const std::size_t at = v * rows.columns + c;
+      const std::int64_t r = rows.values[at] - predictions(predictor, at, c);
       e.integer(models.vertex(rows.component[c], residuals.neighbours(earlier, count, c),
                               residuals.own(v, c)),
                 r);
       residuals.set(v, c, r);
-      predictor.learn(c);
     }
   }
 }
@@ -302,7 +333,8 @@ void codeTimeColumn(Value* v, const TimeColumn& column, int order, Models& model
 
 } // namespace
 
-std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTraversal& traversal)
+std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTraversal& traversal,
+                                      ModelEffort effort)
 {
   const PcaModel& m = q.model;
   const std::size_t k = m.components(), nv = traversal.vertices();
@@ -313,11 +345,11 @@ std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTravers
   for (std::size_t v = 0; v < nv; ++v)
     for (std::size_t c = 0; c < rows.columns; ++c)
       rows.values[v * rows.columns + c] = modelValue(q, m.layout, nv, v, c);
-  const std::vector<VertexPredictor> predictors = chooseVertexPredictors(rows, traversal);
+  const VertexPredictions predictions(rows, traversal, effort == ModelEffort::Full);
   const std::vector<TimeColumn> columns = timeColumnsOf(m.layout, m.frames, k);
 
   RangeEncoder e;
-  for (VertexPredictor p : predictors)
+  for (VertexPredictor p : predictions.chosen)
     putChoice(e, static_cast<int>(p));
   std::vector<int> orders;
   for (const TimeColumn& c : columns)
@@ -326,7 +358,7 @@ std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTravers
     putChoice(e, orders.back());
   }
   Models models;
-  encodeRows(e, models, rows, predictors, traversal);
+  encodeRows(e, models, rows, predictions, traversal);
   for (std::size_t i = 0; i < columns.size(); ++i)
     codeTimeColumn(timeData(q, m.layout, columns[i]), columns[i], orders[i], models,
                    [&](IntegerModel& model, const std::int64_t* v, std::size_t at, std::int64_t p)

@@ -40,8 +40,18 @@
 namespace dp::compress
 {
 
+/** How hard the encoder works: Full tries every predictor; Quick leaves out the regressions
+ *  (a valid stream, a few percent larger, in a fraction of the time: the bit-rate search ranks
+ *  its candidates so). */
+enum class ModelEffort
+{
+  Full,
+  Quick
+};
+
 /** The range coder's bytes of q's mean, basis and weights integers. */
-std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTraversal& traversal);
+std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTraversal& traversal,
+                                      ModelEffort effort = ModelEffort::Full);
 
 /** Fills q.meanIntegers, basisIntegers and weightIntegers from `bytes`, for the model of
  *  `layout` with the counts given (q.model's other fields are left as they are). */

@@ -98,6 +98,7 @@ public:
   }
 
   double diagonal() const { return Diagonal; }
+  bool quantised() const { return Options.quantise; }
 
   /** The component counts worth coding: the one asked for, or a range by the target. */
   std::vector<std::size_t> candidates() const
@@ -118,7 +119,8 @@ public:
   }
 
   /** k components coded: float PCA, or quantised at the largest step meeting the target. */
-  Candidate code(std::size_t k, const compress::VertexTraversal& mesh) const
+  Candidate code(std::size_t k, const compress::VertexTraversal& mesh,
+                 compress::ModelEffort effort) const
   {
     MatrixXd basis, weights;
     D.factors(k, basis, weights);
@@ -132,7 +134,7 @@ public:
     }
     c.model = quantisedToTarget(k, basis, weights);
     const QuantisedPca& q = c.model;
-    c.payload = compress::encodeModel(q, mesh);
+    c.payload = compress::encodeModel(q, mesh, effort);
     c.bits = 8.0 * static_cast<double>(c.payload.size());
     c.plainBits = compress::fixedWidthBits(q.meanIntegers.data(), q.meanIntegers.size());
     for (std::size_t j = 0; j < k; ++j)
@@ -311,57 +313,78 @@ int candidatesAtOnce(const Decomposition& d, const std::vector<std::size_t>& can
       std::clamp(fit, 1.0, static_cast<double>(std::max<std::size_t>(allowed, 1))));
 }
 
-/** The fewest bits so far among coded candidates; ties go to the earlier candidate (the smaller
- *  count), so the winner does not depend on the order they finish in. */
-class BestCandidate
+/** The `Keep` fewest bits so far among coded candidates; ties go to the earlier candidate (the
+ *  smaller count), so the choice does not depend on the order they finish in. */
+class BestCandidates
 {
 public:
-  explicit BestCandidate(std::size_t none) : Index(none)
-  {
-    Best.bits = std::numeric_limits<double>::infinity();
-  }
+  explicit BestCandidates(std::size_t keep) : Keep(keep) {}
   void offer(Candidate&& coded, std::size_t index)
   {
     const std::lock_guard<std::mutex> lock(Mutex);
-    if (coded.bits < Best.bits || (coded.bits == Best.bits && index < Index))
-    {
-      Best = std::move(coded);
-      Index = index;
-    }
+    Kept.emplace_back(index, std::move(coded));
+    std::sort(Kept.begin(), Kept.end(),
+              [](const auto& a, const auto& b) {
+                return a.second.bits < b.second.bits ||
+                       (a.second.bits == b.second.bits && a.first < b.first);
+              });
+    if (Kept.size() > Keep)
+      Kept.pop_back();
   }
-  std::size_t index() const { return Index; }
-  Candidate take() { return std::move(Best); }
+  std::vector<std::pair<std::size_t, Candidate>> take() { return std::move(Kept); }
 
 private:
   std::mutex Mutex;
-  Candidate Best;
-  std::size_t Index;
+  std::size_t Keep;
+  std::vector<std::pair<std::size_t, Candidate>> Kept; // (candidate index, coded), best first
 };
 
+// How many of the candidates ranked at ModelEffort::Quick are coded in full: the bits against the
+// component count are flat near the best, and the regressions gain about alike on neighbours.
+constexpr std::size_t FullyCoded = 3;
+
 /**
- * Codes every candidate count (each searches its step over 8-10 quantisations: about 0.2 s at
- * 1 000 vertices x 150 frames and 120-140 components) side by side, and keeps the fewest bits:
- * the same choice, and the same bytes, for any thread count. `report` (which may throw to
+ * Codes every candidate count side by side (each searches its step over 8-10 quantisations and
+ * is ranked by its quick coding), then codes the best FullyCoded in full and keeps the fewest
+ * bits: the same choice, and the same bytes, for any thread count. `report` (which may throw to
  * abort) is called on the caller's thread only.
  */
 Candidate codeCandidates(const RateSearch& search, const std::vector<std::size_t>& candidates,
                          const compress::VertexTraversal& mesh, const Decomposition& d,
                          const std::function<void(double)>& report, std::size_t& bestK)
 {
-  BestCandidate best(candidates.size());
+  BestCandidates ranked(FullyCoded);
   std::atomic<std::size_t> done{0};
   const std::thread::id caller = std::this_thread::get_id();
   auto codeOne = [&](std::size_t c)
   {
-    best.offer(search.code(candidates[c], mesh), c);
+    ranked.offer(search.code(candidates[c], mesh, compress::ModelEffort::Quick), c);
     const std::size_t finished = ++done;
     if (std::this_thread::get_id() == caller)
-      report(0.3 + 0.65 * static_cast<double>(finished) / static_cast<double>(candidates.size()));
+      report(0.3 + 0.5 * static_cast<double>(finished) / static_cast<double>(candidates.size()));
   };
   tbb::task_arena arena(candidatesAtOnce(d, candidates));
   arena.execute([&] { tbb::parallel_for(std::size_t{0}, candidates.size(), codeOne); });
-  bestK = best.index() < candidates.size() ? candidates[best.index()] : 0;
-  return best.take();
+  std::vector<std::pair<std::size_t, Candidate>> finalists = ranked.take();
+  if (search.quantised())
+    arena.execute(
+        [&]
+        {
+          tbb::parallel_for(std::size_t{0}, finalists.size(),
+                            [&](std::size_t f)
+                            {
+                              Candidate& c = finalists[f].second;
+                              c.payload = compress::encodeModel(c.model, mesh);
+                              c.bits = 8.0 * static_cast<double>(c.payload.size());
+                            });
+        });
+  report(0.95);
+  BestCandidates best(1);
+  for (auto& [index, coded] : finalists)
+    best.offer(std::move(coded), index);
+  std::vector<std::pair<std::size_t, Candidate>> winner = best.take();
+  bestK = winner.empty() ? 0 : candidates[winner.front().first];
+  return winner.empty() ? Candidate{} : std::move(winner.front().second);
 }
 
 } // namespace
