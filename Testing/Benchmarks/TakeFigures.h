@@ -41,6 +41,7 @@ inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vect
 {
   const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
   PcaOptions options;
+  options.layout = PcaLayout::Shapes; // the table's KG column: the shape layout
   options.target = kg;
   const CompressedSequence c = compressSequence(take.data(), nv, frames, options, mesh.triangles());
   std::vector<double> decoded(take.size());
