@@ -207,7 +207,7 @@ struct VertexPredictions
     for (std::size_t i = 0; i < t.vertices(); ++i)
     {
       const std::size_t v = t.order[i];
-      RowPredictor predictor(rows.values.data(), rows.columns, &t.earlier[t.start[i]],
+      RowPredictor predictor(rows.values.data(), rows.columns, t.earlier.data() + t.start[i],
                              t.start[i + 1] - t.start[i], v);
       for (std::size_t c = 0; c < rows.columns; ++c)
       {
@@ -282,7 +282,7 @@ void encodeRows(RangeEncoder& e, Models& models, const VertexRows& rows,
   for (std::size_t i = 0; i < t.vertices(); ++i)
   {
     const std::size_t v = t.order[i];
-    const std::size_t* earlier = &t.earlier[t.start[i]];
+    const std::size_t* earlier = t.earlier.data() + t.start[i];
     const std::size_t count = t.start[i + 1] - t.start[i];
     RowPredictor predictor(rows.values.data(), rows.columns, earlier, count, v);
     for (std::size_t c = 0; c < rows.columns; ++c)
@@ -305,7 +305,7 @@ void decodeRows(RangeDecoder& d, Models& models, VertexRows& rows,
   for (std::size_t i = 0; i < t.vertices(); ++i)
   {
     const std::size_t v = t.order[i];
-    const std::size_t* earlier = &t.earlier[t.start[i]];
+    const std::size_t* earlier = t.earlier.data() + t.start[i];
     const std::size_t count = t.start[i + 1] - t.start[i];
     RowPredictor predictor(rows.values.data(), rows.columns, earlier, count, v);
     for (std::size_t c = 0; c < rows.columns; ++c)
