@@ -149,7 +149,7 @@ TEST(ModelCoding, ValuesBeyondTheLimitAreRefused)
 
 // The prediction over the mesh earns its keep: the tube's positions (a smooth field over the
 // mesh) cost fewer bytes than the same values scattered over the vertices (about half).
-TEST(ModelCoding, ASmoothFieldCostsFarLessThanTheSameValuesScattered)
+TEST(ModelCoding, ASmoothFieldCostsLessThanTheSameValuesScattered)
 {
   const dp::BendingTube tube = tubeMesh(80, 40);
   const std::size_t n = tube.numberOfVertices(), frames = 4, k = 2;

@@ -295,3 +295,31 @@ class TempDirTestCase(unittest.TestCase):
 
     def path(self, *parts):
         return os.path.join(self.tmp, *parts)
+
+
+def sheet_with_an_unexplained_frame(folder, frame=3, frames=6):
+    """Samples the waving sheet into FOLDER (FRAMES frames of 4000 points, no .series) and gives
+    frame FRAME a ball of points beside the sheet that no deformation of a template explains:
+    the tracker flags that frame."""
+    import numpy as np
+    from vtkmodules.numpy_interface import dataset_adapter as dsa
+    import dynamicpoints
+    run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", frames, "--points", 4000,
+             folder)
+    os.remove(os.path.join(folder, "points.series"))
+    name = os.path.join(folder, "frame_%04d.ply" % frame)
+    reader = dynamicpoints.vtkPointSequenceSource()
+    reader.SetFileName(name)
+    reader.Update()
+    data = dsa.WrapDataObject(reader.GetOutput())
+    points, normals = np.asarray(data.Points), np.asarray(data.PointData["Normals"])
+    size = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
+    outward = np.random.default_rng(3).normal(size=(1500, 3))
+    outward /= np.linalg.norm(outward, axis=1)[:, None]
+    ball = points.max(axis=0) + 0.3 * size + 0.1 * size * outward
+    with open(name, "w") as out:
+        out.write("ply\nformat ascii 1.0\nelement vertex %d\n" % (len(points) + len(ball)))
+        out.write("".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")))
+        out.write("end_header\n")
+        np.savetxt(out, np.hstack([np.vstack([points, ball]), np.vstack([normals, outward])]),
+                   fmt="%.7g")

@@ -18,7 +18,8 @@ from vtkmodules.vtkIOXML import vtkXMLPolyDataReader
 
 import dynamicpoints
 from dp_testing import (PLUGIN, TempDirTestCase, blender_addon_import, blender_open_tracked,
-                        blender_report, glb_colours, run_tool, tool, validate_gltf)
+                        blender_report, glb_colours, run_tool, sheet_with_an_unexplained_frame,
+                        tool, validate_gltf)
 
 FRAMES = 30  # the built-in sequence
 
@@ -543,24 +544,7 @@ class TestBadInput(TempDirTestCase):
     def test_a_frame_the_mesh_cannot_explain_is_flagged_in_the_report(self):
         # Frame 3 gets a ball of points beside the sheet that no deformation of the template
         # explains: the job finishes, says which frame to distrust, and the report lists it.
-        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 6, "--points", 4000,
-                 self.path("seq"))
-        os.remove(self.path("seq", "points.series"))
-        reader = dynamicpoints.vtkPointSequenceSource()
-        reader.SetFileName(self.path("seq", "frame_0003.ply"))
-        reader.Update()
-        frame = dsa.WrapDataObject(reader.GetOutput())
-        points, normals = np.asarray(frame.Points), np.asarray(frame.PointData["Normals"])
-        size = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-        outward = np.random.default_rng(3).normal(size=(1500, 3))
-        outward /= np.linalg.norm(outward, axis=1)[:, None]
-        ball = points.max(axis=0) + 0.3 * size + 0.1 * size * outward
-        with open(self.path("seq", "frame_0003.ply"), "w") as out:
-            out.write("ply\nformat ascii 1.0\nelement vertex %d\n" % (len(points) + len(ball)))
-            out.write("".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")))
-            out.write("end_header\n")
-            np.savetxt(out, np.hstack([np.vstack([points, ball]), np.vstack([normals, outward])]),
-                       fmt="%.7g")
+        sheet_with_an_unexplained_frame(self.path("seq"))
         # The default template size: at 300 vertices the waving sheet's boundary is marginal
         # (30 frames: 5-6 frames fail without the ball, with plain or accelerated coarse steps).
         result = self.run_main(self.path("seq"))

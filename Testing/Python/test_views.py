@@ -9,7 +9,8 @@ import subprocess
 import time
 import unittest
 
-from dp_testing import PLUGIN, TempDirTestCase, XWindows, run_node_tool, run_tool, x_display
+from dp_testing import (PLUGIN, TempDirTestCase, XWindows, run_node_tool, run_tool,
+                        sheet_with_an_unexplained_frame, x_display)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -120,27 +121,7 @@ class TestViews(TempDirTestCase):
     def test_a_flagged_frame_is_reached_from_the_plot(self):
         # Frame 3 gets a ball of points beside the sheet that no deformation explains (as in
         # test_main_job): it is flagged, and the page's plot takes the user there.
-        import numpy as np
-        from vtkmodules.numpy_interface import dataset_adapter as dsa
-        import dynamicpoints
-        run_tool("dynamicpoints-sample", "--mesh", "sheet", "--frames", 6, "--points", 4000,
-                 self.path("seq"))
-        os.remove(self.path("seq", "points.series"))
-        reader = dynamicpoints.vtkPointSequenceSource()
-        reader.SetFileName(self.path("seq", "frame_0003.ply"))
-        reader.Update()
-        frame = dsa.WrapDataObject(reader.GetOutput())
-        points, normals = np.asarray(frame.Points), np.asarray(frame.PointData["Normals"])
-        size = np.linalg.norm(points.max(axis=0) - points.min(axis=0))
-        outward = np.random.default_rng(3).normal(size=(1500, 3))
-        outward /= np.linalg.norm(outward, axis=1)[:, None]
-        ball = points.max(axis=0) + 0.3 * size + 0.1 * size * outward
-        with open(self.path("seq", "frame_0003.ply"), "w") as out:
-            out.write("ply\nformat ascii 1.0\nelement vertex %d\n" % (len(points) + len(ball)))
-            out.write("".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz")))
-            out.write("end_header\n")
-            np.savetxt(out, np.hstack([np.vstack([points, ball]), np.vstack([normals, outward])]),
-                       fmt="%.7g")
+        sheet_with_an_unexplained_frame(self.path("seq"))
         out, _, report = self.run_main("--detail-levels", 0, self.path("seq"))
         self.assertEqual(report["framesFailed"], [3])
         seen = self.check_page(os.path.join(out, "view.html"), report, None)

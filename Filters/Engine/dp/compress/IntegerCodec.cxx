@@ -104,15 +104,14 @@ EarlierNeighbours::EarlierNeighbours(const std::vector<std::int64_t>& triangles,
 void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::size_t count,
                  std::size_t stride)
 {
-  const EarlierNeighbours* mesh = nullptr;
   int best = 0;
   double bestCost = std::numeric_limits<double>::infinity();
   for (int order = 0; order <= 2; ++order)
   {
     double cost = 0;
     for (std::size_t i = 0; i < count; ++i)
-      cost +=
-          std::log2(1.0 + static_cast<double>(zigzag(v[i] - predicted(v, i, stride, order, mesh))));
+      cost += std::log2(
+          1.0 + static_cast<double>(zigzag(v[i] - predicted(v, i, stride, order, nullptr))));
     if (cost < bestCost)
     {
       bestCost = cost;
@@ -121,7 +120,7 @@ void putSequence(std::vector<std::uint8_t>& out, const std::int64_t* v, std::siz
   }
   out.push_back(static_cast<std::uint8_t>(best));
   for (std::size_t i = 0; i < count; ++i)
-    putVarint(out, zigzag(v[i] - predicted(v, i, stride, best, mesh)));
+    putVarint(out, zigzag(v[i] - predicted(v, i, stride, best, nullptr)));
 }
 
 ByteReader::ByteReader(const std::uint8_t* data, std::size_t size, std::string what)

@@ -185,22 +185,21 @@ VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std
 
 RowPredictor::RowPredictor(const std::int64_t* values, std::size_t columns,
                            const std::size_t* neighbours, std::size_t count, std::size_t vertex)
-    : Values(values), Columns(columns), Vertex(vertex), Count(std::min(count, MaximumNeighbours)),
-      AllCount(count), All(neighbours)
+    : Values(values), Columns(columns), Vertex(vertex), Neighbours(neighbours), All(count),
+      Count(std::min(count, MaximumNeighbours))
 {
-  std::copy(neighbours, neighbours + Count, Neighbours);
 }
 
 std::int64_t RowPredictor::mean(std::size_t c) const
 {
-  if (AllCount == 0)
+  if (All == 0)
     return 0;
   // Summed as doubles: exact for what a valid file holds (|v| <= 2^60, at most a few hundred
   // neighbours lose only the last bits, identically on both sides).
   double sum = 0;
-  for (std::size_t n = 0; n < AllCount; ++n)
-    sum += static_cast<double>(Values[All[n] * Columns + c]);
-  const double m = std::nearbyint(sum / static_cast<double>(AllCount));
+  for (std::size_t n = 0; n < All; ++n)
+    sum += static_cast<double>(Values[Neighbours[n] * Columns + c]);
+  const double m = std::nearbyint(sum / static_cast<double>(All));
   return std::abs(m) <= static_cast<double>(ValueLimit) ? static_cast<std::int64_t>(m) : 0;
 }
 

@@ -89,10 +89,9 @@ private:
   std::int64_t regression(std::size_t c, double ridge);
 
   const std::int64_t* Values;
-  std::size_t Columns, Vertex, Count;
-  std::size_t Neighbours[MaximumNeighbours];
-  std::size_t AllCount;
-  const std::size_t* All;
+  std::size_t Columns, Vertex;
+  const std::size_t* Neighbours; // all of them take part in the mean,
+  std::size_t All, Count;        // the first Count (at most MaximumNeighbours) in the regression
   // The normal equations so far: G = sum_c x_c x_c^T, b = sum_c x_c v_c (x_c: the neighbours'
   // values of column c, v_c this vertex's).
   double G[MaximumNeighbours * MaximumNeighbours] = {};

@@ -275,8 +275,11 @@ int getChoice(RangeDecoder& d)
   return 2 * high + d.evenBit();
 }
 
-void encodeRows(RangeEncoder& e, Models& models, const VertexRows& rows,
-                const VertexPredictions& predictions, const VertexTraversal& t)
+/** The per-vertex rows coded entry by entry in the traversal's order; Coder: encodes or decodes
+ *  the entry at `at` (column c) given its model and the vertex's RowPredictor, and returns its
+ *  residual (the residuals around give the next entries' contexts). */
+template <typename Coder>
+void codeRows(Models& models, const VertexRows& rows, const VertexTraversal& t, Coder&& code)
 {
   RowResiduals residuals(rows);
   for (std::size_t i = 0; i < t.vertices(); ++i)
@@ -287,35 +290,9 @@ void encodeRows(RangeEncoder& e, Models& models, const VertexRows& rows,
     RowPredictor predictor(rows.values.data(), rows.columns, earlier, count, v);
     for (std::size_t c = 0; c < rows.columns; ++c)
     {
-      const std::size_t at = v * rows.columns + c;
-      const std::int64_t r = rows.values[at] - predictions(predictor, at, c);
-      e.integer(models.vertex(rows.component[c], residuals.neighbours(earlier, count, c),
-                              residuals.own(v, c)),
-                r);
-      residuals.set(v, c, r);
-    }
-  }
-}
-
-void decodeRows(RangeDecoder& d, Models& models, VertexRows& rows,
-                const std::vector<VertexPredictor>& predictors, const VertexTraversal& t,
-                const std::string& what)
-{
-  RowResiduals residuals(rows);
-  for (std::size_t i = 0; i < t.vertices(); ++i)
-  {
-    const std::size_t v = t.order[i];
-    const std::size_t* earlier = t.earlier.data() + t.start[i];
-    const std::size_t count = t.start[i + 1] - t.start[i];
-    RowPredictor predictor(rows.values.data(), rows.columns, earlier, count, v);
-    for (std::size_t c = 0; c < rows.columns; ++c)
-    {
-      const std::int64_t r = d.integer(models.vertex(
-          rows.component[c], residuals.neighbours(earlier, count, c), residuals.own(v, c)));
-      rows.values[v * rows.columns + c] =
-          checkedValue(predictor.predict(c, predictors[c]) + r, what);
-      residuals.set(v, c, r);
-      predictor.learn(c);
+      IntegerModel& model = models.vertex(
+          rows.component[c], residuals.neighbours(earlier, count, c), residuals.own(v, c));
+      residuals.set(v, c, code(model, predictor, v * rows.columns + c, c));
     }
   }
 }
@@ -358,7 +335,13 @@ std::vector<std::uint8_t> encodeModel(const QuantisedPca& q, const VertexTravers
     putChoice(e, orders.back());
   }
   Models models;
-  encodeRows(e, models, rows, predictions, traversal);
+  codeRows(models, rows, traversal,
+           [&](IntegerModel& model, RowPredictor& predictor, std::size_t at, std::size_t c)
+           {
+             const std::int64_t r = rows.values[at] - predictions(predictor, at, c);
+             e.integer(model, r);
+             return r;
+           });
   for (std::size_t i = 0; i < columns.size(); ++i)
     codeTimeColumn(timeData(q, m.layout, columns[i]), columns[i], orders[i], models,
                    [&](IntegerModel& model, const std::int64_t* v, std::size_t at, std::int64_t p)
@@ -394,7 +377,14 @@ void decodeModel(const std::uint8_t* bytes, std::size_t size, const std::string&
                                std::to_string(orders.back()) + " (the file is corrupt)");
   }
   Models models;
-  decodeRows(d, models, rows, predictors, traversal, what);
+  codeRows(models, rows, traversal,
+           [&](IntegerModel& model, RowPredictor& predictor, std::size_t at, std::size_t c)
+           {
+             const std::int64_t r = d.integer(model);
+             rows.values[at] = checkedValue(predictor.predict(c, predictors[c]) + r, what);
+             predictor.learn(c);
+             return r;
+           });
   for (std::size_t v = 0; v < nv; ++v)
     for (std::size_t c = 0; c < rows.columns; ++c)
       modelValue(q, layout, nv, v, c) = rows.values[v * rows.columns + c];
