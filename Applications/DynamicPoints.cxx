@@ -7,9 +7,10 @@
 #include "CommandLine.h"
 #include "Console.h"
 #include "MainJob.h"
-#include "TrackerOptionFlags.h"
+#include "OptionFlags.h"
 
-#include "dp/compress/PcaCompression.h"
+#include "dp/compress/CompressionFigures.h"
+#include "dp/compress/CompressionOptions.h"
 #include "dp/field/TemplateMesh.h"
 #include "dp/geometry/SubdivisionMap.h"
 #include "dp/track/FrameFigures.h"
@@ -81,15 +82,15 @@ Options:
                       where it brings the mesh a fifth closer to the data
   --frames N          track only the first N frames (default: all; they are listed
                       with their times in OUTPUT/first-frames.series)
-  --fit-growth P      compression judged against the data (default): the decompressed
+  --fit-growth P      compression judged against the data (the default): the decompressed
                       mesh's RMS distance to the points may grow by at most P percent
-                      over the tracked mesh's (default: 10)
+                      over the tracked mesh's (default: 10); --set compression.fitGrowth=P
   --error-target KG   compression judged against the motion instead: Karni-Gotsman error
-                      in percent (e.g. 0.2)
+                      in percent (e.g. 0.2); --set compression.measure=kg
+                      --set compression.kgTarget=KG
   --colour-tolerance L where the points carry colour: the levels (of 255) a stored
-                      colour may differ from the tracked one; more holds each vertex's
-                      colour while it stays within L (no flicker, a smaller colour
-                      stream); 0: lossless (default: 4)
+                      colour may differ from the tracked one (default: 4; 0: lossless);
+                      --set compression.colourTolerance=L
   --no-view           write no view.html and no paraview-state.py
   --meshopt           store tracked.glb's buffers compressed by meshoptimizer
                       (EXT_meshopt_compression: smaller, for web viewers such as
@@ -97,10 +98,15 @@ Options:
   --output DIR        where results go (default: dynamicpoints-output)
   --quiet             no per-frame table and no progress bar
   --describe-report   print the per-frame figures of report.json (and of the track
-                      filter's field data) as a Markdown table, and exit
-  --describe-limits   print the ranges of --vertices, --error-target, --fit-growth,
-                      --colour-tolerance and --detail-levels (also the ParaView
-                      properties') as JSON, and exit
+                      filter's field data) and the compression's as Markdown tables,
+                      and exit
+  --describe-limits   print the ranges of --vertices and --detail-levels (also the
+                      ParaView properties') as JSON, and exit
+)";
+
+const char* const CompressionHelpHead = R"(
+Compression options (--set NAME=VALUE; vtkPCACompressFilter and the writers have them as
+properties; the main job judges the compression against the data by default):
 )";
 
 const char* const UsageEnd = R"(  -h, --help          show this help
@@ -116,8 +122,8 @@ extern "C" void onInterrupt(int)
   dp::cli::Interrupted = 1;
 }
 
-// The ranges the main job, the filters and their ParaView properties share besides the tracker's
-// options (--describe-limits; a test checks the plugin's XML against them).
+// The ranges the main job, the filters and their ParaView properties share besides the option
+// tables (--describe-limits; a test checks the plugin's XML against them).
 std::string limitsJson()
 {
   const nlohmann::json limits = {
@@ -125,18 +131,6 @@ std::string limitsJson()
        {{"default", dp::TemplateOptions{}.targetVertices},
         {"minimum", dp::MinimumTemplateVertices},
         {"maximum", dp::MaximumTemplateVertices}}},
-      {"karniGotsmanTarget",
-       {{"default", dp::PcaOptions{}.target},
-        {"minimum", dp::MinimumKarniGotsmanTarget},
-        {"maximum", dp::MaximumKarniGotsmanTarget}}},
-      {"fitGrowth",
-       {{"default", Settings{}.fitGrowth},
-        {"minimum", dp::MinimumFitGrowth},
-        {"maximum", dp::MaximumFitGrowth}}},
-      {"colourTolerance",
-       {{"default", Settings{}.colourTolerance},
-        {"minimum", 0},
-        {"maximum", dp::MaximumColourTolerance}}},
       {"detailLevels",
        {{"default", "auto"}, {"minimum", 0}, {"maximum", dp::MaximumDetailLevels}}}};
   return limits.dump(2) + "\n";
@@ -201,14 +195,17 @@ Settings parse(int argc, char** argv, bool& help)
     else if (arg == "--frames")
       s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
     else if (arg == "--error-target")
-      s.errorTarget = parseDouble(arg, optionValue(argc, argv, i), dp::MinimumKarniGotsmanTarget,
-                                  dp::MaximumKarniGotsmanTarget);
+    {
+      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.kgTarget");
+      s.compression.measure = dp::CompressionMeasure::KarniGotsman;
+    }
     else if (arg == "--fit-growth")
-      s.fitGrowth =
-          parseDouble(arg, optionValue(argc, argv, i), dp::MinimumFitGrowth, dp::MaximumFitGrowth);
+    {
+      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.fitGrowth");
+      s.compression.measure = dp::CompressionMeasure::DistanceToData;
+    }
     else if (arg == "--colour-tolerance")
-      s.colourTolerance = static_cast<int>(
-          parseCount(arg, optionValue(argc, argv, i), 0, dp::MaximumColourTolerance));
+      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.colourTolerance");
     else if (arg == "--quiet")
       s.quiet = true;
     else if (arg == "--meshopt")
@@ -217,7 +214,7 @@ Settings parse(int argc, char** argv, bool& help)
       s.view = false;
     else if (parsePrintFlag(arg, argc, argv, i, s))
       continue;
-    else if (parseTrackerOptionFlag(arg, argc, argv, i, s.tracker))
+    else if (parseTableOptionFlag(arg, argc, argv, i, {&s.tracker, &s.compression}))
       continue;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
@@ -359,6 +356,27 @@ int runBatch(const Settings& base, dp::cli::Ranks& ranks)
   return ranks.broadcast(status);
 }
 
+// What --print-options, --describe-options, --describe-report and --describe-limits print.
+std::string described(const Settings& s)
+{
+  if (s.printOptions == "values")
+    return dp::cli::tableOptionsJson(s.tracker, &s.compression).dump(2) + "\n";
+  if (s.printOptions == "json")
+    return nlohmann::ordered_json{
+               {"tracker", nlohmann::ordered_json::parse(dp::trackerOptions().describeJson())},
+               {"compression",
+                nlohmann::ordered_json::parse(dp::compressionOptions().describeJson())}}
+               .dump(2) +
+           "\n";
+  if (s.printOptions == "report") // per frame, then the compression's
+    return dp::FrameFigures::markdown() + "\n" + dp::CompressionFigures::markdown();
+  if (s.printOptions == "limits")
+    return limitsJson();
+  // The two tables, each as its page of the documentation holds it.
+  return dp::trackerOptions().describeMarkdown() + "\n" +
+         dp::compressionOptions().describeMarkdown();
+}
+
 int run(int argc, char** argv, dp::cli::Ranks& ranks)
 {
   bool help = false;
@@ -366,17 +384,14 @@ int run(int argc, char** argv, dp::cli::Ranks& ranks)
   if (help)
   {
     if (ranks.rank() == 0)
-      std::cout << Usage << dp::cli::TrackerOptionHelp << UsageEnd;
+      std::cout << Usage << dp::cli::OptionHelp << UsageEnd << CompressionHelpHead
+                << dp::cli::compressionOptionHelp(Settings{}.compression);
     return 0;
   }
   if (!settings.printOptions.empty())
   {
     if (ranks.rank() == 0)
-      std::cout << (settings.printOptions == "values"   ? dp::trackerOptionsJson(settings.tracker)
-                    : settings.printOptions == "json"   ? dp::trackerOptionTableJson()
-                    : settings.printOptions == "report" ? dp::FrameFigures::markdown()
-                    : settings.printOptions == "limits" ? limitsJson()
-                                                        : dp::trackerOptionTableMarkdown());
+      std::cout << described(settings);
     return 0;
   }
   std::signal(SIGINT, onInterrupt);

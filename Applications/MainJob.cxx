@@ -13,6 +13,8 @@
 #include "Console.h"
 #include "FrameReport.h"
 
+#include "dp/compress/CompressionFigures.h"
+#include "dp/compress/CompressionOptions.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/export/GltfExport.h"
 #include "dp/geometry/BoundingBox.h"
@@ -160,7 +162,7 @@ private:
   {
     watch(Tracker);
     Tracker->SetInputConnection(Source->GetOutputPort());
-    for (const dp::TrackerOptionDescription& option : dp::trackerOptionTable())
+    for (const dp::TrackerOptionDescription& option : dp::trackerOptions())
       Tracker->SetTrackerOption(option.name.c_str(), option.get(S.tracker));
     Tracker->SetTemplateVertices(S.vertices);
     Tracker->SetTemplateSource(S.templateFrom);
@@ -407,14 +409,11 @@ private:
   // vtkPCACompressFilter as any VTK pipeline would.
   void compress()
   {
-    const bool againstData = !(S.errorTarget > 0);
+    const bool againstData = S.compression.measure == dp::CompressionMeasure::DistanceToData;
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
     compressor->SetInputConnection(Detail->GetOutputPort());
-    compressor->SetErrorMeasure(againstData ? vtkPCACompressFilter::DISTANCE_TO_DATA
-                                            : vtkPCACompressFilter::KARNI_GOTSMAN);
-    compressor->SetErrorTarget(againstData ? S.fitGrowth : S.errorTarget);
-    compressor->SetColourTolerance(S.colourTolerance);
+    compressor->SetCompressionOptions(S.compression);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";
@@ -523,28 +522,25 @@ private:
                 m["geometryBitsPerInputVertexFrame"].get<double>());
   }
 
-  // The codec's figures in report.json's "compression".
+  // The codec's figures in report.json's "compression": each of dp::CompressionFigures the
+  // filter's output carries, by its name.
   void recordCompression(vtkPolyData* result)
   {
-    for (const char* name :
-         {"Components", "Layout", "KGError", "RmsError", "MaxError", "MaxErrorRelative",
-          "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "PaperD0", "PaperD1",
-          "PaperRatio", "ComponentsPerFrame"})
-      Compression[name] = fieldValue(result, name);
+    for (const dp::CompressionFigures::Field& field : dp::CompressionFigures::fields())
+    {
+      const double value = fieldValue(result, field.name);
+      if (!std::isnan(value))
+        Compression[field.name] =
+            field.count ? nlohmann::json(std::llround(value)) : nlohmann::json(value);
+    }
     // The input as raw points: float32 x y z, and r g b bytes where the file keeps colour.
-    const double colourBytes = fieldValue(result, "ColourBytes"); // NaN: no colour
-    const double bytesPerPoint = colourBytes > 0 ? 15.0 : 12.0;
+    const double bytesPerPoint = Compression.contains("ColourBytes") ? 15.0 : 12.0;
     double rawBytes = 0;
     for (const FrameRecord& r : Records)
       rawBytes += bytesPerPoint * r.figures.points;
     Compression["Bytes"] = fs::file_size(Dpz);
     Compression["InputPointBytes"] = rawBytes;
     Compression["InputPointsOverFile"] = rawBytes / static_cast<double>(fs::file_size(Dpz));
-    if (colourBytes > 0)
-    {
-      Compression["ColourBytes"] = static_cast<long long>(colourBytes);
-      Compression["ColourTolerance"] = S.colourTolerance;
-    }
   }
 
   // The compressed file's name for the "Compressed:" line, with its colour's share when it has
@@ -556,8 +552,9 @@ private:
     return Dpz.string() +
            " (with colour: " + std::to_string(Compression["ColourBytes"].get<long long>()) +
            " of its " + std::to_string(Compression["Bytes"].get<long long>()) + " bytes, " +
-           (S.colourTolerance > 0 ? "within " + std::to_string(S.colourTolerance) + " levels"
-                                  : std::string("lossless")) +
+           (S.compression.colourTolerance > 0
+                ? "within " + std::to_string(S.compression.colourTolerance) + " levels"
+                : std::string("lossless")) +
            ")";
   }
 
@@ -566,9 +563,8 @@ private:
     const double before = fieldValue(result, "DistanceToDataInput");
     const double after = fieldValue(result, "DistanceToDataDecompressed");
     const double growth = fieldValue(result, "DistanceToDataGrowth");
-    Compression["Target"] =
-        "the distance to the points grows by at most " + std::to_string(S.fitGrowth) + " %";
-    Compression["FitGrowthAllowedPercent"] = S.fitGrowth;
+    Compression["Target"] = dp::targetSaid(S.compression);
+    Compression["FitGrowthAllowedPercent"] = S.compression.fitGrowth;
     Compression["DistanceToPointsTracked"] = before;
     Compression["DistanceToPointsDecompressed"] = after;
     Compression["FitGrowthPercent"] = growth;
@@ -579,7 +575,7 @@ private:
                 Compression["BitsPerVertexFrame"].get<double>(),
                 Compression["InputPointsOverFile"].get<double>(),
                 Compression.contains("ColourBytes") ? ", r g b bytes" : "", after, before, growth,
-                S.fitGrowth);
+                S.compression.fitGrowth);
   }
 
   void sayMotionFit(const dp::CompressedSequence& sequence)
@@ -590,17 +586,17 @@ private:
       Compression["note"] = "most of the frames' worth of components were kept: the motion is "
                             "not low-rank, the tracking shakes, or the KG target asks for more "
                             "than the data's noise (the default target is the data's)";
-    Compression["Target"] = "KG " + std::to_string(S.errorTarget) + " %";
-    Compression["ErrorTargetKG"] = S.errorTarget;
+    Compression["Target"] = dp::targetSaid(S.compression);
     std::printf("Compressed: %s, %zu components, %.3g bits per vertex per frame (%.1fx "
                 "smaller than float32), KG error %.3g%%\n",
                 dpzSaid().c_str(), sequence.report.components, sequence.report.bitsPerVertexFrame,
                 96.0 / sequence.report.bitsPerVertexFrame, sequence.report.kgError);
     if (weak)
       std::printf("Compression is weak: %zu components for %zu frames (the motion is not "
-                  "low-rank, the tracking shakes, or KG %.3g %% asks for more than the data's "
-                  "noise: without --error-target the target is the data's)\n",
-                  sequence.report.components, Written.size(), S.errorTarget);
+                  "low-rank, the tracking shakes, or %s asks for more than the data's noise: "
+                  "without --error-target the target is the data's)\n",
+                  sequence.report.components, Written.size(),
+                  dp::targetSaid(S.compression).c_str());
   }
 
   /** Writes tracked.dpz and tracked.glb (each beside its name, renamed when complete); says
@@ -644,6 +640,23 @@ private:
       fs::remove(plain);
   }
 
+  // The options the run used, by the names --set and --options take (the tables'), and the
+  // main job's own.
+  nlohmann::json optionsJson() const
+  {
+    return {
+        {"tracker", nlohmann::json::parse(dp::trackerOptions().valuesJson(S.tracker))},
+        {"compression", nlohmann::json::parse(dp::compressionOptions().valuesJson(S.compression))},
+        {"vertices", S.vertices},
+        {"templateFrom", S.templateFrom == vtkDeformableTrackFilter::TEMPLATE_FROM_MESH ? "mesh"
+                         : S.templateFrom == vtkDeformableTrackFilter::TEMPLATE_FROM_POINTS
+                             ? "points"
+                             : "auto"},
+        {"detailLevels",
+         S.detailLevels < 0 ? nlohmann::json("auto") : nlohmann::json(S.detailLevels)},
+        {"frames", S.frames > 0 ? nlohmann::json(S.frames) : nlohmann::json("all")}};
+  }
+
   // report.json and report.png.
   void writeReport() const
   {
@@ -662,6 +675,7 @@ private:
         {"choice", DetailChoice},
         {"fineVertices", DetailLevels > 0 ? FineVertices : MeshVertices}};
     report["boundingBoxDiagonal"] = Diagonal;
+    report["options"] = optionsJson();
     nlohmann::json perFrame = nlohmann::json::array(), failedFrames = nlohmann::json::array();
     std::vector<double> ms;
     int retried = 0;

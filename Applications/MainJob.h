@@ -2,7 +2,7 @@
 // The main job on one input: read, track, write frame by frame, compress, report.
 #pragma once
 
-#include "dp/compress/PcaCompression.h"
+#include "dp/compress/CompressionOptions.h"
 #include "dp/field/TemplateMesh.h"
 #include "dp/track/TrackerOptions.h"
 
@@ -22,11 +22,7 @@ struct Settings
   int vertices = static_cast<int>(dp::TemplateOptions{}.targetVertices);
   int detailLevels = vtkSurfaceDetailFilter::AUTOMATIC; // --detail-levels; -1: from the data
   int templateFrom = vtkDeformableTrackFilter::TEMPLATE_AUTO;
-  long long frames = 0;   // 0: all
-  double errorTarget = 0; // KG in percent; 0: judged against the data (fitGrowth)
-  double fitGrowth = 10;  // percent the decompressed mesh's distance to the points may grow
-  int colourTolerance = dp::PcaOptions{}.colourTolerance; // levels (of 255) a stored colour
-                                                          // may differ from the tracked one
+  long long frames = 0; // 0: all
   bool quiet = false;
   bool meshopt = false;
   bool view = true; // view.html and paraview-state.py (--no-view: neither)
@@ -34,6 +30,16 @@ struct Settings
   // (--describe-options), "report" (--describe-report).
   std::string printOptions;
   dp::TrackerOptions tracker; // --set, --options
+  // --set compression.*, --fit-growth, --error-target, --colour-tolerance; judged against the
+  // data unless told otherwise.
+  dp::CompressionOptions compression = againstData();
+
+  static dp::CompressionOptions againstData()
+  {
+    dp::CompressionOptions o;
+    o.measure = dp::CompressionMeasure::DistanceToData;
+    return o;
+  }
 };
 
 /** One input's whole job; an error it did not foresee is its failure (said on stderr), not the

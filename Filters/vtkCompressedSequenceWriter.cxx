@@ -1,11 +1,13 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkCompressedSequenceWriter.h"
 
+#include "dp/compress/CompressionOptions.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/export/GltfExport.h"
 
 #include "vtkCallbackCommand.h"
 #include "vtkCommand.h"
+#include "vtkDPOptions.h"
 #include "vtkErrorCode.h"
 #include "vtkExecutive.h"
 #include "vtkInformation.h"
@@ -20,21 +22,36 @@
 
 vtkStandardNewMacro(vtkCompressedSequenceWriter);
 
-vtkCompressedSequenceWriter::vtkCompressedSequenceWriter()
+vtkCompressedSequenceWriter::vtkCompressedSequenceWriter() : Options(new dp::CompressionOptions)
 {
-  // The codec's defaults (the engine's), not a copy of them.
-  vtkNew<vtkPCACompressFilter> codec;
-  this->Layout = codec->GetLayout();
-  this->ErrorMeasure = codec->GetErrorMeasure();
-  this->ErrorTarget = codec->GetErrorTarget();
-  this->NumberOfComponents = codec->GetNumberOfComponents();
-  this->ColourTolerance = codec->GetColourTolerance();
   this->MeshoptCompression = dp::GlbOptions().meshopt;
 }
 
 vtkCompressedSequenceWriter::~vtkCompressedSequenceWriter()
 {
   this->SetFileName(nullptr);
+  delete this->Options;
+}
+
+void vtkCompressedSequenceWriter::SetCompressionOption(const char* name, double value)
+{
+  std::string error;
+  if (name && dp::compressionOptions().has(name) &&
+      dp::compressionOptions().find(name).name == "compression.quantise")
+    error = "the writers always quantise (compression.quantise is vtkPCACompressFilter's)";
+  else if (vtkDP::setOption(dp::compressionOptions(), *this->Options, name, value, error))
+    this->Modified();
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+}
+
+double vtkCompressedSequenceWriter::GetCompressionOption(const char* name)
+{
+  std::string error;
+  const double v = vtkDP::getOption(dp::compressionOptions(), *this->Options, name, error);
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+  return v;
 }
 
 int vtkCompressedSequenceWriter::FillInputPortInformation(int, vtkInformation* info)
@@ -71,15 +88,15 @@ bool endsWith(const std::string& name, const char* extension)
 }
 // Runs `codec` on the writer's input with the writer's settings, its progress shown as the
 // writer's; returns its failure, empty when none.
-std::string compress(vtkCompressedSequenceWriter* writer, vtkPCACompressFilter* codec, bool glb)
+std::string compress(vtkCompressedSequenceWriter* writer, vtkPCACompressFilter* codec,
+                     const dp::CompressionOptions& writerOptions, bool glb)
 {
   // The codec is a consumer of the writer's input of its own: it asks for every time step.
   codec->SetInputConnection(writer->GetInputConnection(0, 0));
-  codec->SetLayout(glb ? vtkPCACompressFilter::SHAPES : writer->GetLayout()); // glTF: shapes
-  codec->SetErrorMeasure(writer->GetErrorMeasure());
-  codec->SetErrorTarget(writer->GetErrorTarget());
-  codec->SetNumberOfComponents(writer->GetNumberOfComponents());
-  codec->SetColourTolerance(writer->GetColourTolerance());
+  dp::CompressionOptions options = writerOptions;
+  if (glb)
+    options.layout = dp::PcaLayout::Shapes; // what glTF's morph targets hold
+  codec->SetCompressionOptions(options);
   ProgressRelay relay{writer, vtksys::SystemTools::GetFilenameName(writer->GetFileName())};
   vtkNew<vtkCallbackCommand> progress;
   progress->SetCallback(relayProgress);
@@ -105,7 +122,7 @@ void vtkCompressedSequenceWriter::WriteData()
   }
   const bool glb = endsWith(name, ".glb");
   vtkNew<vtkPCACompressFilter> codec;
-  std::string failure = compress(this, codec, glb);
+  std::string failure = compress(this, codec, *this->Options, glb);
   const dp::CompressedSequence* sequence = codec->GetCompressedSequence();
   if (failure.empty() && sequence) // none on pieces other than 0: process 0 writes
   {
@@ -138,11 +155,9 @@ void vtkCompressedSequenceWriter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
   os << indent << "FileName: " << (this->FileName ? this->FileName : "(none)") << "\n";
-  os << indent << "Layout: " << this->Layout << "\n";
-  os << indent << "ErrorMeasure: " << this->ErrorMeasure << "\n";
-  os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
-  os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
-  os << indent << "ColourTolerance: " << this->ColourTolerance << "\n";
+  for (const auto& option : dp::compressionOptions())
+    if (option.name != "compression.quantise")
+      os << indent << option.name << ": " << option.said(option.get(*this->Options)) << "\n";
   os << indent << "MeshoptCompression: " << this->MeshoptCompression << "\n";
   os << indent << "Piece: " << this->Piece << " of " << this->NumberOfPieces << "\n";
 }

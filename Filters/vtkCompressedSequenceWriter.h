@@ -5,9 +5,9 @@
  *
  * Input: temporal vtkPolyData of fixed connectivity (the output of vtkDeformableTrackFilter, or
  * an animated mesh read from disk). Write() runs vtkPCACompressFilter on the input (which pulls
- * every time step; principal components chosen for ErrorTarget, quantised, predicted,
- * zstd-coded; see dp/compress/PcaCompression.h) and writes its result with the engine's writers to
- * FileName, in the format its extension names:
+ * every time step; principal components chosen for the error target, quantised, predicted
+ * over the mesh and along time, range-coded; see dp/compress/PcaCompression.h) and writes its
+ * result with the engine's writers to FileName, in the format its extension names:
  *  - .dpz: DynamicPoints' compressed sequence (version, checksums), read back by
  *    vtkCompressedSequenceReader;
  *  - .glb: glTF 2.0 binary, one morph target per shape component and one animation of the
@@ -28,6 +28,11 @@
 #include "DynamicPointsFiltersModule.h" // for export macro
 #include "vtkWriter.h"
 
+namespace dp
+{
+struct CompressionOptions;
+}
+
 class DYNAMICPOINTSFILTERS_EXPORT vtkCompressedSequenceWriter : public vtkWriter
 {
 public:
@@ -42,19 +47,31 @@ public:
   ///@}
 
   ///@{
-  /** As vtkPCACompressFilter: Layout (default AUTOMATIC; .glb is always SHAPES), ErrorMeasure
-   *  (default KARNI_GOTSMAN), ErrorTarget (default 0.2), NumberOfComponents (0: chosen for
-   *  the target), ColourTolerance (0: colours lossless). */
-  vtkSetClampMacro(Layout, int, 0, 2);
-  vtkGetMacro(Layout, int);
-  vtkSetClampMacro(ErrorMeasure, int, 0, 2);
-  vtkGetMacro(ErrorMeasure, int);
-  vtkSetMacro(ErrorTarget, double);
-  vtkGetMacro(ErrorTarget, double);
-  vtkSetClampMacro(NumberOfComponents, int, 0, VTK_INT_MAX);
-  vtkGetMacro(NumberOfComponents, int);
-  vtkSetClampMacro(ColourTolerance, int, 0, 64);
-  vtkGetMacro(ColourTolerance, int);
+  /** The compression options, as vtkPCACompressFilter's (dp::compressionOptions() describes
+   *  them) but Quantize: a file always holds the quantised, coded components. .glb is always
+   *  in the SHAPES layout, which glTF needs. */
+  void SetCompressionOption(const char* name, double value);
+  double GetCompressionOption(const char* name);
+  void SetLayout(int value) { this->SetCompressionOption("Layout", value); }
+  int GetLayout() { return static_cast<int>(this->GetCompressionOption("Layout")); }
+  void SetErrorMeasure(int value) { this->SetCompressionOption("ErrorMeasure", value); }
+  int GetErrorMeasure() { return static_cast<int>(this->GetCompressionOption("ErrorMeasure")); }
+  void SetKGTarget(double value) { this->SetCompressionOption("KGTarget", value); }
+  double GetKGTarget() { return this->GetCompressionOption("KGTarget"); }
+  void SetMaxVertexTarget(double value) { this->SetCompressionOption("MaxVertexTarget", value); }
+  double GetMaxVertexTarget() { return this->GetCompressionOption("MaxVertexTarget"); }
+  void SetFitGrowth(double value) { this->SetCompressionOption("FitGrowth", value); }
+  double GetFitGrowth() { return this->GetCompressionOption("FitGrowth"); }
+  void SetNumberOfComponents(int value) { this->SetCompressionOption("NumberOfComponents", value); }
+  int GetNumberOfComponents()
+  {
+    return static_cast<int>(this->GetCompressionOption("NumberOfComponents"));
+  }
+  void SetColourTolerance(int value) { this->SetCompressionOption("ColourTolerance", value); }
+  int GetColourTolerance()
+  {
+    return static_cast<int>(this->GetCompressionOption("ColourTolerance"));
+  }
   ///@}
 
   ///@{
@@ -83,12 +100,7 @@ protected:
   void WriteData() override;
 
   char* FileName = nullptr;
-  // The codec's options; their defaults are the engine's, set by the constructor.
-  int Layout;
-  int ErrorMeasure;
-  double ErrorTarget;
-  int NumberOfComponents;
-  int ColourTolerance;
+  dp::CompressionOptions* Options; // the codec's; their defaults are the engine's
   vtkTypeBool MeshoptCompression;
   int Piece = 0;
   int NumberOfPieces = 1;

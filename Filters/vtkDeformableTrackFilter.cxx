@@ -7,6 +7,7 @@
 #include "dp/track/FrameFigures.h"
 #include "dp/track/Tracker.h"
 #include "dp/track/TrackerOptionTable.h"
+#include "vtkDPOptions.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"
@@ -111,42 +112,20 @@ void vtkDeformableTrackFilter::SetTemplateVertices(int vertices)
 
 void vtkDeformableTrackFilter::SetTrackerOption(const char* name, double value)
 {
-  try
-  {
-    const dp::TrackerOptionDescription& option = dp::trackerOption(name ? name : "");
-    if (std::isnan(value))
-    {
-      vtkErrorMacro(<< "tracker option " << option.name << ": NaN is no value");
-      return;
-    }
-    double v = (option.zeroAllowed && value == 0)
-                   ? 0.0
-                   : std::clamp(value, option.minimum, option.maximum);
-    if (option.kind != dp::OptionKind::Real)
-      v = std::round(v);
-    if (option.get(this->Internal->Options) != v)
-    {
-      option.set(this->Internal->Options, v);
-      this->Modified();
-    }
-  }
-  catch (const std::invalid_argument& e)
-  {
-    vtkErrorMacro(<< e.what());
-  }
+  std::string error;
+  if (vtkDP::setOption(dp::trackerOptions(), this->Internal->Options, name, value, error))
+    this->Modified();
+  if (!error.empty())
+    vtkErrorMacro(<< error);
 }
 
 double vtkDeformableTrackFilter::GetTrackerOption(const char* name)
 {
-  try
-  {
-    return dp::trackerOption(name ? name : "").get(this->Internal->Options);
-  }
-  catch (const std::invalid_argument& e)
-  {
-    vtkErrorMacro(<< e.what());
-    return 0;
-  }
+  std::string error;
+  const double v = vtkDP::getOption(dp::trackerOptions(), this->Internal->Options, name, error);
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+  return v;
 }
 
 vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
@@ -619,7 +598,7 @@ void vtkDeformableTrackFilter::ShowProgressOf(std::size_t frame, bool done)
 void vtkDeformableTrackFilter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  for (const dp::TrackerOptionDescription& option : dp::trackerOptionTable())
+  for (const dp::TrackerOptionDescription& option : dp::trackerOptions())
     os << indent << option.name << ": " << option.get(this->Internal->Options) << "\n";
   os << indent << "TemplateVertices: " << this->TemplateVertices << "\n";
   os << indent << "TemplateSource: " << this->TemplateSource << "\n";

@@ -1,11 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPCACompressFilter.h"
 
+#include "dp/compress/CompressionFigures.h"
+#include "dp/compress/CompressionOptions.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/finemesh/DetailCompression.h"
 #include "dp/geometry/SubdivisionMap.h"
 #include "dp/track/DataFit.h"
+#include "vtkDPOptions.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"
@@ -33,12 +36,6 @@ vtkStandardNewMacro(vtkPCACompressFilter);
 namespace
 {
 
-// How many components the frames allow: one per frame in the shape layout (a weight per frame),
-// three in the trajectory layout (x y z per frame in each basis vector).
-std::size_t timeDimensions(dp::PcaLayout layout, std::size_t frames)
-{
-  return layout == dp::PcaLayout::Trajectories ? 3 * frames : frames;
-}
 // Frame `frame`'s colours of `sequence` as point array "Colors" of `output` (none without colour).
 void addColours(const dp::CompressedSequence& sequence, std::size_t frame, vtkPolyData* output)
 {
@@ -74,6 +71,9 @@ struct vtkPCACompressFilter::Internals
   std::unique_ptr<dp::SubdivisionMap> Map;
   std::vector<double> Displacements;
   dp::DetailCompression DetailFit;
+  // The properties (dp::compressionOptions() describes them); their defaults are the engine's.
+  dp::CompressionOptions Options;
+  dp::CompressionFigures Figures; // of Result
 
   std::size_t collected() const
   {
@@ -98,41 +98,51 @@ struct vtkPCACompressFilter::Internals
     Displacements.clear();
     DetailFit = dp::DetailCompression{};
   }
-
-  // The properties' defaults are the engine's (one source: the plugin's XML is checked against
-  // them by a test).
-  static void takeDefaults(vtkPCACompressFilter& f)
-  {
-    const dp::PcaOptions o;
-    f.Layout = static_cast<int>(o.layout); // TRAJECTORIES, SHAPES, AUTOMATIC as the engine's
-    f.ErrorMeasure = o.measure == dp::PcaErrorMeasure::MaxVertexError ? MAX_VERTEX : KARNI_GOTSMAN;
-    f.ErrorTarget = o.target;
-    f.NumberOfComponents = static_cast<int>(o.components);
-    f.Quantize = o.quantise;
-    f.ColourTolerance = o.colourTolerance;
-  }
-
-  // (DISTANCE_TO_DATA sets its own measure and target: dp::compressAgainstData.)
-  static dp::PcaOptions optionsOf(const vtkPCACompressFilter& f)
-  {
-    dp::PcaOptions o;
-    o.layout = static_cast<dp::PcaLayout>(f.Layout);
-    o.measure = f.ErrorMeasure == MAX_VERTEX ? dp::PcaErrorMeasure::MaxVertexError
-                                             : dp::PcaErrorMeasure::KarniGotsman;
-    o.target = f.ErrorTarget;
-    o.components = static_cast<std::size_t>(f.NumberOfComponents);
-    o.quantise = f.Quantize;
-    o.colourTolerance = f.ColourTolerance;
-    return o;
-  }
 };
 
-// The headers' clamps (ColourTolerance here and in vtkCompressedSequenceWriter) say 64.
-static_assert(dp::MaximumColourTolerance == 64, "the ColourTolerance clamps need updating");
+vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals) {}
 
-vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals)
+void vtkPCACompressFilter::SetCompressionOption(const char* name, double value)
 {
-  Internals::takeDefaults(*this);
+  std::string error;
+  if (vtkDP::setOption(dp::compressionOptions(), this->Internal->Options, name, value, error))
+    this->Modified();
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+}
+
+double vtkPCACompressFilter::GetCompressionOption(const char* name)
+{
+  std::string error;
+  const double v = vtkDP::getOption(dp::compressionOptions(), this->Internal->Options, name, error);
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+  return v;
+}
+
+void vtkPCACompressFilter::SetCompressionOptions(const dp::CompressionOptions& options)
+{
+  try
+  {
+    dp::compressionOptions().check(options);
+  }
+  catch (const std::invalid_argument& e)
+  {
+    vtkErrorMacro(<< e.what());
+    return;
+  }
+  this->Internal->Options = options;
+  this->Modified();
+}
+
+const dp::CompressionOptions& vtkPCACompressFilter::GetCompressionOptions() const
+{
+  return this->Internal->Options;
+}
+
+bool vtkPCACompressFilter::AgainstData() const
+{
+  return this->Internal->Options.measure == dp::CompressionMeasure::DistanceToData;
 }
 
 vtkPCACompressFilter::~vtkPCACompressFilter()
@@ -174,7 +184,7 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
   if (in.DetailLevels > 0)
   {
     const std::string error = this->CollectDetail(input, frame);
-    if (!error.empty() || this->ErrorMeasure != DISTANCE_TO_DATA)
+    if (!error.empty() || !this->AgainstData())
       return error;
     return this->CollectData(input, frame);
   }
@@ -211,7 +221,7 @@ std::string vtkPCACompressFilter::CollectFrame(vtkPolyData* input, std::size_t f
     in.Positions.insert(in.Positions.end(), p, p + 3);
   }
   this->CollectColours(input);
-  return this->ErrorMeasure == DISTANCE_TO_DATA ? this->CollectData(input, frame) : std::string();
+  return this->AgainstData() ? this->CollectData(input, frame) : std::string();
 }
 
 std::string vtkPCACompressFilter::CollectDetail(vtkPolyData* input, std::size_t frame)
@@ -287,13 +297,13 @@ void vtkPCACompressFilter::CompressDetail(std::size_t frames,
 {
   Internals& in = *this->Internal;
   const dp::FittedDetail fitted{*in.Map, in.Positions.data(), in.Displacements.data(), frames};
-  if (this->ErrorMeasure == DISTANCE_TO_DATA)
+  if (this->AgainstData())
   {
     std::vector<const dp::FrameSamples*> samples;
     for (const dp::FrameSamples& s : in.Samples)
       samples.push_back(&s);
     in.DetailFit = dp::compressDetailAgainstData(*in.Result, fitted, samples, in.Reach,
-                                                 this->ErrorTarget / 100, progress);
+                                                 in.Options.fitGrowth / 100, progress);
   }
   else
     dp::compressDetailAtDeviation(*in.Result, fitted, std::max(in.Result->report.rmsError, 1e-12));
@@ -354,24 +364,24 @@ std::string vtkPCACompressFilter::Compress()
   const auto vertices = static_cast<std::size_t>(in.Vertices);
   try
   {
-    if (this->ErrorMeasure == DISTANCE_TO_DATA)
+    if (this->AgainstData())
     {
       std::vector<const dp::FrameSamples*> samples;
       for (const dp::FrameSamples& s : in.Samples)
         samples.push_back(&s);
       dp::DataFitCompression c = dp::compressAgainstData(
           dp::TriangleMesh(in.Triangles, vertices), in.Positions.data(), frames, samples, in.Reach,
-          this->ErrorTarget / 100, Internals::optionsOf(*this), times, progress);
+          in.Options.fitGrowth / 100, dp::pcaOptionsOf(in.Options), times, progress);
       in.Before = c.tracked;
       in.After = c.decompressed;
       in.Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
     }
     else
       in.Result = std::make_unique<dp::CompressedSequence>(
-          dp::compressSequence(in.Positions.data(), vertices, frames, Internals::optionsOf(*this),
+          dp::compressSequence(in.Positions.data(), vertices, frames, dp::pcaOptionsOf(in.Options),
                                in.Triangles, times, progress));
     if (in.ColoursInEveryFrame && !in.Colours.empty())
-      dp::setColours(*in.Result, std::move(in.Colours), this->ColourTolerance);
+      dp::setColours(*in.Result, std::move(in.Colours), in.Options.colourTolerance);
     if (in.DetailLevels > 0)
     {
       this->SetProgressText("PCA Compress: compressing the detail layer");
@@ -383,9 +393,29 @@ std::string vtkPCACompressFilter::Compress()
     in.Result.reset();
     return std::string("cannot compress: ") + e.what();
   }
-  if (this->ErrorMeasure != DISTANCE_TO_DATA) // against the data, the data decide the bits
+  in.Figures = this->Figures(frames);
+  if (!this->AgainstData()) // against the data, the data decide the bits
     this->WarnIfWeak(frames);
   return {};
+}
+
+dp::CompressionFigures vtkPCACompressFilter::Figures(std::size_t frames) const
+{
+  const Internals& in = *this->Internal;
+  dp::CompressionFigures f = dp::CompressionFigures::of(*in.Result, frames);
+  if (in.Before.samples > 0)
+  {
+    f.distanceToDataInput = in.Before.rms;
+    f.distanceToDataDecompressed = in.After.rms;
+    f.distanceToDataGrowth = 100 * (in.After.rms / in.Before.rms - 1);
+  }
+  if (in.DetailLevels > 0 && in.DetailFit.fitted.samples > 0)
+  {
+    f.detailDistanceToDataInput = in.DetailFit.fitted.rms;
+    f.detailDistanceToDataDecompressed = in.DetailFit.decompressed.rms;
+    f.detailDistanceToDataGrowth = 100 * in.DetailFit.growth;
+  }
+  return f;
 }
 
 void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
@@ -411,46 +441,12 @@ void vtkPCACompressFilter::FillOutput(std::size_t frame, vtkPolyData* output)
         vtkDP::distancesArray("CompressionError", original, coordinates->GetPointer(0), n));
     addColours(result, frame, output);
   }
-  const dp::PcaReport& r = result.report;
-  vtkDP::addFieldValue(output, "Components", static_cast<double>(r.components));
-  vtkDP::addFieldValue(output, "Layout", static_cast<double>(result.pca.model.layout));
-  vtkDP::addFieldValue(output, "PaperD0", r.paperD0);
-  vtkDP::addFieldValue(output, "PaperD1", r.paperD1);
-  vtkDP::addFieldValue(output, "PaperRatio", r.paperRatio);
-  vtkDP::addFieldValue(output, "BitsPerVertexFrame", r.bitsPerVertexFrame);
-  vtkDP::addFieldValue(output, "QuantizedPlainBitsPerVertexFrame", r.quantisedPlainBits);
-  vtkDP::addFieldValue(output, "KGError", r.kgError);
-  vtkDP::addFieldValue(output, "MaxError", r.maxError);
-  vtkDP::addFieldValue(output, "MaxErrorRelative", r.maxErrorRelative);
-  vtkDP::addFieldValue(output, "RmsError", r.rmsError);
-  if (!result.colours.empty())
+  for (const auto& field : dp::CompressionFigures::fields())
   {
-    vtkDP::addFieldValue(output, "ColourBytes", static_cast<double>(r.colourBytes));
-    vtkDP::addFieldValue(output, "ColourTolerance", r.colourTolerance);
+    const double value = this->Internal->Figures.*field.value;
+    if (!std::isnan(value))
+      vtkDP::addFieldValue(output, field.name, value);
   }
-  if (in.Before.samples > 0)
-  {
-    vtkDP::addFieldValue(output, "DistanceToDataInput", in.Before.rms);
-    vtkDP::addFieldValue(output, "DistanceToDataDecompressed", in.After.rms);
-    vtkDP::addFieldValue(output, "DistanceToDataGrowth", 100 * (in.After.rms / in.Before.rms - 1));
-  }
-  if (in.DetailLevels > 0)
-  {
-    vtkDP::addFieldValue(output, "DetailLevels", in.DetailLevels);
-    vtkDP::addFieldValue(output, "DetailBytes", static_cast<double>(r.detailBytes));
-    vtkDP::addFieldValue(output, "DetailStep", result.detail.step);
-    if (in.DetailFit.fitted.samples > 0)
-    {
-      vtkDP::addFieldValue(output, "DetailDistanceToDataInput", in.DetailFit.fitted.rms);
-      vtkDP::addFieldValue(output, "DetailDistanceToDataDecompressed",
-                           in.DetailFit.decompressed.rms);
-      vtkDP::addFieldValue(output, "DetailDistanceToDataGrowth", 100 * in.DetailFit.growth);
-    }
-  }
-  vtkDP::addFieldValue(output, "ComponentsPerFrame",
-                       static_cast<double>(r.components) /
-                           static_cast<double>(timeDimensions(result.pca.model.layout,
-                                                              this->GetNumberOfInputFrames())));
 }
 
 void vtkPCACompressFilter::FillDetail(std::size_t frame, vtkPolyData* output)
@@ -533,24 +529,19 @@ void vtkPCACompressFilter::WarnIfWeak(std::size_t frames)
 {
   // PCA pays off when a few shapes explain the take; keeping most of the frames' worth of
   // components means the motion is not low-rank, or the tracking shakes.
-  const dp::PcaReport& r = this->Internal->Result->report;
-  const std::size_t possible = timeDimensions(this->Internal->Result->pca.model.layout, frames);
-  if (frames >= 8 && 2 * r.components > possible)
+  const dp::CompressionFigures& f = this->Internal->Figures;
+  if (frames >= 8 && f.componentsPerFrame > 0.5)
   {
-    vtkWarningMacro(<< "kept " << r.components << " of " << possible
+    vtkWarningMacro(<< "kept " << f.components << " of " << f.components / f.componentsPerFrame
                     << " possible components for the error target: the motion is not low-rank, "
                        "or the tracking shakes; the compression is weak ("
-                    << r.bitsPerVertexFrame << " bits per vertex per frame)");
+                    << f.bitsPerVertexFrame << " bits per vertex per frame)");
   }
 }
 
 void vtkPCACompressFilter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "Layout: " << this->Layout << "\n";
-  os << indent << "ErrorMeasure: " << this->ErrorMeasure << "\n";
-  os << indent << "ErrorTarget: " << this->ErrorTarget << "\n";
-  os << indent << "NumberOfComponents: " << this->NumberOfComponents << "\n";
-  os << indent << "Quantize: " << this->Quantize << "\n";
-  os << indent << "ColourTolerance: " << this->ColourTolerance << "\n";
+  for (const auto& option : dp::compressionOptions())
+    os << indent << option.name << ": " << option.said(option.get(this->Internal->Options)) << "\n";
 }

@@ -10,11 +10,12 @@
  * compresses them with dp::compressSequence: principal components of the vertex positions in
  * the paper's layout (basis = trajectories, weights per vertex) or Alexa & Mueller's (basis =
  * shapes, weights per frame), the component count chosen for an error target (Karni-Gotsman
- * error in percent, or the largest vertex error as a fraction of the bounding-box diagonal)
- * or given; then, unless Quantize is off (the paper's float PCA), quantised, predicted over
- * time and zstd-coded. With DISTANCE_TO_DATA the error target is the data's, not the motion's:
- * the decompressed mesh's RMS distance to each frame's points (the input's "DataSamples") may
- * grow by at most ErrorTarget percent.
+ * error in percent, KGTarget; or the largest vertex error as a fraction of the bounding-box
+ * diagonal, MaxVertexTarget) or given; then, unless Quantize is off (the paper's float PCA),
+ * quantised, predicted over the mesh and along time, and range-coded. With DISTANCE_TO_DATA the
+ * error target is the data's, not the motion's: the decompressed mesh's RMS distance to each
+ * frame's points (the input's "DataSamples") may grow by at most FitGrowth percent. The options
+ * are described once, in dp::compressionOptions().
  *
  * Output: the reconstruction at the requested time (the input's time steps), the input's
  * polygons, point array "CompressionError" (distance of each vertex to its input position; the
@@ -24,22 +25,19 @@
  * .glb's COLOR_0), losslessly or within ColourTolerance levels, and the output carries the
  * frame's stored "Colors" too, with field data "ColourBytes" (what the colour stream takes in
  * the .dpz) and "ColourTolerance".
- * Field data: "Components", "PaperD0", "PaperD1", "PaperRatio" (the paper's counts of
- * numbers), "BitsPerVertexFrame", "QuantizedPlainBitsPerVertexFrame", "KGError" (percent),
- * "MaxError" (world units), "MaxErrorRelative" (of the diagonal), "RmsError" (world units),
- * with DISTANCE_TO_DATA "DistanceToDataInput" and "DistanceToDataDecompressed" (RMS, world
- * units) and "DistanceToDataGrowth" (percent), and "ComponentsPerFrame" (components kept over
- * what the frames allow, one a frame in the shape layout and three in the trajectory layout;
- * "Layout" says which was kept: above 1/2, with a target of the motion's, the compression is weak
- * and a warning says so; so does an input without polygons, which is unlikely to be one mesh
- * moving).
+ * Field data: the figures of dp::CompressionFigures (Documentation/MainJob.md lists them):
+ * "Components", "Layout" (the one kept), the paper's counts of numbers, "BitsPerVertexFrame",
+ * the errors ("KGError", "MaxError", "RmsError"), with DISTANCE_TO_DATA the distance to the data
+ * before and after, and "ComponentsPerFrame" (components kept over what the frames allow: above
+ * 1/2, with a target of the motion's, the compression is weak and a warning says so; so does an
+ * input without polygons, which is unlikely to be one mesh moving).
  *
  * A detail layer (an input from vtkSurfaceDetailFilter: a fine mesh with field data
  * "DetailLevels" > 0, "BasePoints", "BaseTriangles", point data "Detail"): the tracked (base)
  * mesh it carries is compressed as above, then the fine mesh's displacements are carried over to
  * the decompressed base and coded through the take (dp::compressDetailAgainstData: with
  * DISTANCE_TO_DATA the decompressed fine mesh's distance to the data grows by at most
- * ErrorTarget percent over the input's; with a motion target the displacements take the base's
+ * FitGrowth percent over the input's; with a motion target the displacements take the base's
  * RMS error). The output is then the decompressed fine mesh, "CompressionError" its vertices'
  * distance to the input's, and field data "DetailLevels", "DetailBytes", "DetailStep" and, with
  * DISTANCE_TO_DATA, "DetailDistanceToDataInput", "DetailDistanceToDataDecompressed",
@@ -67,7 +65,9 @@
 namespace dp
 {
 struct CompressedSequence;
-}
+struct CompressionFigures;
+struct CompressionOptions;
+} // namespace dp
 
 class DYNAMICPOINTSFILTERS_EXPORT vtkPCACompressFilter : public vtkDPTemporalFilter
 {
@@ -84,39 +84,63 @@ public:
   };
   enum ErrorMeasureType
   {
-    KARNI_GOTSMAN = 0,   // ErrorTarget in percent
-    MAX_VERTEX = 1,      // ErrorTarget as a fraction of the bounding-box diagonal
-    DISTANCE_TO_DATA = 2 // ErrorTarget: the percent the distance to the data may grow by
+    KARNI_GOTSMAN = 0,   // KGTarget, percent
+    MAX_VERTEX = 1,      // MaxVertexTarget, a fraction of the bounding-box diagonal
+    DISTANCE_TO_DATA = 2 // FitGrowth: the percent the distance to the data may grow by
   };
 
   ///@{
-  /** Layout of the decomposition (default AUTOMATIC). */
-  vtkSetClampMacro(Layout, int, TRAJECTORIES, AUTOMATIC);
-  vtkGetMacro(Layout, int);
+  /**
+   * Any compression option by its name in dp::CompressionOptions ("compression.fitGrowth") or
+   * its property name ("FitGrowth"); dp::compressionOptions() describes them all (as does
+   * Documentation/Compression.md). A value out of the option's range is clamped to it, as
+   * vtkSetClampMacro does; an unknown name or a NaN is an error. The named accessors below are
+   * this under the property's name.
+   */
+  void SetCompressionOption(const char* name, double value);
+  double GetCompressionOption(const char* name);
   ///@}
 
   ///@{
-  /** What ErrorTarget measures (default KARNI_GOTSMAN) and its value (default 0.2 %).
-   *  DISTANCE_TO_DATA judges the compression against the data the mesh was tracked to (the
-   *  input's field data "DataSamples" and "DataReach", which vtkDeformableTrackFilter writes):
-   *  the decompressed mesh's RMS distance to them may grow by at most ErrorTarget percent over
-   *  the input's (dp::compressAgainstData; 10 is the main job's default). */
-  vtkSetClampMacro(ErrorMeasure, int, KARNI_GOTSMAN, DISTANCE_TO_DATA);
-  vtkGetMacro(ErrorMeasure, int);
-  vtkSetMacro(ErrorTarget, double);
-  vtkGetMacro(ErrorTarget, double);
+  /** Layout of the decomposition (TRAJECTORIES, SHAPES or AUTOMATIC, the default). */
+  void SetLayout(int value) { this->SetCompressionOption("Layout", value); }
+  int GetLayout() { return static_cast<int>(this->GetCompressionOption("Layout")); }
   ///@}
 
   ///@{
-  /** Number of components; 0 (default) chooses the fewest bytes that meet ErrorTarget. */
-  vtkSetClampMacro(NumberOfComponents, int, 0, VTK_INT_MAX);
-  vtkGetMacro(NumberOfComponents, int);
+  /** What the error target measures (KARNI_GOTSMAN, the default; MAX_VERTEX; DISTANCE_TO_DATA)
+   *  and each measure's target: KGTarget (percent, default 0.2), MaxVertexTarget (of the
+   *  bounding-box diagonal, default 0.002), FitGrowth (percent, default 10). DISTANCE_TO_DATA
+   *  judges the compression against the data the mesh was tracked to (the input's field data
+   *  "DataSamples" and "DataReach", which vtkDeformableTrackFilter writes): the decompressed
+   *  mesh's RMS distance to them may grow by at most FitGrowth percent over the input's
+   *  (dp::compressAgainstData). */
+  void SetErrorMeasure(int value) { this->SetCompressionOption("ErrorMeasure", value); }
+  int GetErrorMeasure() { return static_cast<int>(this->GetCompressionOption("ErrorMeasure")); }
+  void SetKGTarget(double value) { this->SetCompressionOption("KGTarget", value); }
+  double GetKGTarget() { return this->GetCompressionOption("KGTarget"); }
+  void SetMaxVertexTarget(double value) { this->SetCompressionOption("MaxVertexTarget", value); }
+  double GetMaxVertexTarget() { return this->GetCompressionOption("MaxVertexTarget"); }
+  void SetFitGrowth(double value) { this->SetCompressionOption("FitGrowth", value); }
+  double GetFitGrowth() { return this->GetCompressionOption("FitGrowth"); }
+  ///@}
+
+  ///@{
+  /** Number of components; 0 (default) chooses the fewest bytes that meet the target. */
+  void SetNumberOfComponents(int value) { this->SetCompressionOption("NumberOfComponents", value); }
+  int GetNumberOfComponents()
+  {
+    return static_cast<int>(this->GetCompressionOption("NumberOfComponents"));
+  }
   ///@}
 
   ///@{
   /** Quantise and code (default on); off: the paper's float PCA. */
-  vtkSetMacro(Quantize, vtkTypeBool);
-  vtkGetMacro(Quantize, vtkTypeBool);
+  void SetQuantize(vtkTypeBool value) { this->SetCompressionOption("Quantize", value); }
+  vtkTypeBool GetQuantize()
+  {
+    return static_cast<vtkTypeBool>(this->GetCompressionOption("Quantize"));
+  }
   vtkBooleanMacro(Quantize, vtkTypeBool);
   ///@}
 
@@ -125,9 +149,18 @@ public:
    *  0 stores them losslessly; more holds each vertex's colour while it stays within that many
    *  levels, which removes the tracked colour's flicker and most of the colour stream's bytes
    *  (dp::setColours). */
-  vtkSetClampMacro(ColourTolerance, int, 0, 64);
-  vtkGetMacro(ColourTolerance, int);
+  void SetColourTolerance(int value) { this->SetCompressionOption("ColourTolerance", value); }
+  int GetColourTolerance()
+  {
+    return static_cast<int>(this->GetCompressionOption("ColourTolerance"));
+  }
   ///@}
+
+#ifndef __VTK_WRAP__
+  /** All the compression options at once (the writers hand theirs over so). */
+  void SetCompressionOptions(const dp::CompressionOptions& options);
+  const dp::CompressionOptions& GetCompressionOptions() const;
+#endif
 
   /** Why the last update failed (the error it reported: a frame that differs from frame 0, a
    *  point that is not finite, the codec's refusal), empty when it did not. */
@@ -147,17 +180,12 @@ protected:
   long long NextInputFrame(std::size_t requestedFrame) override;
   int RequestFrameData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  // The properties; their defaults are the engine's (dp::PcaOptions), set by the constructor.
-  int Layout;
-  int ErrorMeasure;
-  double ErrorTarget;
-  int NumberOfComponents;
-  vtkTypeBool Quantize;
-  int ColourTolerance;
-
 private:
   vtkPCACompressFilter(const vtkPCACompressFilter&) = delete;
   void operator=(const vtkPCACompressFilter&) = delete;
+
+  /** The error measure is DISTANCE_TO_DATA. */
+  bool AgainstData() const;
 
   // RequestFrameData's steps; those returning text return the error, empty when none.
   /** Checks input frame `frame` against frame 0 and keeps its positions. */
@@ -175,6 +203,8 @@ private:
   void FillDetail(std::size_t frame, vtkPolyData* output);
   /** Compresses the frames collected and warns when the compression is weak. */
   std::string Compress();
+  /** The figures of the result (field data), with the fit to the data where it was judged. */
+  dp::CompressionFigures Figures(std::size_t frames) const;
   /** Warns when most of the frames' worth of components were kept (weak compression). */
   void WarnIfWeak(std::size_t frames);
   /** The reconstruction of `frame` with its error and the figures. */

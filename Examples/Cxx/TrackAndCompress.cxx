@@ -87,7 +87,7 @@ bool writeCompressedFiles(vtkDeformableTrackFilter* tracker, double errorTarget,
 {
   vtkNew<vtkCompressedSequenceWriter> files;
   files->SetInputConnection(tracker->GetOutputPort());
-  files->SetErrorTarget(errorTarget);
+  files->SetKGTarget(errorTarget);
   for (const char* name : {"tracked.dpz", "tracked.glb"})
   {
     files->SetFileName((output / name).string().c_str());
@@ -123,12 +123,12 @@ int main(int argc, char** argv)
 
   vtkNew<vtkPCACompressFilter> compressor;
   compressor->SetInputConnection(tracker->GetOutputPort());
-  compressor->SetErrorTarget(0.2); // Karni-Gotsman error, percent
+  compressor->SetKGTarget(0.2); // Karni-Gotsman error, percent
 
   std::ofstream pvd(output / "sequence.pvd");
   if (!writeFrames(source, frames, tracker, compressor, output, pvd))
     return 1;
-  if (!writeCompressedFiles(tracker, compressor->GetErrorTarget(), output))
+  if (!writeCompressedFiles(tracker, compressor->GetKGTarget(), output))
     return 1;
 
   vtkFieldData* figures = compressor->GetOutput()->GetFieldData();

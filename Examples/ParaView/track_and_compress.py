@@ -41,7 +41,7 @@ def main(plugin, series, output, in_gui=False):
     track = DeformableTrack(Input=points)  # noqa: F821 (defined by LoadPlugin)
     track.TemplateVertices = 600
     compress = PCACompress(Input=track)  # noqa: F821
-    compress.ErrorTarget = 0.2
+    compress.KGTarget = 0.2
     if not in_gui:  # the GUI has its progress bar
         print_progress(track)
 
@@ -73,7 +73,7 @@ def main(plugin, series, output, in_gui=False):
           f"KG error {figures.GetArray('KGError').GetValue(0):.3g}%")
     # File > Save Data: the extension picks the plugin's writer, which compresses the same way.
     for name in ("tracked.dpz", "tracked.glb"):
-        SaveData(os.path.join(output, name), proxy=track, ErrorTarget=0.2)
+        SaveData(os.path.join(output, name), proxy=track, KGTarget=0.2)
 
     view.ViewTime = times[len(times) // 2]
     # Look at the sequence from the side (-y), z up.

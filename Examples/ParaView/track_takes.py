@@ -79,7 +79,7 @@ def track(path, output, vertices):
         writer.SetInputConnection(detail.GetOutputPort())
         # The main job's target: the distance to the points may grow by 10 %.
         writer.SetErrorMeasure(dynamicpoints.vtkPCACompressFilter.DISTANCE_TO_DATA)
-        writer.SetErrorTarget(10)
+        writer.SetFitGrowth(10)
         writer.SetFileName(os.path.join(output, name))
         writer.Write()  # an input that failed upstream leaves no file (VTK said why)
         if writer.GetErrorCode() or not os.path.exists(os.path.join(output, name)):

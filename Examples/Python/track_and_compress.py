@@ -52,7 +52,7 @@ def main(argv):
 
     compressor = dynamicpoints.vtkPCACompressFilter()
     compressor.SetInputConnection(tracker.GetOutputPort())
-    compressor.SetErrorTarget(0.2)  # Karni-Gotsman error, percent
+    compressor.SetKGTarget(0.2)  # Karni-Gotsman error, percent
 
     print(f"{frames} frames from {target}")
     print(f"{'frame':>5} {'points':>7} {'rms dist':>10} {'moved':>8} {'max compr. err':>15}")
@@ -83,7 +83,7 @@ def main(argv):
     # from its cache) and writes the format its file name's extension says.
     writer = dynamicpoints.vtkCompressedSequenceWriter()
     writer.SetInputConnection(tracker.GetOutputPort())
-    writer.SetErrorTarget(compressor.GetErrorTarget())
+    writer.SetKGTarget(compressor.GetKGTarget())
     for name in ("tracked.dpz", "tracked.glb"):
         writer.SetFileName(os.path.join(output, name))
         if writer.Write() != 1:

@@ -18,11 +18,11 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 #include "FrameOutputs.h"
+#include "OptionFlags.h"
 #include "PerFrameMesh.h"
 #include "ScalingTable.h"
 #include "TakeFigures.h"
 #include "TakeMeasures.h"
-#include "TrackerOptionFlags.h"
 #include "TrackingTruth.h"
 
 #include "dp/compress/PcaCompression.h"
@@ -76,7 +76,7 @@ struct Settings
   std::size_t startFrame = 0;
   std::string csvFile; // per-frame figures
   bool colour = false; // the samples carry a colour fixed to the material (the tracker gets it)
-  int colourTolerance = dp::PcaOptions{}.colourTolerance; // of the stored colour swim
+  int colourTolerance = dp::CompressionOptions{}.colourTolerance; // of the stored colour swim
   std::vector<double> colourRest; // the sequence's first frame: where the colour pattern lies
   bool compress = false;          // the compression of the take beside the true motion's
   dp::ReconstructionOptions reconstruction; // of reconstructed templates (count set per run)
@@ -525,7 +525,7 @@ std::optional<int> parseArguments(int argc, char** argv, Plan& plan)
     {
       const std::string arg = argv[i];
       if (!parseDataOption(arg, argc, argv, i, plan) &&
-          !dp::cli::parseTrackerOptionFlag(arg, argc, argv, i, plan.options) &&
+          !dp::cli::parseTableOptionFlag(arg, argc, argv, i, {&plan.options, nullptr}) &&
           !parseOutputOption(arg, argc, argv, i, plan))
       {
         std::cout << Usage;

@@ -31,7 +31,7 @@ def main():
               for name in ("tracked.pvd", "tracked.dpz")}
     # File > Save Data: the plugin's writers, chosen by extension, write the whole sequence.
     tracked = OpenDataFile(os.path.join(folder, "tracked.pvd"))
-    SaveData(os.path.join(folder, "saved.dpz"), proxy=tracked, ErrorTarget=0.5)
+    SaveData(os.path.join(folder, "saved.dpz"), proxy=tracked, KGTarget=0.5)
     SaveData(os.path.join(folder, "saved.glb"), proxy=tracked)
     result["saved.dpz"] = read_back(os.path.join(folder, "saved.dpz"), None)
     print("DP-PV " + json.dumps(result))

@@ -105,10 +105,19 @@ def check_panel(ns):
     # A slider over 20 .. 10 000 000 cannot be used: such fields are plain numbers.
     vertices = track.GetProperty("TemplateVertices").SMProperty.GetDomain("range")
     assert vertices.GetMinimumExists(0) and not vertices.GetMaximumExists(0)
-    for name in WRITERS:
-        writer = getattr(servermanager.writers, name)()
-        target = writer.GetProperty("ErrorTarget").SMProperty.GetDomain("range")
-        assert target.GetMinimumExists(0) and not target.GetMaximumExists(0), name
+    # Each error measure has its own target, a plain number field shown only while its measure
+    # is chosen; the codec filter's and the writers' alike.
+    compress = servermanager.filters.PCACompress(Input=track)
+    proxies = [compress] + [getattr(servermanager.writers, name)() for name in WRITERS]
+    for proxy in proxies:
+        for measure, name in enumerate(("KGTarget", "MaxVertexTarget", "FitGrowth")):
+            prop = proxy.GetProperty(name).SMProperty
+            target = prop.GetDomain("range")
+            assert target.GetMinimumExists(0) and not target.GetMaximumExists(0), name
+            decorator = prop.GetHints().FindNestedElementByName("PropertyWidgetDecorator")
+            assert decorator.GetAttribute("property") == "ErrorMeasure", name
+            assert decorator.GetAttribute("value") == str(measure), name
+        assert proxy.GetProperty("ErrorTarget") is None  # one target for all: gone
 
 
 def observe_progress(proxy, values=False):

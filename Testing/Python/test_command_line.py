@@ -34,11 +34,14 @@ class TestCommandLineTools(TempDirTestCase):
         self.assertEqual(missing.returncode, 1)
         self.assertIn("nowhere: folder does not exist", missing.stderr)
 
-    def test_tracker_options_by_name_from_flags_and_a_file(self):
+    def test_options_by_name_from_flags_and_a_file(self):
         printed = json.loads(run_tool("dynamicpoints", "--print-options").stdout)
         self.assertEqual(printed["graph.yieldRate"], 0.3)
         self.assertEqual(printed["solver"], "gauss-newton")
-        self.assertGreaterEqual(len(printed), 45)
+        # The main job judges its compression against the data by default.
+        self.assertEqual(printed["compression.measure"], "data")
+        self.assertEqual(printed["compression.fitGrowth"], 10)
+        self.assertGreaterEqual(len(printed), 53)
         # What --print-options writes, --options reads; --set after it wins.
         printed["graph.yieldRate"] = 0.5
         printed["solver"] = "lbfgs"
@@ -46,28 +49,49 @@ class TestCommandLineTools(TempDirTestCase):
             json.dump(printed, f)
         changed = json.loads(run_tool("dynamicpoints", "--options", self.path("options.json"),
                                       "--set", "colourWeight=7", "--set", "CoarseLevel=off",
+                                      "--set", "compression.layout=shapes",
+                                      "--error-target", "0.1", "--colour-tolerance", "0",
                                       "--print-options").stdout)
         self.assertEqual((changed["graph.yieldRate"], changed["solver"]), (0.5, "lbfgs"))
         self.assertEqual((changed["colourWeight"], changed["graph.enabled"]), (7, False))
+        self.assertEqual((changed["compression.layout"], changed["compression.measure"],
+                          changed["compression.kgTarget"], changed["compression.colourTolerance"]),
+                         ("shapes", "kg", 0.1, 0))
         for args, message in (
                 (["--set", "graph.yieldRate=1.5"],
                  "tracker option graph.yieldRate: 1.5 is out of its range [0, 1]"),
                 (["--set", "graph.yieldrate=1"], "no tracker option 'graph.yieldrate'"),
                 (["--set", "solver"], "--set wants NAME=VALUE"),
                 (["--options", self.path("missing.json")], "cannot read"),
+                (["--set", "compression.colourTolerance=99"],
+                 "compression option compression.colourTolerance: 99 is out of its range [0, 64]"),
                 (["--describe-options", "yaml"], "wants json or markdown")):
             result = run_tool("dynamicpoints", *args, "--print-options", check=False)
             self.assertEqual(result.returncode, 2, args)
             self.assertIn(message, result.stderr)
 
+    def test_help_describes_every_compression_option_from_the_table(self):
+        help_text = run_tool("dynamicpoints", "--help").stdout
+        table = json.loads(run_tool("dynamicpoints", "--describe-options", "json").stdout)
+        for row in table["compression"]:
+            self.assertIn("\n  " + row["name"] + "\n", help_text)
+            # Its range and its first words, as the table says them (wrapped).
+            first = " ".join(row["doc"].split()[:4])
+            self.assertIn(first, " ".join(help_text.split()), row["name"])
+        self.assertIn("compression.measure\n                      kg|max-vertex|data (default data)",
+                      help_text)
+
     def test_the_documentation_lists_the_per_frame_figures_of_the_report(self):
-        table = run_tool("dynamicpoints", "--describe-report").stdout
-        self.assertIn("| `LargestStretch` | `largestStretch` |", table)
+        per_frame, compression = run_tool("dynamicpoints", "--describe-report").stdout.split("\n\n")
+        self.assertIn("| `LargestStretch` | `largestStretch` |", per_frame)
+        self.assertIn("| `DistanceToDataGrowth` |", compression)
         doc = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..",
                            "Documentation", "MainJob.md")
         with open(doc, encoding="utf-8") as f:
-            self.assertIn(table, f.read(), "MainJob.md's table of per-frame figures is stale: "
-                          "regenerate it with dynamicpoints --describe-report")
+            text = f.read()
+        for table in (per_frame, compression):
+            self.assertIn(table.strip(), text, "MainJob.md's tables of the report's figures are "
+                          "stale: regenerate them with dynamicpoints --describe-report")
 
 
 if __name__ == "__main__":

@@ -316,6 +316,12 @@ class TestDefaultRun(TempDirTestCase):
         compression = report["compression"]
         self.assertLessEqual(compression["FitGrowthPercent"], 10)
         self.assertEqual(compression["FitGrowthAllowedPercent"], 10)
+        # The options the run used, by the names --set takes.
+        options = report["options"]
+        self.assertEqual(options["compression"]["compression.measure"], "data")
+        self.assertEqual(options["compression"]["compression.fitGrowth"], 10)
+        self.assertEqual(options["tracker"]["graph.yieldRate"], 0.3)
+        self.assertEqual((options["vertices"], options["detailLevels"]), (1000, "auto"))
         # The tube's motion is low-rank: a handful of components, not one per frame (three in the
         # trajectory layout: x y z a frame).
         per_frame = 3 if compression["Layout"] == 0 else 1
@@ -413,7 +419,7 @@ class TestMotionTarget(TempDirTestCase):
                              ** 2).sum(axis=2).mean())
         self.assertLess(deviation, 2.5 * report["RmsError"])
         self.assertGreater(deviation, report["RmsError"])
-        self.assertEqual(report["ErrorTargetKG"], 0.2)
+        self.assertEqual(report["Target"], "KG 0.2 %")
         self.assertIn("weak", report)
 
 
@@ -588,11 +594,14 @@ class TestBadInput(TempDirTestCase):
                               (["--output"], "option --output needs a value"),
                               (["--vertices", "5"], "is outside [20"),
                               (["--frames", "x"], "is not a whole number"),
-                              (["--error-target", "-1"], "is outside"),
-                              (["--fit-growth", "0"], "is outside"),
+                              (["--error-target", "-1"],
+                               "compression.kgTarget: -1 is out of its range [0.0001, 50]"),
+                              (["--fit-growth", "0"], "compression.fitGrowth: 0 is out of its"),
+                              (["--set", "compression.layout=rows"],
+                               "compression.layout wants trajectories|shapes|automatic"),
                               (["--template-from", "cloud"], "wants auto, mesh or points"),
-                              (["--fit-growth", "nan"], "is not a number"),
-                              (["--error-target", "nan"], "is not a number")):
+                              (["--fit-growth", "nan"], "nan is out of its range"),
+                              (["--error-target", "nan"], "nan is out of its range")):
             result = run_tool("dynamicpoints", *args, check=False)
             self.assertEqual(result.returncode, 2, args)
             self.assertIn(message, result.stderr)

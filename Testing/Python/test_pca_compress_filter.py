@@ -67,7 +67,7 @@ class TestPCACompressFilter(TempDirTestCase):
     def test_meets_the_error_target_and_reports_it(self):
         originals = np.stack([self.original(t) for t in range(FRAMES)])
         for layout in (0, 1):
-            f = self.compressor(Layout=layout, ErrorTarget=0.2)
+            f = self.compressor(Layout=layout, KGTarget=0.2)
             rebuilt = []
             for t in range(FRAMES):
                 f.UpdateTimeStep(t)
@@ -132,7 +132,7 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertTrue(os.path.exists(self.path("piece1.dpz")))
 
     def test_the_writer_names_the_file_and_the_reason_when_it_cannot_write(self):
-        writer = self.write(self.path("first.dpz"), ErrorTarget=0.5)
+        writer = self.write(self.path("first.dpz"), KGTarget=0.5)
         # A file that cannot be written: an error naming it, nothing left behind.
         rec = MessageRecorder(writer)
         writer.SetFileName(self.path("no-such-folder", "x.dpz"))
@@ -170,8 +170,8 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_the_gltf_export_plays_back_in_vtk_within_the_target(self):
         glb = self.path("tube.glb")
-        self.write(glb, ErrorTarget=0.2)
-        f = self.compressor(ErrorTarget=0.2)
+        self.write(glb, KGTarget=0.2)
+        f = self.compressor(KGTarget=0.2)
         f.Update()
         k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
         reader = vtkGLTFReader()
@@ -217,7 +217,7 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_the_gltf_export_passes_the_khronos_validator(self):
         glb = self.path("tube.glb")
-        self.write(glb, ErrorTarget=0.2)
+        self.write(glb, KGTarget=0.2)
         report = validate_gltf(glb)
         self.assertEqual((report["errors"], report["warnings"]), (0, 0), report["messages"])
         self.assertEqual(report["info"]["animationCount"], 1)
@@ -264,8 +264,8 @@ class TestPCACompressFilter(TempDirTestCase):
 
     def test_blender_imports_every_frame_and_morph_target(self):
         glb = self.path("tube.glb")
-        self.write(glb, ErrorTarget=0.2)
-        f = self.compressor(ErrorTarget=0.2, Layout=1)  # a .glb holds the shape layout
+        self.write(glb, KGTarget=0.2)
+        f = self.compressor(KGTarget=0.2, Layout=1)  # a .glb holds the shape layout
         f.Update()
         k = int(dsa.WrapDataObject(f.GetOutput()).FieldData["Components"][0])
         report = blender_report(glb, (0, 7, FRAMES - 1))
@@ -426,7 +426,7 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
 
     def test_a_mesh_moving_smoothly_compresses_without_a_warning(self):
-        f = self.compressor(ErrorTarget=0.2)
+        f = self.compressor(KGTarget=0.2)
         rec = MessageRecorder(f)
         f.Update()
         fd = dsa.WrapDataObject(f.GetOutput()).FieldData
@@ -475,7 +475,7 @@ class TestPCACompressFilter(TempDirTestCase):
             f = dynamicpoints.vtkPCACompressFilter()
             f.SetInputConnection(tracker.GetOutputPort())
             f.SetErrorMeasure(f.DISTANCE_TO_DATA)
-            f.SetErrorTarget(target)
+            f.SetFitGrowth(target)
             rec = MessageRecorder(f)
             f.Update()
             self.assertEqual(rec.errors + rec.warnings, [])
@@ -488,16 +488,39 @@ class TestPCACompressFilter(TempDirTestCase):
             figures[target] = fd["BitsPerVertexFrame"][0]
         self.assertLess(figures[20], figures[5])  # a looser target costs fewer bits
         # The writer takes the same target.
-        writer = self.write(self.path("data.dpz"), source=tracker, ErrorMeasure=2, ErrorTarget=10)
+        writer = self.write(self.path("data.dpz"), source=tracker, ErrorMeasure=2, FitGrowth=10)
         self.assertEqual(writer.GetErrorMeasure(), 2)
 
     def test_against_the_data_without_the_tracked_points_it_says_what_is_missing(self):
-        f = self.compressor(ErrorMeasure=2, ErrorTarget=10)  # the true meshes carry no points
+        f = self.compressor(ErrorMeasure=2, FitGrowth=10)  # the true meshes carry no points
         rec = MessageRecorder(f)
         f.Update()
         self.assertIn("frame 0 has no DataSamples", rec.error_text)
         self.assertIn("Deformable Track", rec.error_text)
         self.assertEqual(f.GetOutput().GetNumberOfPoints(), 0)
+
+    def test_each_option_by_name_clamped_and_absurd_values_named(self):
+        # The codec filter's and the writer's options are dp::compressionOptions(): reached by
+        # name or property, clamped to their ranges, a NaN or an unknown name an error by name.
+        for obj in (dynamicpoints.vtkPCACompressFilter(), dynamicpoints.vtkCompressedSequenceWriter()):
+            with self.subTest(cls=obj.GetClassName()):
+                rec = MessageRecorder(obj)
+                obj.SetCompressionOption("compression.layout", 1)
+                self.assertEqual(obj.GetLayout(), 1)
+                obj.SetKGTarget(500)  # above the range's 50 %: clamped
+                self.assertEqual(obj.GetCompressionOption("compression.kgTarget"), 50)
+                obj.SetColourTolerance(-3)
+                self.assertEqual(obj.GetColourTolerance(), 0)
+                obj.SetFitGrowth(float("nan"))
+                self.assertIn("compression option compression.fitGrowth: NaN is no value",
+                              rec.error_text)
+                self.assertEqual(obj.GetFitGrowth(), 10)  # the default kept
+                obj.SetCompressionOption("compression.psnr", 1)
+                self.assertIn("no compression option 'compression.psnr'", rec.error_text)
+        writer = dynamicpoints.vtkCompressedSequenceWriter()
+        rec = MessageRecorder(writer)
+        writer.SetCompressionOption("Quantize", 0)
+        self.assertIn("the writers always quantise", rec.error_text)
 
 
 if __name__ == "__main__":

@@ -181,7 +181,7 @@ class TestSurfaceDetailFilter(TempDirTestCase):
         writer = dynamicpoints.vtkCompressedSequenceWriter()
         writer.SetInputConnection(p.detail.GetOutputPort())
         writer.SetErrorMeasure(dynamicpoints.vtkPCACompressFilter.DISTANCE_TO_DATA)
-        writer.SetErrorTarget(10)
+        writer.SetFitGrowth(10)
         path = self.path("detailed.dpz")
         writer.SetFileName(path)
         self.assertEqual(writer.Write(), 1)

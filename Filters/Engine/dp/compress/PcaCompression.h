@@ -69,8 +69,8 @@ enum class PcaErrorMeasure
 };
 
 /** The KG targets a compression may ask for, in percent: below 1e-4 % the coding is lossless
- *  in practice, above 50 % little of the motion is left. The engine, the filters' and writers'
- *  ParaView properties and the command line take this range (a test checks the XML). */
+ *  in practice, above 50 % little of the motion is left (dp::compressionOptions() gives the
+ *  range to every front end). */
 constexpr double MinimumKarniGotsmanTarget = 1e-4;
 constexpr double MaximumKarniGotsmanTarget = 50;
 /** The growth of the distance to the data a compression may allow, in percent
@@ -85,8 +85,6 @@ struct PcaOptions
   double target = 0.2;        // KG in %, max vertex error / diagonal, or RMS deviation
   std::size_t components = 0; // > 0: this many, and the target only sets the quantisation
   bool quantise = true;       // false: the paper's float PCA (no quantisation, no coding)
-  int colourTolerance = 4;    // colour levels (of 255) a stored colour may differ from the
-                              // tracked one (setColours); 0: lossless
 };
 
 /** The colour tolerances setColours takes, in levels of 255. */

@@ -1,15 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/TrackerOptionTable.h"
 
-#include <nlohmann/json.hpp>
-
-#include <algorithm>
-#include <cmath>
-#include <cstdlib>
-#include <limits>
-#include <sstream>
 #include <stdexcept>
-#include <type_traits>
+#include <string>
 
 namespace dp
 {
@@ -17,94 +10,29 @@ namespace dp
 namespace
 {
 
-constexpr double Unbounded = std::numeric_limits<double>::max();
-
-using Row = TrackerOptionDescription;
-
-// Accessors of a double, int, size_t or bool member reached by `field` (a lambda returning a
-// reference): the table stores every value as a double.
-template <typename Field>
-void bind(Row& row, Field field)
-{
-  row.get = [field](const TrackerOptions& o)
-  { return static_cast<double>(field(const_cast<TrackerOptions&>(o))); };
-  row.set = [field](TrackerOptions& o, double v)
-  {
-    auto& member = field(o);
-    using T = std::decay_t<decltype(member)>;
-    if constexpr (std::is_same_v<T, bool>)
-      member = v != 0;
-    else
-      member = static_cast<T>(v);
-  };
-}
-
-template <typename Field>
-Row real(const char* name, const char* property, OptionPanel panel, double lo, double hi,
-         const char* unit, const char* doc, Field field)
-{
-  Row row;
-  row.name = name;
-  row.property = property;
-  row.kind = OptionKind::Real;
-  row.minimum = lo;
-  row.maximum = hi;
-  row.unit = unit;
-  row.doc = doc;
-  row.panel = panel;
-  bind(row, field);
-  return row;
-}
-
-template <typename Field>
-Row integer(const char* name, const char* property, OptionPanel panel, double lo, double hi,
-            const char* doc, Field field)
-{
-  Row row = real(name, property, panel, lo, hi, "", doc, field);
-  row.kind = OptionKind::Integer;
-  return row;
-}
-
-template <typename Field>
-Row flag(const char* name, const char* property, OptionPanel panel, const char* doc, Field field)
-{
-  Row row = real(name, property, panel, 0, 1, "", doc, field);
-  row.kind = OptionKind::Flag;
-  return row;
-}
-
-Row automatic(Row row)
-{
-  row.zeroAllowed = true;
-  return row;
-}
+using Row = OptionDescription<TrackerOptions>;
+using Rows = OptionRows<TrackerOptions>;
+constexpr auto real = [](auto&&... a) { return Rows::real(a...); };
+constexpr auto integer = [](auto&&... a) { return Rows::integer(a...); };
+constexpr auto flag = [](auto&&... a) { return Rows::flag(a...); };
+constexpr auto automatic = [](Row row) { return Rows::automatic(std::move(row)); };
 
 Row solverRow()
 {
-  Row row;
-  row.name = "solver";
-  row.property = "Solver";
-  row.kind = OptionKind::Choice;
-  row.maximum = 2;
-  row.doc = "the fine level's minimiser: Gauss-Newton, L-BFGS or the paper's steepest descent";
-  row.panel = OptionPanel::Shown;
-  row.choices = {"gauss-newton", "lbfgs", "steepest-descent"};
-  row.get = [](const TrackerOptions& o) { return static_cast<double>(o.solver); };
-  row.set = [](TrackerOptions& o, double v) { o.solver = static_cast<TrackerSolver>(v); };
-  return row;
+  return Rows::choice(
+      "solver", "Solver", OptionPanel::Shown, {"gauss-newton", "lbfgs", "steepest-descent"},
+      "the fine level's minimiser: Gauss-Newton, L-BFGS or the paper's steepest descent",
+      [](auto& o) -> auto& { return o.solver; });
 }
 
 Row measureRow()
 {
-  Row row;
-  row.name = "distance.measure";
-  row.property = "DistanceMeasure";
-  row.kind = OptionKind::Choice;
-  row.maximum = 1;
-  row.doc = "what the distance term measures: the distance to the tangent planes of the nearest "
-            "points (vertices may slide along the data) or to the points (the paper)";
-  row.panel = OptionPanel::Advanced;
-  row.choices = {"planes", "points"};
+  Row row = Rows::choice(
+      "distance.measure", "DistanceMeasure", OptionPanel::Advanced, {"planes", "points"},
+      "what the distance term measures: the distance to the tangent planes of the nearest points "
+      "(vertices may slide along the data) or to the points (the paper)",
+      [](auto& o) -> auto& { return o.distance.measure; });
+  // The property's values are planes 0, points 1 (the enum's are the other way round).
   row.get = [](const TrackerOptions& o)
   { return o.distance.measure == DistanceMeasure::Points ? 1.0 : 0.0; };
   row.set = [](TrackerOptions& o, double v)
@@ -383,208 +311,21 @@ std::vector<Row> makeTable()
   return rows;
 }
 
-std::string number(double v)
-{
-  std::ostringstream s;
-  s.precision(15);
-  s << v;
-  return s.str();
-}
-
-std::string kindName(OptionKind kind)
-{
-  switch (kind)
-  {
-  case OptionKind::Integer:
-    return "integer";
-  case OptionKind::Flag:
-    return "flag";
-  case OptionKind::Choice:
-    return "choice";
-  default:
-    return "real";
-  }
-}
-
-std::string panelName(OptionPanel panel)
-{
-  return panel == OptionPanel::Shown ? "shown" : panel == OptionPanel::Advanced ? "advanced" : "";
-}
-
-// A value as JSON: flags as true/false, choices by name.
-nlohmann::json jsonValue(const Row& row, double v)
-{
-  if (row.kind == OptionKind::Flag)
-    return v != 0;
-  if (row.kind == OptionKind::Choice)
-    return row.choices.at(static_cast<std::size_t>(v));
-  if (row.kind == OptionKind::Integer)
-    return static_cast<long long>(v);
-  return v;
-}
-
-void setChecked(TrackerOptions& options, const Row& row, double v)
-{
-  if (!row.accepts(v))
-    throw std::invalid_argument("tracker option " + row.name + ": " + number(v) +
-                                " is out of its range " + row.range() + " (" + row.doc + ")");
-  row.set(options, v);
-}
-
 } // namespace
 
-bool TrackerOptionDescription::accepts(double value) const
+const OptionTable<TrackerOptions>& trackerOptions()
 {
-  if (!std::isfinite(value))
-    return false;
-  if (kind != OptionKind::Real && value != std::floor(value))
-    return false;
-  return (zeroAllowed && value == 0) || (value >= minimum && value <= maximum);
-}
-
-std::string TrackerOptionDescription::range() const
-{
-  if (kind == OptionKind::Choice)
-  {
-    std::string names;
-    for (const std::string& c : choices)
-      names += (names.empty() ? "" : "|") + c;
-    return names;
-  }
-  if (kind == OptionKind::Flag)
-    return "true|false";
-  const std::string upper = maximum == Unbounded ? "inf" : number(maximum);
-  return (zeroAllowed ? "0 or " : "") + std::string("[") + number(minimum) + ", " + upper + "]";
-}
-
-const std::vector<TrackerOptionDescription>& trackerOptionTable()
-{
-  static const std::vector<Row> table = makeTable();
+  static const OptionTable<TrackerOptions> table("tracker option", makeTable());
   return table;
-}
-
-const TrackerOptionDescription& trackerOption(std::string_view nameOrProperty)
-{
-  for (const Row& row : trackerOptionTable())
-    if (row.name == nameOrProperty || (!row.property.empty() && row.property == nameOrProperty))
-      return row;
-  throw std::invalid_argument("no tracker option '" + std::string(nameOrProperty) +
-                              "' (--print-options lists them)");
 }
 
 void checkTrackerOptions(const TrackerOptions& options)
 {
-  for (const Row& row : trackerOptionTable())
-  {
-    const double v = row.get(options);
-    if (!row.accepts(v))
-      throw std::invalid_argument("tracker option " + row.name + ": " + number(v) +
-                                  " is out of its range " + row.range() + " (" + row.doc + ")");
-  }
+  trackerOptions().check(options);
   if (!(options.softening.to > options.softening.from))
     throw std::invalid_argument("tracker options softening.from and softening.to: from (" +
-                                number(options.softening.from) + ") must be below to (" +
-                                number(options.softening.to) + ")");
-}
-
-void setTrackerOption(TrackerOptions& options, std::string_view name, std::string_view text)
-{
-  const Row& row = trackerOption(name);
-  const std::string value(text);
-  if (row.kind == OptionKind::Flag && (value == "true" || value == "on" || value == "yes"))
-    return row.set(options, 1);
-  if (row.kind == OptionKind::Flag && (value == "false" || value == "off" || value == "no"))
-    return row.set(options, 0);
-  for (std::size_t c = 0; c < row.choices.size(); ++c)
-    if (row.choices[c] == value)
-      return row.set(options, static_cast<double>(c));
-  char* end = nullptr;
-  const double v = std::strtod(value.c_str(), &end);
-  if (value.empty() || end != value.c_str() + value.size())
-    throw std::invalid_argument("tracker option " + row.name + " wants " + row.range() + ", not '" +
-                                value + "'");
-  setChecked(options, row, v);
-}
-
-std::string trackerOptionsJson(const TrackerOptions& options)
-{
-  nlohmann::ordered_json out = nlohmann::ordered_json::object();
-  for (const Row& row : trackerOptionTable())
-    out[row.name] = jsonValue(row, row.get(options));
-  return out.dump(2) + "\n";
-}
-
-void readTrackerOptionsJson(TrackerOptions& options, const std::string& json,
-                            const std::string& source)
-{
-  nlohmann::json in;
-  try
-  {
-    in = nlohmann::json::parse(json);
-  }
-  catch (const nlohmann::json::exception& e)
-  {
-    throw std::invalid_argument(source + ": not JSON: " + e.what());
-  }
-  if (!in.is_object())
-    throw std::invalid_argument(source + ": wants one JSON object of option names and values");
-  for (const auto& [name, value] : in.items())
-  {
-    try
-    {
-      setTrackerOption(options, name,
-                       value.is_string()    ? value.get<std::string>()
-                       : value.is_boolean() ? (value.get<bool>() ? "true" : "false")
-                                            : value.dump());
-    }
-    catch (const std::invalid_argument& e)
-    {
-      throw std::invalid_argument(source + ": " + e.what());
-    }
-  }
-}
-
-std::string trackerOptionTableJson()
-{
-  const TrackerOptions defaults;
-  nlohmann::ordered_json out = nlohmann::ordered_json::array();
-  for (const Row& row : trackerOptionTable())
-  {
-    nlohmann::ordered_json r;
-    r["name"] = row.name;
-    r["property"] = row.property;
-    r["kind"] = kindName(row.kind);
-    r["default"] = jsonValue(row, row.get(defaults));
-    r["value"] = row.get(defaults); // the number the filter's property holds
-    r["minimum"] = row.minimum;
-    r["maximum"] =
-        row.maximum == Unbounded ? nlohmann::ordered_json() : nlohmann::ordered_json(row.maximum);
-    r["zero_allowed"] = row.zeroAllowed;
-    r["unit"] = row.unit;
-    r["doc"] = row.doc;
-    r["panel"] = panelName(row.panel);
-    r["choices"] = row.choices;
-    out.push_back(r);
-  }
-  return out.dump(2) + "\n";
-}
-
-std::string trackerOptionTableMarkdown()
-{
-  const TrackerOptions defaults;
-  std::ostringstream md;
-  md << "| option | ParaView | default | range | unit | what |\n"
-        "|---|---|---|---|---|---|\n";
-  for (const Row& row : trackerOptionTable())
-  {
-    const std::string shown =
-        row.property.empty()
-            ? ""
-            : row.property + (row.panel == OptionPanel::Advanced ? " (advanced)" : "");
-    md << "| `" << row.name << "` | " << shown << " | " << jsonValue(row, row.get(defaults)).dump()
-       << " | " << row.range() << " | " << row.unit << " | " << row.doc << " |\n";
-  }
-  return md.str();
+                                std::to_string(options.softening.from) + ") must be below to (" +
+                                std::to_string(options.softening.to) + ")");
 }
 
 } // namespace dp

@@ -1,0 +1,120 @@
+// SPDX-License-Identifier: BSD-3-Clause
+#include "dp/compress/CompressionOptions.h"
+
+#include <sstream>
+
+namespace dp
+{
+
+namespace
+{
+
+using Row = OptionDescription<CompressionOptions>;
+using Rows = OptionRows<CompressionOptions>;
+using P = OptionPanel;
+
+std::vector<Row> targetRows()
+{
+  return {
+      Rows::choice(
+          "compression.measure", "ErrorMeasure", P::Shown, {"kg", "max-vertex", "data"},
+          "what the error target measures: the Karni-Gotsman error of the motion, the largest "
+          "vertex error, or the distance to the data the mesh was tracked to (the input must "
+          "carry it: the track filter's output)",
+          [](auto& o) -> auto& { return o.measure; }),
+      Rows::real(
+          "compression.kgTarget", "KGTarget", P::Shown, MinimumKarniGotsmanTarget,
+          MaximumKarniGotsmanTarget, "percent",
+          "measure kg: the largest Karni-Gotsman error, the norm of the positions' error over "
+          "that of their motion about each frame's centroid",
+          [](auto& o) -> auto& { return o.kgTarget; }),
+      Rows::real(
+          "compression.maxVertexTarget", "MaxVertexTarget", P::Shown, 1e-7, 0.5, "of the diagonal",
+          "measure max-vertex: the largest distance of a vertex from its place, over the "
+          "sequence's bounding-box diagonal",
+          [](auto& o) -> auto& { return o.maxVertexTarget; }),
+      Rows::real(
+          "compression.fitGrowth", "FitGrowth", P::Shown, MinimumFitGrowth, MaximumFitGrowth,
+          "percent",
+          "measure data: how much the decompressed mesh's RMS distance to the data may grow over "
+          "the tracked mesh's (10 suits noisy captures)",
+          [](auto& o) -> auto& { return o.fitGrowth; }),
+  };
+}
+
+std::vector<Row> codingRows()
+{
+  return {
+      Rows::choice(
+          "compression.layout", "Layout", P::Shown, {"trajectories", "shapes", "automatic"},
+          "the components: vertex trajectories with per-vertex weights (the paper), shapes with "
+          "per-frame weights (morph targets), or both coded and the one of fewer bits kept",
+          [](auto& o) -> auto& { return o.layout; }),
+      Rows::integer(
+          "compression.components", "NumberOfComponents", P::Advanced, 0, 1e6,
+          "principal components kept, the target then setting only the quantisation; 0: the "
+          "fewest bytes that meet the target",
+          [](auto& o) -> auto& { return o.components; }),
+      Rows::flag(
+          "compression.quantise", "Quantize", P::Advanced,
+          "quantise, predict and range-code the components; off: the paper's float PCA, to "
+          "study it (the writers always quantise)",
+          [](auto& o) -> auto& { return o.quantise; }),
+      Rows::integer(
+          "compression.colourTolerance", "ColourTolerance", P::Advanced, 0, MaximumColourTolerance,
+          "where the input carries colour: the levels (of 255) a stored colour may differ from "
+          "the given one; more holds each vertex's colour while it stays within them (no "
+          "flicker, a smaller colour stream); 0: lossless",
+          [](auto& o) -> auto& { return o.colourTolerance; }),
+  };
+}
+
+std::vector<Row> makeTable()
+{
+  std::vector<Row> rows = targetRows();
+  for (Row& row : codingRows())
+    rows.push_back(std::move(row));
+  return rows;
+}
+
+} // namespace
+
+const OptionTable<CompressionOptions>& compressionOptions()
+{
+  static const OptionTable<CompressionOptions> table("compression option", makeTable());
+  return table;
+}
+
+PcaOptions pcaOptionsOf(const CompressionOptions& options)
+{
+  compressionOptions().check(options);
+  PcaOptions o;
+  o.layout = options.layout;
+  o.measure = options.measure == CompressionMeasure::MaxVertexError
+                  ? PcaErrorMeasure::MaxVertexError
+                  : PcaErrorMeasure::KarniGotsman;
+  o.target = options.measure == CompressionMeasure::MaxVertexError ? options.maxVertexTarget
+                                                                   : options.kgTarget;
+  o.components = options.components;
+  o.quantise = options.quantise;
+  return o;
+}
+
+std::string targetSaid(const CompressionOptions& options)
+{
+  std::ostringstream s;
+  switch (options.measure)
+  {
+  case CompressionMeasure::MaxVertexError:
+    s << "max vertex error " << options.maxVertexTarget << " of the diagonal";
+    break;
+  case CompressionMeasure::DistanceToData:
+    s << "the distance to the data grows by at most " << options.fitGrowth << " %";
+    break;
+  default:
+    s << "KG " << options.kgTarget << " %";
+  }
+  return s.str();
+}
+
+} // namespace dp
