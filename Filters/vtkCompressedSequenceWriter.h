@@ -62,6 +62,15 @@ public:
   double GetMaxVertexTarget() { return this->GetCompressionOption("MaxVertexTarget"); }
   void SetFitGrowth(double value) { this->SetCompressionOption("FitGrowth", value); }
   double GetFitGrowth() { return this->GetCompressionOption("FitGrowth"); }
+  void SetSlideAlongSurface(vtkTypeBool value)
+  {
+    this->SetCompressionOption("SlideAlongSurface", value);
+  }
+  vtkTypeBool GetSlideAlongSurface()
+  {
+    return static_cast<vtkTypeBool>(this->GetCompressionOption("SlideAlongSurface"));
+  }
+  vtkBooleanMacro(SlideAlongSurface, vtkTypeBool);
   void SetNumberOfComponents(int value) { this->SetCompressionOption("NumberOfComponents", value); }
   int GetNumberOfComponents()
   {

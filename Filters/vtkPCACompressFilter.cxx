@@ -63,6 +63,7 @@ struct vtkPCACompressFilter::Internals
   std::vector<dp::FrameSamples> Samples;
   double Reach = 0;
   dp::DataFit Before, After;
+  bool Slid = false; // the take slid along its surface was kept
   // A detail layer (DetailLevels > 0): the fine mesh's connectivity, its map from the base
   // (Positions and Triangles then hold the base), the fitted displacements, frame-major.
   int DetailLevels = 0;
@@ -91,6 +92,7 @@ struct vtkPCACompressFilter::Internals
     Samples.clear();
     Reach = 0;
     Before = After = dp::DataFit{};
+    Slid = false;
     DetailLevels = 0;
     FineVertices = 0;
     FinePolys = nullptr;
@@ -369,11 +371,13 @@ std::string vtkPCACompressFilter::Compress()
       std::vector<const dp::FrameSamples*> samples;
       for (const dp::FrameSamples& s : in.Samples)
         samples.push_back(&s);
-      dp::DataFitCompression c = dp::compressAgainstData(
-          dp::TriangleMesh(in.Triangles, vertices), in.Positions.data(), frames, samples, in.Reach,
-          in.Options.fitGrowth / 100, dp::pcaOptionsOf(in.Options), times, progress);
+      dp::DataFitCompression c =
+          dp::compressAgainstData(dp::TriangleMesh(in.Triangles, vertices), in.Positions.data(),
+                                  frames, samples, in.Reach, in.Options.fitGrowth / 100,
+                                  dp::pcaOptionsOf(in.Options), in.Options.slide, times, progress);
       in.Before = c.tracked;
       in.After = c.decompressed;
+      in.Slid = c.slid;
       in.Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
     }
     else
@@ -408,6 +412,7 @@ dp::CompressionFigures vtkPCACompressFilter::Figures(std::size_t frames) const
     f.distanceToDataInput = in.Before.rms;
     f.distanceToDataDecompressed = in.After.rms;
     f.distanceToDataGrowth = 100 * (in.After.rms / in.Before.rms - 1);
+    f.slid = in.Slid ? 1 : 0;
   }
   if (in.DetailLevels > 0 && in.DetailFit.fitted.samples > 0)
   {

@@ -114,7 +114,9 @@ public:
    *  judges the compression against the data the mesh was tracked to (the input's field data
    *  "DataSamples" and "DataReach", which vtkDeformableTrackFilter writes): the decompressed
    *  mesh's RMS distance to them may grow by at most FitGrowth percent over the input's
-   *  (dp::compressAgainstData). */
+   *  (dp::compressAgainstData); with SlideAlongSurface (default on) the take is also coded with
+   *  its vertices slid along the surface toward a model of fewer components, and the fewer bits
+   *  kept (dp::slideAlongSurface). */
   void SetErrorMeasure(int value) { this->SetCompressionOption("ErrorMeasure", value); }
   int GetErrorMeasure() { return static_cast<int>(this->GetCompressionOption("ErrorMeasure")); }
   void SetKGTarget(double value) { this->SetCompressionOption("KGTarget", value); }
@@ -123,6 +125,15 @@ public:
   double GetMaxVertexTarget() { return this->GetCompressionOption("MaxVertexTarget"); }
   void SetFitGrowth(double value) { this->SetCompressionOption("FitGrowth", value); }
   double GetFitGrowth() { return this->GetCompressionOption("FitGrowth"); }
+  void SetSlideAlongSurface(vtkTypeBool value)
+  {
+    this->SetCompressionOption("SlideAlongSurface", value);
+  }
+  vtkTypeBool GetSlideAlongSurface()
+  {
+    return static_cast<vtkTypeBool>(this->GetCompressionOption("SlideAlongSurface"));
+  }
+  vtkBooleanMacro(SlideAlongSurface, vtkTypeBool);
   ///@}
 
   ///@{

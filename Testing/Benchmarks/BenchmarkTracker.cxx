@@ -607,10 +607,10 @@ void printCompressionRows(const dp::Tracker& tracker, const dp::AnimatedMesh& me
                    compressForData(triangles, trackedTake, samples, reach, 0.1), rawBytes);
   printCompression("truth, data +10 %", compressForData(triangles, trueTake, samples, reach, 0.1),
                    rawBytes);
-  printCompression(
-      "tracked, data +10 %, traj.",
-      compressForData(triangles, trackedTake, samples, reach, 0.1, dp::PcaLayout::Trajectories),
-      rawBytes);
+  printCompression("tracked, data +10 %, traj.",
+                   compressForData(triangles, trackedTake, samples, reach, 0.1,
+                                   dp::PcaLayout::Trajectories, &trueTake),
+                   rawBytes);
   printCompression(
       "truth, data +10 %, traj.",
       compressForData(triangles, trueTake, samples, reach, 0.1, dp::PcaLayout::Trajectories),

@@ -8,6 +8,7 @@
 #include "dp/track/DataFit.h"
 #include "dp/track/Tracker.h"
 
+#include <cmath>
 #include <cstdio>
 #include <vector>
 
@@ -23,6 +24,8 @@ struct CompressionFigures
   double rmsDeviation = 0; // of the decompressed vertices (world units)
   DataFit before, after;   // the samples' distance to the take and to the decompressed take
   int rounds = 1;
+  // Given the true motion: the take's RMS vertex error against it, and the decompressed take's.
+  double truthErrorBefore = std::nan(""), truthErrorAfter = std::nan("");
 };
 
 /** Frame-major positions of a take given frame by frame. */
@@ -62,13 +65,15 @@ inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vect
 inline CompressionFigures compressForData(const TriangleMesh& mesh, const std::vector<double>& take,
                                           const std::vector<const FrameSamples*>& samples,
                                           double reach, double growth,
-                                          PcaLayout layout = PcaLayout::Shapes)
+                                          PcaLayout layout = PcaLayout::Shapes,
+                                          const std::vector<double>* truth = nullptr,
+                                          bool slide = true)
 {
   const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
   PcaOptions options;
   options.layout = layout;
   const DataFitCompression c =
-      compressAgainstData(mesh, take.data(), frames, samples, reach, growth, options);
+      compressAgainstData(mesh, take.data(), frames, samples, reach, growth, options, slide);
   CompressionFigures f;
   f.components = c.sequence.report.components;
   f.bitsPerVertexFrame = c.sequence.report.bitsPerVertexFrame;
@@ -77,6 +82,26 @@ inline CompressionFigures compressForData(const TriangleMesh& mesh, const std::v
   f.before = c.tracked;
   f.after = c.decompressed;
   f.rounds = c.rounds;
+  if (truth)
+  {
+    std::vector<double> decoded(take.size());
+    for (std::size_t t = 0; t < frames; ++t)
+      c.sequence.pca.model.frame(t, &decoded[3 * nv * t]);
+    double before = 0, after = 0;
+    for (std::size_t i = 0; i < take.size(); i += 3)
+    {
+      double b = 0, a = 0;
+      for (int k = 0; k < 3; ++k)
+      {
+        b += std::pow(take[i + k] - (*truth)[i + k], 2);
+        a += std::pow(decoded[i + k] - (*truth)[i + k], 2);
+      }
+      before += b;
+      after += a;
+    }
+    f.truthErrorBefore = std::sqrt(before / (take.size() / 3.0));
+    f.truthErrorAfter = std::sqrt(after / (take.size() / 3.0));
+  }
   return f;
 }
 
@@ -88,6 +113,9 @@ inline void printCompression(const char* what, const CompressionFigures& f, doub
               1e3 * f.before.rms, 1e3 * f.after.rms,
               f.before.rms > 0 ? 100 * (f.after.rms / f.before.rms - 1) : 0.0,
               rawBytes / static_cast<double>(f.bytes));
+  if (std::isfinite(f.truthErrorBefore))
+    std::printf("%14s %-22s vertex error against the truth %5.2f -> %5.2f mm\n", "", "",
+                1e3 * f.truthErrorBefore, 1e3 * f.truthErrorAfter);
 }
 
 } // namespace dp::bench

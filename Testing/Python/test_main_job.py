@@ -320,6 +320,8 @@ class TestDefaultRun(TempDirTestCase):
         options = report["options"]
         self.assertEqual(options["compression"]["compression.measure"], "data")
         self.assertEqual(options["compression"]["compression.fitGrowth"], 10)
+        self.assertIs(options["compression"]["compression.slide"], True)
+        self.assertIn(compression["SlidAlongSurface"], (0, 1))  # whichever took fewer bits
         self.assertEqual(options["tracker"]["graph.yieldRate"], 0.3)
         self.assertEqual((options["vertices"], options["detailLevels"]), (1000, "auto"))
         # The tube's motion is low-rank: a handful of components, not one per frame (three in the

@@ -35,6 +35,8 @@ const std::vector<CompressionFigures::Field>& CompressionFigures::fields()
        "against the data: the decompressed mesh's RMS distance to it"},
       {"DistanceToDataGrowth", &F::distanceToDataGrowth,
        "against the data: the growth of that distance, percent"},
+      {"SlidAlongSurface", &F::slid,
+       "against the data: 1 where the take slid along its surface was kept (fewer bits)", true},
       {"DetailLevels", &F::detailLevels, "detail layer: subdivision levels over the tracked mesh",
        true},
       {"DetailBytes", &F::detailBytes, "detail layer: its section of the .dpz", true},

@@ -34,6 +34,7 @@ struct CompressionFigures
   double colourBytes = None, colourTolerance = None;
   // Against the data (the measure `data`): the RMS distance to it before and after, the growth.
   double distanceToDataInput = None, distanceToDataDecompressed = None, distanceToDataGrowth = None;
+  double slid = None; // 1: the take slid along its surface was kept (fewer bits)
   // The detail layer.
   double detailLevels = None, detailBytes = None, detailStep = None;
   double detailDistanceToDataInput = None, detailDistanceToDataDecompressed = None,

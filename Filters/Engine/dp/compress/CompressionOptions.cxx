@@ -39,6 +39,12 @@ std::vector<Row> targetRows()
           "measure data: how much the decompressed mesh's RMS distance to the data may grow over "
           "the tracked mesh's (10 suits noisy captures)",
           [](auto& o) -> auto& { return o.fitGrowth; }),
+      Rows::flag(
+          "compression.slide", "SlideAlongSurface", P::Advanced,
+          "measure data: also code the take with each vertex slid along its surface toward a "
+          "model of fewer components (the tracker's sliding, which the data do not see, costs "
+          "bits), and keep the fewer bits that keep the fit",
+          [](auto& o) -> auto& { return o.slide; }),
   };
 }
 

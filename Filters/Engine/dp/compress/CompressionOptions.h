@@ -40,6 +40,8 @@ struct CompressionOptions
   double kgTarget = 0.2;
   double maxVertexTarget = 0.002;
   double fitGrowth = 10;
+  bool slide =
+      true; // measure data: also code the take slid along its surface (compressAgainstData)
   PcaLayout layout = PcaLayout::Automatic;
   std::size_t components = 0; // 0: chosen for the fewest bytes that meet the target
   bool quantise = true;       // false: the paper's float PCA (no file can hold it)
