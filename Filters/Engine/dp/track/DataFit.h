@@ -27,7 +27,8 @@
  * the truth as it was (it removes wander, not motion).
  *
  * Limits: a take without samples (no points in any frame) has no fit to keep; it is compressed
- * at KG 0.2 %, the codec's default.
+ * at KG 0.2 %, the codec's default. The slide holds one more copy of the take and its
+ * decomposition, and codes the take twice more (about twice the time of the coding alone).
  */
 #pragma once
 
