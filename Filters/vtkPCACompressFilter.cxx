@@ -397,13 +397,13 @@ std::string vtkPCACompressFilter::Compress()
     in.Result.reset();
     return std::string("cannot compress: ") + e.what();
   }
-  in.Figures = this->Figures(frames);
+  in.Figures = this->MeasureFigures(frames);
   if (!this->AgainstData()) // against the data, the data decide the bits
     this->WarnIfWeak(frames);
   return {};
 }
 
-dp::CompressionFigures vtkPCACompressFilter::Figures(std::size_t frames) const
+dp::CompressionFigures vtkPCACompressFilter::MeasureFigures(std::size_t frames) const
 {
   const Internals& in = *this->Internal;
   dp::CompressionFigures f = dp::CompressionFigures::of(*in.Result, frames);

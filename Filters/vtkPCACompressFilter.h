@@ -215,7 +215,7 @@ private:
   /** Compresses the frames collected and warns when the compression is weak. */
   std::string Compress();
   /** The figures of the result (field data), with the fit to the data where it was judged. */
-  dp::CompressionFigures Figures(std::size_t frames) const;
+  dp::CompressionFigures MeasureFigures(std::size_t frames) const;
   /** Warns when most of the frames' worth of components were kept (weak compression). */
   void WarnIfWeak(std::size_t frames);
   /** The reconstruction of `frame` with its error and the figures. */

@@ -200,18 +200,11 @@ public:
   /** The option of that name or ParaView property name; std::invalid_argument if none. */
   const Row& find(std::string_view nameOrProperty) const
   {
-    for (const Row& row : Rows)
-      if (row.name == nameOrProperty || (!row.property.empty() && row.property == nameOrProperty))
-        return row;
+    if (const Row* row = lookup(nameOrProperty))
+      return *row;
     throw std::invalid_argument("no " + What + " '" + std::string(nameOrProperty) + "'");
   }
-  bool has(std::string_view nameOrProperty) const
-  {
-    for (const Row& row : Rows)
-      if (row.name == nameOrProperty || (!row.property.empty() && row.property == nameOrProperty))
-        return true;
-    return false;
-  }
+  bool has(std::string_view nameOrProperty) const { return lookup(nameOrProperty) != nullptr; }
 
   /** Throws std::invalid_argument naming the first option out of its range (NaN included). */
   void check(const Options& options) const
@@ -262,6 +255,13 @@ public:
   }
 
 private:
+  const Row* lookup(std::string_view nameOrProperty) const
+  {
+    for (const Row& row : Rows)
+      if (row.name == nameOrProperty || (!row.property.empty() && row.property == nameOrProperty))
+        return &row;
+    return nullptr;
+  }
   std::vector<const OptionSpec*> specs() const
   {
     std::vector<const OptionSpec*> out;
