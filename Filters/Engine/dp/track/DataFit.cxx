@@ -24,11 +24,11 @@ constexpr double Close = 0.03;
 // The codec's default target, for a take with no data to keep a fit to.
 constexpr double DefaultKG = 0.2;
 // The slide along the surface: toward models of these shares of the components the take kept
-// coded as tracked (the best share varies from take to take: 0.55 to 1 measured), in this many
-// steps, each vertex moving at most this share of its mean edge length a step (larger steps
-// bend the surface between the vertices, which costs fit).
-constexpr double SlideRanks[] = {0.6, 0.9};
-constexpr int SlideSteps = 3;
+// coded as tracked (the best share varies from take to take), in this many steps, each vertex
+// moving at most this share of its mean edge length a step (larger steps bend the surface
+// between the vertices, which costs fit; more small steps gain little more).
+constexpr double SlideRanks[] = {0.55, 0.8};
+constexpr int SlideSteps = 6;
 constexpr double SlideStep = 0.15;
 } // namespace
 
