@@ -175,7 +175,7 @@ TEST(DetailCoding, TheFileCarriesTheLayer)
   const Take take(5);
   dp::CompressedSequence s = detailed(take, 0.001);
   const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
-  EXPECT_EQ(versionOf(bytes), 4u);
+  EXPECT_EQ(versionOf(bytes), 5u);
   const dp::CompressedSequence back = dp::decodeCompressedSequence(bytes.data(), bytes.size(), "d");
   EXPECT_EQ(back.detail.levels, 2);
   EXPECT_EQ(back.detail.step, s.detail.step);

@@ -89,8 +89,8 @@ TEST(PcaColour, RoundTripIsExactThroughMemoryAndAFile)
   dp::setColours(s, colours(m.vertices, m.frames));
   ASSERT_EQ(s.colours.size(), 3 * m.vertices * m.frames);
   const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
-  EXPECT_EQ(versionOf(plain), 4u);
-  EXPECT_EQ(versionOf(bytes), 4u);
+  EXPECT_EQ(versionOf(plain), 5u);
+  EXPECT_EQ(versionOf(bytes), 5u);
   // The report says what the colour takes in the file: the file grows by exactly that.
   EXPECT_GT(s.report.colourBytes, 0u);
   EXPECT_EQ(bytes.size(), plain.size() + s.report.colourBytes);
@@ -145,21 +145,23 @@ TEST(PcaColour, AToleranceHoldsEachColourWithinItAndShrinksTheStream)
 }
 
 // Files of the earlier versions (the .dpz fuzzer's seeds: version 1 without colour, 2 with
-// colour, 3 with a detail layer and colour) still read, and written again (as version 4, the
-// geometry range-coded) they give back the same sequence.
+// colour, 3 with a detail layer and colour, 4 the same with the geometry range-coded) still
+// read, and written again (as version 5, the connectivity range-coded too) they give back the
+// same sequence.
 TEST(PcaColour, EarlierVersionsStillRead)
 {
-  for (const char* name : {"tracked.dpz", "tracked_colour.dpz", "detailed_colour.dpz"})
+  for (const char* name :
+       {"tracked.dpz", "tracked_colour.dpz", "detailed_colour.dpz", "coded_detailed_colour.dpz"})
   {
     const std::string path = std::string(DP_DPZ_SEEDS) + "/" + name;
     std::ifstream in(path, std::ios::binary);
     const std::vector<std::uint8_t> file((std::istreambuf_iterator<char>(in)),
                                          std::istreambuf_iterator<char>());
     const dp::CompressedSequence old = dp::readCompressedSequence(path);
-    EXPECT_LT(versionOf(file), 4u) << name;
+    EXPECT_LT(versionOf(file), 5u) << name;
     EXPECT_EQ(old.colours.empty(), std::string(name) == "tracked.dpz") << name;
     const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(old);
-    EXPECT_EQ(versionOf(bytes), 4u);
+    EXPECT_EQ(versionOf(bytes), 5u);
     const dp::CompressedSequence r = dp::decodeCompressedSequence(bytes.data(), bytes.size(), name);
     EXPECT_EQ(r.pca.meanIntegers, old.pca.meanIntegers) << name;
     EXPECT_EQ(r.pca.basisIntegers, old.pca.basisIntegers) << name;
@@ -205,16 +207,16 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
                  std::runtime_error)
         << "byte " << i;
   }
-  // Read as an earlier version (the geometry as a zstd section): refused, not misread.
+  // Read as an earlier version (the connectivity as a zstd section): refused, not misread.
   std::vector<std::uint8_t> relabelled = bytes;
-  for (std::uint8_t earlier : {1, 2, 3})
+  for (std::uint8_t earlier : {1, 2, 3, 4})
   {
     relabelled[8] = earlier;
     EXPECT_THROW(dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "x"),
                  std::runtime_error);
   }
   // A version this reader does not know.
-  relabelled[8] = 5;
+  relabelled[8] = 6;
   try
   {
     dp::decodeCompressedSequence(relabelled.data(), relabelled.size(), "new.dpz");
@@ -222,7 +224,7 @@ TEST(PcaColour, ACorruptOrTruncatedColourStreamIsRefusedByName)
   }
   catch (const std::runtime_error& e)
   {
-    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 5"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("new.dpz: format version 6"), std::string::npos)
         << e.what();
   }
 }

@@ -6,10 +6,12 @@
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -227,6 +229,33 @@ TEST(PcaCompression, RoundTripThroughTheFileIsExact)
   }
 }
 
+// The frame times come back exactly whichever way the header writes them: evenly spaced ones
+// (first + t step, as the readers number frames) as two numbers, 8 bytes a frame fewer; times
+// summed up in steps of 0.1, which first + t step does not give exactly, and uneven ones as
+// their list.
+TEST(PcaCompression, TheFrameTimesComeBackExactlyEvenlySpacedOrNot)
+{
+  const Animation a = bendingTube();
+  std::vector<double> even, summed, uneven;
+  for (std::size_t t = 0; t < a.frames; ++t)
+  {
+    even.push_back(2.5 + 0.5 * static_cast<double>(t));
+    summed.push_back(t == 0 ? 0.0 : summed.back() + 0.1);
+    uneven.push_back(static_cast<double>(t * t) / 7.0);
+  }
+  std::vector<std::size_t> sizes;
+  for (const std::vector<double>* times : {&even, &summed, &uneven})
+  {
+    const dp::CompressedSequence s = dp::compressSequence(a.positions.data(), a.vertices, a.frames,
+                                                          dp::PcaOptions{}, a.triangles, *times);
+    const std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+    EXPECT_EQ(dp::decodeCompressedSequence(bytes.data(), bytes.size(), "t").times, *times);
+    sizes.push_back(bytes.size());
+  }
+  EXPECT_EQ(sizes[0] + 8 * a.frames - 16, sizes[1]);
+  EXPECT_EQ(sizes[1], sizes[2]);
+}
+
 // A name that cannot take the file (a folder is in the way): an error naming it, and neither a
 // half file under the name nor the one written beside it left behind.
 TEST(PcaCompression, AFileThatCannotBePutInPlaceIsNamedAndLeavesNothing)
@@ -333,6 +362,32 @@ TEST(PcaCompression, CorruptOrTruncatedFilesAreRefusedByName)
   catch (const std::runtime_error& e)
   {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/sequence.dpz"), std::string::npos);
+  }
+}
+
+// A header whose evenly spaced times would let it claim any number of frames in 16 bytes (a fuzz
+// finding: 2^38 frames of times allocated): refused when the file cannot hold them, its CRC right.
+TEST(PcaCompression, AHeaderClaimingMoreFramesThanTheFileHoldsIsRefused)
+{
+  const Animation a = bendingTube(6);
+  const dp::CompressedSequence s =
+      dp::compressSequence(a.positions.data(), a.vertices, a.frames, dp::PcaOptions{}, a.triangles);
+  std::vector<std::uint8_t> bytes = dp::encodeCompressedSequence(s);
+  std::uint64_t headerSize = 0;
+  std::memcpy(&headerSize, bytes.data() + 12, 8);
+  const std::uint64_t frames = std::uint64_t{1} << 30; // vertices x frames still below 2^40
+  std::memcpy(bytes.data() + 20 + 1 + 8, &frames, 8);  // after the layout and the vertex count
+  const auto crc = static_cast<std::uint32_t>(crc32(0L, bytes.data() + 20, headerSize));
+  std::memcpy(bytes.data() + 20 + headerSize, &crc, 4);
+  try
+  {
+    dp::decodeCompressedSequence(bytes.data(), bytes.size(), "many.dpz");
+    ADD_FAILURE();
+  }
+  catch (const std::runtime_error& e)
+  {
+    EXPECT_NE(std::string(e.what()).find("claims more frames (1073741824)"), std::string::npos)
+        << e.what();
   }
 }
 

@@ -379,7 +379,7 @@ class TestPCACompressFilter(TempDirTestCase):
         self.assertIsNone(reader.GetOutput().GetPointData().GetArray("Colors"))
         self.assertIsNone(reader.GetOutput().GetFieldData().GetArray("ColourBytes"))
         with open(self.path("partly.dpz"), "rb") as f:
-            self.assertEqual(f.read(12)[8:], (4).to_bytes(4, "little"))  # format version 4
+            self.assertEqual(f.read(12)[8:], (5).to_bytes(4, "little"))  # format version 5
         # No colour stream in it: the file is as large as the colourless sequence's.
         self.write(self.path("plain.dpz"))
         self.assertEqual(os.path.getsize(self.path("partly.dpz")),

@@ -1,10 +1,11 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The .dpz file (declared in PcaCompression.h): a magic number and format version, a header of
 // counts, steps and times with its CRC-32, then sections each with its sizes and CRC-32: the
-// connectivity (zstd), the geometry (range-coded from version 4 on, zstd before), a byte of flags
-// (from version 3 on), the colour (zstd) and the detail layer (range-coded). Every count is checked
-// against what the bytes can hold before anything is allocated, so a corrupt or hostile file is
-// refused with its name and the reason.
+// connectivity (range-coded from version 5 on, zstd before), the geometry (range-coded from
+// version 4 on, zstd before), a byte of flags (from version 3 on), the colour (zstd) and the
+// detail layer (range-coded). Every count is checked against what the bytes can hold before
+// anything is allocated, so a corrupt or hostile file is refused with its name and the reason.
+#include "dp/compress/ConnectivityCoding.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/IntegerCodec.h"
 #include "dp/compress/ModelCoding.h"
@@ -39,11 +40,16 @@ constexpr char Magic[8] = {'\x89', 'D', 'P', 'Z', '\r', '\n', '\x1a', '\n'};
 // Version 1: connectivity and geometry. Version 2 adds the colour section after them. Version 3
 // adds a byte of flags after the geometry (ColourFlag, DetailFlag) and the detail section.
 // Version 4 codes the geometry over the mesh by the range coder (ModelCoding.h) instead of
-// predicted varints through zstd; it is what this writer writes, and this reader reads all four.
+// predicted varints through zstd. Version 5 codes the connectivity by the range coder too
+// (ConnectivityCoding.h) and the frame times evenly spaced as their first and step; it is what
+// this writer writes, and this reader reads all five.
 constexpr std::uint32_t PlainVersion = 1;
 constexpr std::uint32_t ColourVersion = 2;
 constexpr std::uint32_t DetailVersion = 3;
 constexpr std::uint32_t CodedGeometryVersion = 4;
+constexpr std::uint32_t CodedConnectivityVersion = 5;
+// Version 5's times: as a list (one double a frame), or evenly spaced (the first and the step).
+constexpr std::uint8_t ListedTimes = 0, EvenTimes = 1;
 constexpr std::uint8_t ColourFlag = 1, DetailFlag = 2;
 
 // A fuzzing build (Testing/Fuzz) computes the checksums but does not enforce them, so mutated
@@ -166,8 +172,58 @@ struct Counts
   bool shapes = true;
 };
 
+// The frame times of a header: from version 5 on a byte of form, then the list or the first
+// and the step; before, the list. Listed, the frames are bounded by the header's length; evenly
+// spaced, by what the file's `sectionBytes` after the header can hold (every frame takes a
+// value of the geometry, at least 0.022 bits, unless the take is still: some slack for that).
+void readTimes(ByteReader& header, std::uint32_t version, std::uint64_t frames,
+               std::size_t sectionBytes, std::vector<double>& times)
+{
+  const std::uint8_t form = version >= CodedConnectivityVersion ? header.byte() : ListedTimes;
+  if (form != ListedTimes && form != EvenTimes)
+    header.fail("unknown form of the frame times (" + std::to_string(form) + ")");
+  if (header.remaining() != (form == ListedTimes ? 8 * frames : 16))
+    header.fail("header length does not match its counts");
+  if (form == EvenTimes &&
+      static_cast<double>(frames) > 400.0 * static_cast<double>(sectionBytes) + 1e6)
+    header.fail("claims more frames (" + std::to_string(frames) + ") than the file can hold");
+  times.resize(frames);
+  if (form == EvenTimes)
+  {
+    const auto first = header.raw<double>(), step = header.raw<double>();
+    for (std::size_t t = 0; t < frames; ++t)
+      times[t] = first + static_cast<double>(t) * step;
+  }
+  else
+    for (double& v : times)
+      v = header.raw<double>();
+  for (double v : times)
+    if (!std::isfinite(v))
+      header.fail("a time value is not finite");
+}
+
+// The times as the header writes them: evenly spaced when first + t step gives each exactly.
+void putTimes(std::vector<std::uint8_t>& header, const std::vector<double>& times)
+{
+  const double first = times.empty() ? 0.0 : times[0];
+  const double step = times.size() > 1 ? times[1] - times[0] : 1.0;
+  bool even = true;
+  for (std::size_t t = 0; t < times.size() && even; ++t)
+    even = first + static_cast<double>(t) * step == times[t];
+  putRaw<std::uint8_t>(header, even ? EvenTimes : ListedTimes);
+  if (even)
+  {
+    putRaw<double>(header, first);
+    putRaw<double>(header, step);
+  }
+  else
+    for (double v : times)
+      putRaw<double>(header, v);
+}
+
 // The header: layout, counts, quantisation steps, times.
-Counts readHeader(ByteReader& header, CompressedSequence& s)
+Counts readHeader(ByteReader& header, std::uint32_t version, std::size_t sectionBytes,
+                  CompressedSequence& s)
 {
   QuantisedPca& q = s.pca;
   PcaModel& m = q.model;
@@ -187,7 +243,7 @@ Counts readHeader(ByteReader& header, CompressedSequence& s)
       k > 3 * nv || n.triangles > limit)
     header.fail("implausible counts (vertices " + std::to_string(nv) + ", frames " +
                 std::to_string(nt) + ", components " + std::to_string(k) + ")");
-  if (header.remaining() != 8 * (2 + k + nt))
+  if (header.remaining() < 8 * (2 + k))
     header.fail("header length does not match its counts");
   m.vertices = nv;
   m.frames = nt;
@@ -202,33 +258,18 @@ Counts readHeader(ByteReader& header, CompressedSequence& s)
     if (!(v > 0) || !std::isfinite(v))
       header.fail("invalid basis step");
   }
-  s.times.resize(nt);
-  for (double& v : s.times)
-  {
-    v = header.raw<double>();
-    if (!std::isfinite(v))
-      header.fail("a time value is not finite");
-  }
+  readTimes(header, version, nt, sectionBytes, s.times);
   return n;
 }
 
-// Each varint takes at most 10 bytes, each sequence one more for its order.
-void readConnectivity(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
-                      const Counts& n, CompressedSequence& s)
+// Versions 1 to 4's connectivity: predicted varints through zstd. Each varint takes at most 10
+// bytes, each sequence one more for its order.
+void readPackedConnectivity(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                            const Counts& n, CompressedSequence& s)
 {
   const std::vector<std::uint8_t> raw =
       getSection(in, bytes, "connectivity", 10 * 3 * n.triangles + 1);
-  ByteReader c(raw.data(), raw.size(), name + " (connectivity)");
-  if (raw.size() < 3 * n.triangles) // every index takes at least a byte
-    c.fail("holds " + std::to_string(raw.size()) + " bytes for " + std::to_string(3 * n.triangles) +
-           " indices");
-  s.triangles.resize(3 * n.triangles);
-  c.sequence(s.triangles.data(), s.triangles.size(), 3);
-  if (c.remaining() != 0)
-    c.fail("unexpected bytes after the triangles");
-  for (std::int64_t v : s.triangles)
-    if (v < 0 || static_cast<std::uint64_t>(v) >= n.vertices)
-      c.fail("triangle index " + std::to_string(v) + " out of range");
+  s.triangles = compress::unpackTriangles(raw, name + " (connectivity)", n.triangles, n.vertices);
 }
 
 // Versions 1 to 3: the integers of the mean, the basis and the weights, as predicted varints
@@ -260,22 +301,44 @@ void readGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& 
     g.fail("unexpected bytes after the weights");
 }
 
-// Version 4's geometry: the range coder's bytes (ModelCoding.h) with their size and CRC-32.
-void putCodedGeometry(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>& coded)
+// A range-coded section (the geometry from version 4 on, the connectivity from 5): the coder's
+// bytes with their size and CRC-32.
+void putCoded(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>& coded)
 {
   putRaw<std::uint64_t>(out, coded.size());
   putRaw<std::uint32_t>(out, crc(coded.data(), coded.size()));
   out.insert(out.end(), coded.begin(), coded.end());
 }
 
-void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
-                       const Counts& n, CompressedSequence& s)
+// The bytes of a range-coded section, their checksum checked; `in` moves past them.
+std::pair<const std::uint8_t*, std::size_t> getCoded(ByteReader& in, const std::uint8_t* bytes,
+                                                     const std::string& what)
 {
   const auto size = in.raw<std::uint64_t>();
   const auto expected = in.raw<std::uint32_t>();
   if (size > in.remaining())
-    in.fail("geometry is truncated (" + std::to_string(in.remaining()) + " of " +
+    in.fail(what + " is truncated (" + std::to_string(in.remaining()) + " of " +
             std::to_string(size) + " bytes)");
+  const std::uint8_t* coded = bytes + in.position();
+  if (crc(coded, size) != expected && EnforceChecksums)
+    in.fail(what + ": checksum mismatch (the file is corrupt)");
+  for (std::uint64_t i = 0; i < size; ++i)
+    in.byte();
+  return {coded, static_cast<std::size_t>(size)};
+}
+
+void readCodedConnectivity(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                           const Counts& n, CompressedSequence& s)
+{
+  const auto [coded, size] = getCoded(in, bytes, "connectivity");
+  s.triangles =
+      compress::decodeConnectivity(coded, size, name + " (connectivity)", n.triangles, n.vertices);
+}
+
+void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& name,
+                       const Counts& n, CompressedSequence& s)
+{
+  const auto [coded, size] = getCoded(in, bytes, "geometry");
   // The range coder spends at least 0.022 bits a value (its likeliest bit): more values (or
   // vertices to visit) than that allows cannot be in the bytes, and are refused before anything
   // is allocated.
@@ -283,11 +346,6 @@ void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::str
       static_cast<double>(n.meanCount() + n.components * (n.basisRows() + n.weightRows()));
   if (numbers + static_cast<double>(n.vertices) > 400.0 * static_cast<double>(size) + 1e6)
     in.fail("geometry claims more values than its " + std::to_string(size) + " bytes can hold");
-  const std::uint8_t* coded = bytes + in.position();
-  if (crc(coded, size) != expected && EnforceChecksums)
-    in.fail("geometry: checksum mismatch (the file is corrupt)");
-  for (std::uint64_t i = 0; i < size; ++i)
-    in.byte();
   const compress::VertexTraversal traversal(s.triangles, n.vertices);
   compress::decodeModel(coded, size, name + " (geometry)", traversal, s.pca.model.layout, n.frames,
                         n.components, s.pca);
@@ -450,23 +508,22 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   putRaw<double>(header, q.meanStep);
   for (double v : q.basisSteps)
     putRaw<double>(header, v);
+  std::vector<double> times(m.frames);
   for (std::size_t t = 0; t < m.frames; ++t)
-    putRaw<double>(header, t < s.times.size() ? s.times[t] : static_cast<double>(t));
+    times[t] = t < s.times.size() ? s.times[t] : static_cast<double>(t);
+  putTimes(header, times);
 
   const bool detailed = s.detail.levels > 0;
   if (detailed)
     checkDetail(s);
   std::vector<std::uint8_t> out(Magic, Magic + sizeof(Magic));
-  putRaw<std::uint32_t>(out, CodedGeometryVersion);
+  putRaw<std::uint32_t>(out, CodedConnectivityVersion);
   putRaw<std::uint64_t>(out, header.size());
   out.insert(out.end(), header.begin(), header.end());
   putRaw<std::uint32_t>(out, crc(header.data(), header.size()));
 
-  std::vector<std::uint8_t> connectivity;
-  compress::putSequence(connectivity, s.triangles.data(), s.triangles.size(), 3);
-  putSection(out, connectivity);
-  putCodedGeometry(out,
-                   compress::encodeModel(q, compress::VertexTraversal(s.triangles, m.vertices)));
+  putCoded(out, compress::encodeConnectivity(s.triangles, m.vertices));
+  putCoded(out, compress::encodeModel(q, compress::VertexTraversal(s.triangles, m.vertices)));
   putRaw<std::uint8_t>(out, static_cast<std::uint8_t>((s.colours.empty() ? 0 : ColourFlag) |
                                                       (detailed ? DetailFlag : 0)));
   if (!s.colours.empty())
@@ -527,9 +584,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
   for (std::size_t i = 0; i < sizeof(Magic); ++i)
     in.byte();
   const auto version = in.raw<std::uint32_t>();
-  if (version < PlainVersion || version > CodedGeometryVersion)
+  if (version < PlainVersion || version > CodedConnectivityVersion)
     in.fail("format version " + std::to_string(version) + " is not supported (this reader: " +
-            std::to_string(PlainVersion) + " to " + std::to_string(CodedGeometryVersion) + ")");
+            std::to_string(PlainVersion) + " to " + std::to_string(CodedConnectivityVersion) + ")");
   const auto headerSize = in.raw<std::uint64_t>();
   if (headerSize > in.remaining())
     in.fail("header truncated");
@@ -541,8 +598,11 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
     in.fail("header checksum mismatch (the file is corrupt)");
 
   CompressedSequence s;
-  const Counts n = readHeader(header, s);
-  readConnectivity(in, bytes, name, n, s);
+  const Counts n = readHeader(header, version, in.remaining(), s);
+  if (version >= CodedConnectivityVersion)
+    readCodedConnectivity(in, bytes, name, n, s);
+  else
+    readPackedConnectivity(in, bytes, name, n, s);
   if (version >= CodedGeometryVersion)
     readCodedGeometry(in, bytes, name, n, s);
   else

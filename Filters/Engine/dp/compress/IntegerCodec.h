@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
  * @file IntegerCodec.h
- * @brief Predicted varints: the coding of the .dpz file's connectivity, and the reading of the
- *        geometry of format versions 1 to 3 (since version 4 the geometry is range-coded,
- *        ModelCoding.h). Each sequence is predicted (order 0 none, 1 the value one stride back, 2
+ * @brief Predicted varints: the .dpz file's connectivity in format versions 1 to 4, and from
+ *        version 5 on where zstd packs them smaller than the range coder's corners
+ *        (ConnectivityCoding.h); the reading of its geometry in versions 1 to 3 (range-coded
+ *        since version 4, ModelCoding.h). Each sequence is predicted (order 0 none, 1 the value one stride back, 2
  *        linear from two strides back, 3 for per-vertex sequences the rounded mean of the same
  *        coordinate at the vertex's earlier mesh neighbours), the order with the smallest
  *        estimated cost is kept, and the residuals are written as zigzag varints; whole sections

@@ -206,12 +206,14 @@ double maxVertexError(const Eigen::Ref<const Eigen::MatrixXd>& original,
 
 /**
  * The compressed file (.dpz): magic, version, a header with its CRC-32, and sections, each with
- * its CRC-32: the connectivity (zstd), the geometry (mean, basis, weights: range-coded over the
- * mesh, ModelCoding.h, in version 4; predicted zigzag varints through zstd in versions 1 to 3),
+ * its CRC-32: the connectivity (range-coded, ConnectivityCoding.h, from version 5 on; zstd
+ * before), the geometry (mean, basis, weights: range-coded over the mesh, ModelCoding.h, from
+ * version 4 on; predicted zigzag varints through zstd in versions 1 to 3),
  * in version 2 the colours (each frame's bytes as differences from the previous frame's, zstd,
  * so colour fixed to the surface costs little), and from version 3 on a byte of flags saying
  * which of the colours and the detail layer (its levels, step and range-coded displacements,
- * DetailCoding.h) follow. This writer writes version 4; this reader reads all four. The reader
+ * DetailCoding.h) follow; version 5 also writes evenly spaced frame times as their first and
+ * step. This writer writes version 5; this reader reads all five. The reader
  * checks every length, count and checksum and throws std::runtime_error naming the file and what is
  * wrong; it never returns partial geometry, colour or detail. Writing throws std::invalid_argument
  * when the colours' count is neither 0 nor frames * vertices * 3, or the detail layer's
