@@ -15,8 +15,9 @@
 namespace dp::bench
 {
 
-/** One take compressed: its size and its distance to the data before and after. */
-struct CompressionFigures
+/** One take compressed: its size and its distance to the data before and after (the codec's own
+ *  figures are dp::CompressionFigures; these are the benchmark's, beside the truth). */
+struct TakeCompression
 {
   std::size_t components = 0;
   double bitsPerVertexFrame = 0;
@@ -38,9 +39,9 @@ inline std::vector<double> frameMajor(const std::vector<std::vector<double>>& fr
 }
 
 /** The take compressed at a KG target (shapes, as the main job stores it). */
-inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vector<double>& take,
-                                       const std::vector<const FrameSamples*>& samples,
-                                       double reach, double kg)
+inline TakeCompression compressAtKG(const TriangleMesh& mesh, const std::vector<double>& take,
+                                    const std::vector<const FrameSamples*>& samples, double reach,
+                                    double kg)
 {
   const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
   PcaOptions options;
@@ -50,7 +51,7 @@ inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vect
   std::vector<double> decoded(take.size());
   for (std::size_t t = 0; t < frames; ++t)
     c.pca.model.frame(t, &decoded[3 * nv * t]);
-  CompressionFigures f;
+  TakeCompression f;
   f.components = c.report.components;
   f.bitsPerVertexFrame = c.report.bitsPerVertexFrame;
   f.bytes = encodeCompressedSequence(c).size();
@@ -62,19 +63,19 @@ inline CompressionFigures compressAtKG(const TriangleMesh& mesh, const std::vect
 }
 
 /** The take compressed against its data (dp::compressAgainstData, the main job's default). */
-inline CompressionFigures compressForData(const TriangleMesh& mesh, const std::vector<double>& take,
-                                          const std::vector<const FrameSamples*>& samples,
-                                          double reach, double growth,
-                                          PcaLayout layout = PcaLayout::Shapes,
-                                          const std::vector<double>* truth = nullptr,
-                                          bool slide = true)
+inline TakeCompression compressForData(const TriangleMesh& mesh, const std::vector<double>& take,
+                                       const std::vector<const FrameSamples*>& samples,
+                                       double reach, double growth,
+                                       PcaLayout layout = PcaLayout::Shapes,
+                                       const std::vector<double>* truth = nullptr,
+                                       bool slide = true)
 {
   const std::size_t nv = mesh.numberOfVertices(), frames = take.size() / (3 * nv);
   PcaOptions options;
   options.layout = layout;
   const DataFitCompression c =
       compressAgainstData(mesh, take.data(), frames, samples, reach, growth, options, slide);
-  CompressionFigures f;
+  TakeCompression f;
   f.components = c.sequence.report.components;
   f.bitsPerVertexFrame = c.sequence.report.bitsPerVertexFrame;
   f.bytes = encodeCompressedSequence(c.sequence).size();
@@ -105,7 +106,7 @@ inline CompressionFigures compressForData(const TriangleMesh& mesh, const std::v
   return f;
 }
 
-inline void printCompression(const char* what, const CompressionFigures& f, double rawBytes)
+inline void printCompression(const char* what, const TakeCompression& f, double rawBytes)
 {
   std::printf("%14s %-22s %4zu comp. %6.2f bpvf, deviation %5.2f mm, data %5.2f -> %5.2f mm "
               "(%+5.1f %%), raw points / file %6.0fx\n",
