@@ -4,11 +4,11 @@
  * @brief Predicted varints: the .dpz file's connectivity in format versions 1 to 4, and from
  *        version 5 on where zstd packs them smaller than the range coder's corners
  *        (ConnectivityCoding.h); the reading of its geometry in versions 1 to 3 (range-coded
- *        since version 4, ModelCoding.h). Each sequence is predicted (order 0 none, 1 the value one stride back, 2
- *        linear from two strides back, 3 for per-vertex sequences the rounded mean of the same
- *        coordinate at the vertex's earlier mesh neighbours), the order with the smallest
- *        estimated cost is kept, and the residuals are written as zigzag varints; whole sections
- *        are then packed by zstd.
+ *        since version 4, ModelCoding.h). Each sequence is predicted (order 0 none, 1 the value
+ *        one stride back, 2 linear from two strides back, 3 for per-vertex sequences the rounded
+ *        mean of the same coordinate at the vertex's earlier mesh neighbours), the order with the
+ *        smallest estimated cost is kept, and the residuals are written as zigzag varints; whole
+ *        sections are then packed by zstd.
  *
  * Internal to the compression; not installed API. Limits: a reader trusts nothing: ByteReader
  * throws std::runtime_error naming the file on truncation or malformed numbers, and sums wrap
