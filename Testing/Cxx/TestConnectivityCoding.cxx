@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The connectivity's coding (dp/compress/ConnectivityCoding.h): every kind of triangle list
 // (a mesh in its own order and shuffled, random triples, one triangle repeated, two alternating,
-// the largest indices, repeated corners, none) comes back exactly; a mesh in no pattern costs
+// the largest indices, repeated corners, a fan of 200 000 triangles round one vertex, none)
+// comes back exactly; a mesh in no pattern costs
 // well under the varints through zstd of format versions 1-4, a mesh in a regular pattern no
 // more than they (they are kept then); and a cut, corrupt or overclaiming stream of either
 // coding is refused by name or decodes to indices within the vertex count.
@@ -95,6 +96,10 @@ TEST(ConnectivityCoding, EveryKindOfTriangleListComesBackExactly)
   const std::int64_t top = (std::int64_t{1} << 40) - 1; // the largest count a header may give
   expectRoundTrip({top, 0, top - 1, 0, top, 1}, static_cast<std::size_t>(top) + 1, "extreme");
   expectRoundTrip({3, 3, 5, 5, 5, 5, 1, 3, 1}, 6, "repeated corners");
+  std::vector<std::int64_t> fan; // one vertex in every triangle: its ring must not grow with them
+  for (std::int64_t i = 1; i <= 200000; ++i)
+    fan.insert(fan.end(), {0, i, i + 1});
+  expectRoundTrip(fan, 200002, "fan");
   expectRoundTrip({}, 1, "none");
 }
 

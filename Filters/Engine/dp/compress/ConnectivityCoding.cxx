@@ -19,6 +19,9 @@ namespace
 // (on tracked templates more of either gained nothing; 16 recent cost 1 % more).
 constexpr std::size_t ListSize = 32;
 constexpr std::size_t RecentSize = 32;
+// A vertex's neighbours kept at most: more are never reached by a list of ListSize, and the cap
+// keeps a vertex shared by every triangle (a fan; a hostile file) linear, not quadratic.
+constexpr std::size_t RingSize = 2 * ListSize;
 // The first byte of the bytes: which coding follows.
 constexpr std::uint8_t PackedVarints = 0, CodedCorners = 1;
 
@@ -77,7 +80,7 @@ private:
     for (auto [from, to] : {std::pair{a, b}, std::pair{b, a}})
     {
       std::vector<std::int64_t>& ring = Adjacency[from];
-      if (std::find(ring.begin(), ring.end(), to) == ring.end())
+      if (ring.size() < RingSize && std::find(ring.begin(), ring.end(), to) == ring.end())
         ring.push_back(to);
     }
   }
