@@ -19,8 +19,9 @@ namespace
 // (on tracked templates more of either gained nothing; 16 recent cost 1 % more).
 constexpr std::size_t ListSize = 32;
 constexpr std::size_t RecentSize = 32;
-// A vertex's neighbours kept at most: more are never reached by a list of ListSize, and the cap
-// keeps a vertex shared by every triangle (a fan; a hostile file) linear, not quadratic.
+// A vertex's neighbours kept at most: a list of ListSize seldom reaches further (only past
+// neighbours already listed), and the cap keeps a vertex shared by every triangle (a fan; a
+// hostile file) linear, not quadratic.
 constexpr std::size_t RingSize = 2 * ListSize;
 // The first byte of the bytes: which coding follows.
 constexpr std::uint8_t PackedVarints = 0, CodedCorners = 1;
