@@ -132,6 +132,11 @@ class TestDefaultRun(TempDirTestCase):
         files = pvd_files(self.output("tracked.pvd"))
         return np.stack([np.array(dsa.WrapDataObject(read_vtp(f)).Points) for _, f in files])
 
+    def decompressed(self):
+        """What the .dpz gives back: what the glTF file plays (the compressed take may have slid
+        its vertices along the surface, so the tracked one is not the reference)."""
+        return np.stack(read_dpz(self.output("tracked.dpz")))
+
     def test_it_says_what_it_did(self):
         out = self.result.stdout
         self.assertIn(f"Sequence: {FRAMES} frame(s)", out)
@@ -222,7 +227,7 @@ class TestDefaultRun(TempDirTestCase):
         reader.UpdateInformation()
         steps = reader.GetOutputInformation(0).Get(reader.GetExecutive().TIME_STEPS())
         self.assertEqual(len(steps), FRAMES)
-        original = self.tracked()
+        original = self.decompressed()
         reader.UpdateTimeStep(steps[17])
         played = np.array(dsa.WrapDataObject(first_polydata(reader.GetOutput())).Points)
         diagonal = json.load(open(self.output("report.json")))["boundingBoxDiagonal"]
@@ -237,7 +242,7 @@ class TestDefaultRun(TempDirTestCase):
         report = blender_report(blend, (0, 17, FRAMES - 1))
         self.assertEqual(report["scene_frames"], [0, FRAMES - 1])
         self.assertEqual((report["frames"], report["fps"]), (FRAMES, 24))
-        original = self.tracked()
+        original = self.decompressed()
         diagonal = json.load(open(self.output("report.json")))["boundingBoxDiagonal"]
         for t in (0, 17, FRAMES - 1):
             played = np.array(report["positions"][str(t)])
@@ -255,7 +260,7 @@ class TestDefaultRun(TempDirTestCase):
         self.assertGreater(report["morph_targets"], 0)
         played = np.array(report["positions"][str(FRAMES - 1)])
         diagonal = json.load(open(self.output("report.json")))["boundingBoxDiagonal"]
-        self.assertLess(np.abs(played - self.tracked()[FRAMES - 1]).max(), 0.02 * diagonal)
+        self.assertLess(np.abs(played - self.decompressed()[FRAMES - 1]).max(), 0.02 * diagonal)
 
     def test_the_report_holds_every_frame_and_the_compression(self):
         with open(self.output("report.json")) as f:
