@@ -246,9 +246,9 @@ std::vector<std::int64_t> decodeConnectivity(const std::uint8_t* bytes, std::siz
     throw std::runtime_error(what + ": implausible triangle count");
   if (bytes[0] == PackedVarints)
     return decodePacked(bytes + 1, size - 1, what, triangleCount, vertices);
-  // Each corner costs the range coder at least one decision (0.022 bits at its likeliest): more
-  // triangles than the bytes can hold are refused before anything is allocated.
-  if (static_cast<double>(triangleCount) > 120.0 * static_cast<double>(size) + 1e5)
+  // Each corner is at least one decision of the coder: more corners than the bytes can hold are
+  // refused before anything is allocated.
+  if (!canHold(size, 3.0 * static_cast<double>(triangleCount)))
     throw std::runtime_error(what + ": claims more triangles than its " + std::to_string(size) +
                              " bytes can hold");
   std::vector<std::int64_t> triangles(3 * triangleCount);

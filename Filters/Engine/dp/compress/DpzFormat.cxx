@@ -10,6 +10,7 @@
 #include "dp/compress/IntegerCodec.h"
 #include "dp/compress/ModelCoding.h"
 #include "dp/compress/PcaCompression.h"
+#include "dp/compress/RangeCoder.h"
 #include "dp/detail/FileText.h"
 
 #include <zlib.h>
@@ -184,8 +185,7 @@ void readTimes(ByteReader& header, std::uint32_t version, std::uint64_t frames,
     header.fail("unknown form of the frame times (" + std::to_string(form) + ")");
   if (header.remaining() != (form == ListedTimes ? 8 * frames : 16))
     header.fail("header length does not match its counts");
-  if (form == EvenTimes &&
-      static_cast<double>(frames) > 400.0 * static_cast<double>(sectionBytes) + 1e6)
+  if (form == EvenTimes && !compress::canHold(sectionBytes, static_cast<double>(frames)))
     header.fail("claims more frames (" + std::to_string(frames) + ") than the file can hold");
   times.resize(frames);
   if (form == EvenTimes)
@@ -339,12 +339,11 @@ void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::str
                        const Counts& n, CompressedSequence& s)
 {
   const auto [coded, size] = getCoded(in, bytes, "geometry");
-  // The range coder spends at least 0.022 bits a value (its likeliest bit): more values (or
-  // vertices to visit) than that allows cannot be in the bytes, and are refused before anything
-  // is allocated.
+  // More values (or vertices to visit) than the coder's bytes can hold are refused before
+  // anything is allocated.
   const double numbers =
       static_cast<double>(n.meanCount() + n.components * (n.basisRows() + n.weightRows()));
-  if (numbers + static_cast<double>(n.vertices) > 400.0 * static_cast<double>(size) + 1e6)
+  if (!compress::canHold(size, numbers + static_cast<double>(n.vertices)))
     in.fail("geometry claims more values than its " + std::to_string(size) + " bytes can hold");
   const compress::VertexTraversal traversal(s.triangles, n.vertices);
   compress::decodeModel(coded, size, name + " (geometry)", traversal, s.pca.model.layout, n.frames,
@@ -451,11 +450,9 @@ void readDetail(ByteReader& in, const std::uint8_t* bytes, const std::string& na
   if (size > in.remaining())
     in.fail("detail layer is truncated (" + std::to_string(in.remaining()) + " of " +
             std::to_string(size) + " bytes)");
-  // The range coder spends at least 0.022 bits a value (its likeliest bit): more values than
-  // that allows cannot be in the bytes, and are refused before anything is allocated; and a
+  // More values than the coder's bytes can hold are refused before anything is allocated; and a
   // subdivision of more triangles than the fine vertices claimed is not made.
-  if (static_cast<double>(fine) * static_cast<double>(n.frames) >
-      400.0 * static_cast<double>(size) + 1e6)
+  if (!compress::canHold(size, static_cast<double>(fine) * static_cast<double>(n.frames)))
     in.fail("detail layer claims more values than its " + std::to_string(size) + " bytes can hold");
   if (std::ldexp(static_cast<double>(n.triangles), 2 * d.levels) >
       8.0 * static_cast<double>(fine) + 1e6)

@@ -47,6 +47,15 @@ struct IntegerModel
   BitModel mantissa[MaximumBits + 1][AdaptiveMantissa];
 };
 
+/** Whether `bytes` of the coder can hold `values` values of one decision or more each: every
+ *  decision costs at least 0.022 bits (the likeliest bit's odds), so at most about 360 values a
+ *  byte, with slack for a small stream. A decoder asks it of a count read from a file before it
+ *  allocates anything for that count. */
+inline bool canHold(std::size_t bytes, double values)
+{
+  return values <= 400.0 * static_cast<double>(bytes) + 1e6;
+}
+
 class RangeEncoder
 {
 public:
