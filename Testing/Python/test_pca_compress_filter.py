@@ -168,6 +168,26 @@ class TestPCACompressFilter(TempDirTestCase):
             self.assertIn(name, rec.error_text)
             self.assertEqual(reader.GetOutput().GetNumberOfPoints(), 0)
 
+    def test_a_header_claiming_billions_of_vertices_is_refused_by_the_budget(self):
+        # The report's 144-byte file: version 1, trajectories, one frame, no components, no
+        # triangles, 2^31 vertices, its checksums right. It grew to 17 GB and aborted the reader.
+        import struct
+        import zlib
+        header = struct.pack("<BQQQQdd", 0, 2**31, 1, 0, 0, 1e-3, 1e-3) + struct.pack("<d", 0.0)
+        data = (b"\x89DPZ\r\n\x1a\n" + struct.pack("<IQ", 1, len(header)) + header +
+                struct.pack("<I", zlib.crc32(header)) + bytes(64))  # sections never reached
+        path = self.path("billions.dpz")
+        with open(path, "wb") as out:
+            out.write(data)
+        reader = dynamicpoints.vtkCompressedSequenceReader()
+        reader.SetFileName(path)
+        rec = MessageRecorder(reader)
+        reader.Update()
+        self.assertIn("billions.dpz: reading it needs", rec.error_text)
+        self.assertIn("more than the memory budget of 8.0 GiB", rec.error_text)
+        self.assertIn("DP_MEMORY_BUDGET", rec.error_text)
+        self.assertEqual(reader.GetOutput().GetNumberOfPoints(), 0)
+
     def test_the_gltf_export_plays_back_in_vtk_within_the_target(self):
         glb = self.path("tube.glb")
         self.write(glb, KGTarget=0.2)

@@ -3,8 +3,11 @@
 // counts, steps and times with its CRC-32, then sections each with its sizes and CRC-32: the
 // connectivity (range-coded from version 5 on, zstd before), the geometry (range-coded from
 // version 4 on, zstd before), a byte of flags (from version 3 on), the colour (zstd) and the
-// detail layer (range-coded). Every count is checked against what the bytes can hold before
-// anything is allocated, so a corrupt or hostile file is refused with its name and the reason.
+// detail layer (range-coded). Every count is checked against what the bytes can hold, and what
+// the decoded take will hold against the memory budget (dp::MemoryAccount), before anything is
+// allocated for it, so a corrupt or hostile file is refused with its name and the reason.
+// Worst case: the budget; below it, the model's values (16 bytes each) at the range coder's
+// densest, about 6 KiB per byte of the geometry, and zstd sections at 32 768x.
 #include "dp/compress/ConnectivityCoding.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/IntegerCodec.h"
@@ -12,6 +15,7 @@
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
 #include "dp/detail/FileText.h"
+#include "dp/io/MemoryBudget.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -221,9 +225,34 @@ void putTimes(std::vector<std::uint8_t>& header, const std::vector<double>& time
       putRaw<double>(header, v);
 }
 
+// What decoding holds, per count, generously (TestMemoryBudget measures it): a triangle's
+// three ids and the coders' corner tables and rings; a vertex's traversal and neighbour lists;
+// a value of the model as an integer and a double (and its varint in versions 1 to 3); a frame's
+// positions given to the caller.
+constexpr double BytesPerTriangle = 160, BytesPerVertex = 160, BytesPerValue = 32,
+                 BytesPerFramePosition = 24;
+// The detail layer: a fine vertex's displacement per frame (and its share of the coded bytes),
+// and once its place in the subdivision, its position, normal and colour in the frame given to
+// the caller; a fine triangle's ids, in the map and in the caller's cells.
+constexpr double BytesPerFineDisplacement = 10, BytesPerFineVertex = 160, BytesPerFineTriangle = 96;
+
+// Claims from `account` what the header's counts make the decoder hold, before any of it.
+void claimBase(MemoryAccount& account, const Counts& n)
+{
+  const double nv = static_cast<double>(n.vertices), nt = static_cast<double>(n.frames);
+  const double values =
+      static_cast<double>(n.meanCount()) +
+      static_cast<double>(n.components) * static_cast<double>(n.basisRows() + n.weightRows());
+  account.claim(8 * nt + BytesPerTriangle * static_cast<double>(n.triangles) +
+                    (BytesPerVertex + BytesPerFramePosition) * nv + BytesPerValue * values,
+                std::to_string(n.vertices) + " vertices, " + std::to_string(n.triangles) +
+                    " triangles, " + std::to_string(n.frames) + " frames, " +
+                    std::to_string(n.components) + " components");
+}
+
 // The header: layout, counts, quantisation steps, times.
 Counts readHeader(ByteReader& header, std::uint32_t version, std::size_t sectionBytes,
-                  CompressedSequence& s)
+                  MemoryAccount& account, CompressedSequence& s)
 {
   QuantisedPca& q = s.pca;
   PcaModel& m = q.model;
@@ -258,6 +287,7 @@ Counts readHeader(ByteReader& header, std::uint32_t version, std::size_t section
     if (!(v > 0) || !std::isfinite(v))
       header.fail("invalid basis step");
   }
+  claimBase(account, n);
   readTimes(header, version, nt, sectionBytes, s.times);
   return n;
 }
@@ -286,6 +316,12 @@ void readGeometry(ByteReader& in, const std::uint8_t* bytes, const std::string& 
   if (raw.size() < numbers) // every number takes at least a byte
     g.fail("holds " + std::to_string(raw.size()) + " bytes for " + std::to_string(numbers) +
            " numbers");
+  // Every vertex is a triangle's corner or has values of its own (a byte each at least): more
+  // are refused before their neighbour lists are made.
+  if (n.vertices > 3 * n.triangles + raw.size())
+    g.fail("claims " + std::to_string(n.vertices) + " vertices; its " +
+           std::to_string(n.triangles) + " triangles and " + std::to_string(raw.size()) +
+           " bytes of values hold at most " + std::to_string(3 * n.triangles + raw.size()));
   const EarlierNeighbours mesh(s.triangles, n.vertices);
   const EarlierNeighbours* perVertex = n.shapes ? &mesh : nullptr;
   q.meanIntegers.resize(meanCount);
@@ -351,9 +387,13 @@ void readCodedGeometry(ByteReader& in, const std::uint8_t* bytes, const std::str
 }
 
 // Version 2's colour section: exactly three bytes per vertex and frame.
-void readColours(ByteReader& in, const std::uint8_t* bytes, const Counts& n, CompressedSequence& s)
+void readColours(ByteReader& in, const std::uint8_t* bytes, const Counts& n, MemoryAccount& account,
+                 CompressedSequence& s)
 {
   const std::uint64_t count = 3 * n.vertices * n.frames;
+  // The stream as zstd gives it back, the colours from it, a frame's given to the caller.
+  account.claim(2.0 * static_cast<double>(count) + 3.0 * static_cast<double>(n.vertices),
+                "the colours of " + std::to_string(n.frames) + " frames");
   const std::size_t start = in.position();
   const std::vector<std::uint8_t> raw = getSection(in, bytes, "colour stream", count);
   if (raw.size() != count)
@@ -432,7 +472,7 @@ void putDetail(std::vector<std::uint8_t>& out, const DetailLayer& d, std::size_t
 
 // The detail section back: its header checked against the base, its displacements decoded.
 void readDetail(ByteReader& in, const std::uint8_t* bytes, const std::string& name, const Counts& n,
-                CompressedSequence& s)
+                MemoryAccount& account, CompressedSequence& s)
 {
   const std::size_t start = in.position();
   DetailLayer& d = s.detail;
@@ -459,6 +499,14 @@ void readDetail(ByteReader& in, const std::uint8_t* bytes, const std::string& na
     in.fail("detail layer claims " + std::to_string(fine) + " fine vertices, too few for " +
             std::to_string(d.levels) + " levels over " + std::to_string(n.triangles) +
             " triangles");
+  const double fineTriangles = std::ldexp(static_cast<double>(n.triangles), 2 * d.levels);
+  account.claim(
+      static_cast<double>(size) +
+          static_cast<double>(fine) *
+              (BytesPerFineVertex + BytesPerFineDisplacement * static_cast<double>(n.frames)) +
+          BytesPerFineTriangle * fineTriangles,
+      "a detail layer of " + std::to_string(fine) + " fine vertices over " +
+          std::to_string(n.frames) + " frames");
   std::size_t computed = 0;
   try
   {
@@ -595,7 +643,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
     in.fail("header checksum mismatch (the file is corrupt)");
 
   CompressedSequence s;
-  const Counts n = readHeader(header, version, in.remaining(), s);
+  MemoryAccount account(name);
+  account.claim(static_cast<double>(size), "the file's bytes"); // held by the caller throughout
+  const Counts n = readHeader(header, version, in.remaining(), account, s);
   if (version >= CodedConnectivityVersion)
     readCodedConnectivity(in, bytes, name, n, s);
   else
@@ -612,9 +662,9 @@ CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size
       in.fail("unknown sections (flags " + std::to_string(flags) + ")");
   }
   if (flags & ColourFlag)
-    readColours(in, bytes, n, s);
+    readColours(in, bytes, n, account, s);
   if (flags & DetailFlag)
-    readDetail(in, bytes, name, n, s);
+    readDetail(in, bytes, name, n, account, s);
   if (in.remaining() != 0)
     in.fail("unexpected bytes after the last section");
   dequantise(n, s.pca);

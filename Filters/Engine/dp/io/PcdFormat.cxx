@@ -2,6 +2,7 @@
 // PCD reader and writer (the Point Cloud Library's format, v0.7: ascii, binary,
 // binary_compressed).
 #include "dp/detail/FileText.h"
+#include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <cmath>
@@ -477,6 +478,14 @@ PointCloud readPCD(const std::string& path)
                               " points but the data holds at most " +
                               std::to_string(text.size() / leastBytesPerPoint));
   }
+  // Compressed, a file may still hold 88 times its size: what the points will hold (the data
+  // decompressed, their values, the cloud) is asked of the budget first.
+  if (header.data == "binary_compressed")
+    MemoryAccount(path).claim(
+        static_cast<double>(bytes.size()) +
+            static_cast<double>(header.points) *
+                static_cast<double>(layout.recordSize + 8 * layout.valuesPerPoint + 40),
+        std::to_string(header.points) + " points");
   PcdValues values;
   values.values.resize(header.points * layout.valuesPerPoint);
   values.packedColor.resize(layout.rgb >= 0 ? header.points : 0);

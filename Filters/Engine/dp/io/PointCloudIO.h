@@ -13,6 +13,12 @@
  * (a truncated binary body, a short ASCII body, an index out of range are errors) and throws
  * dp::FileError whose message starts with the file name. Non-finite coordinates are not
  * errors: readPointCloud() drops them and counts them in the report.
+ *
+ * Memory: a header's counts are checked against what the bytes after it can hold before
+ * anything is allocated, so a file costs at most, resident, per byte of it (its densest records;
+ * TestMemoryBudget holds these): binary PLY 12, ASCII PLY 10, binary PCD 18, ASCII PCD 10, text
+ * 12, OBJ 10; a .series file (FrameSequence) 16. Compressed PCD may hold 88 times its size: what
+ * its points will take is asked of the memory budget first (MemoryBudget.h).
  */
 #pragma once
 
