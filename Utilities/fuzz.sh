@@ -5,7 +5,10 @@
 # or for DP_FUZZ_RUNS executions when that is set, on a copy of its seed corpus
 # (Testing/Fuzz/corpus/NAME, which also holds the inputs of past findings, replayed first); the
 # copy grows there from run to run. Exits non-zero on the first finding; the input is left in the
-# build's findings/.
+# build's findings/. Memory is held tight: the readers' budget (DP_MEMORY_BUDGET) is 128 MiB, and
+# a process resident over 512 MiB, or a single allocation over 256 MiB, is a finding (what a
+# reader allocates is bounded by its input, and the inputs are small). Each run's executions
+# and coverage are added to $build/runs.tsv (target, date, runs, edges, features).
 #   bash Utilities/fuzz.sh [SECONDS] [TARGET ...]
 #   targets: ply pcd xyz obj series template_ply template_obj track dpz (default: all)
 set -euo pipefail
@@ -31,14 +34,17 @@ for target in "${targets[@]}"; do
   echo "== fuzz_$target for $span"
   status=0
   start=$(date +%s)
-  TMPDIR="$scratch" "$build/fuzz_$target" "$corpus" "${limit[@]}" \
-    -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
+  TMPDIR="$scratch" DP_MEMORY_BUDGET=128M "$build/fuzz_$target" "$corpus" "${limit[@]}" \
+    -timeout=10 -rss_limit_mb=512 -malloc_limit_mb=256 -print_final_stats=1 \
     -artifact_prefix="$build/findings/${target}-" >"$build/$target.log" 2>&1 ||
     status=$?
   grep -E "^(stat::number_of_executed_units|stat::peak_rss|SUMMARY)|runtime error|ERROR:" \
     "$build/$target.log" || true
-  echo "   $(($(date +%s) - start)) s; coverage: $(grep -oE 'cov: [0-9]+ ft: [0-9]+' \
-    "$build/$target.log" | tail -1); corpus: $(ls "$corpus" | wc -l) inputs"
+  runs=$(grep -oE '^stat::number_of_executed_units: [0-9]+' "$build/$target.log" | grep -oE '[0-9]+$' || echo 0)
+  coverage=$(grep -oE 'cov: [0-9]+ ft: [0-9]+' "$build/$target.log" | tail -1)
+  echo "   $(($(date +%s) - start)) s; $runs runs; coverage: $coverage; corpus: $(ls "$corpus" | wc -l) inputs"
+  printf '%s\t%s\t%s\t%s\n' "$target" "$(date -u +%F)" "$runs" \
+    "$(echo "$coverage" | awk '{print $2 "\t" $4}')" >>"$build/runs.tsv"
   if [ "$status" -ne 0 ]; then
     echo "fuzz_$target: finding (log $build/$target.log, input in $build/findings/)"
     exit 1

@@ -255,13 +255,17 @@ TEST(MemoryBudget, HostileDpzHeadersAreRefusedWithinAHundredMiB)
       if (version >= 5) // frames evenly spaced: any number of them in 16 bytes
         claims.push_back({version, layout, 1 << 20, 1 << 20, 3000, 0});
     }
-  for (const Claim& c : claims)
+  for (std::size_t i = 0; i < claims.size(); ++i)
   {
+    const Claim& c = claims[i];
     const std::string label = "v" + std::to_string(c.version) + " layout " +
                               std::to_string(c.layout) + " vertices " + std::to_string(c.vertices) +
                               " triangles " + std::to_string(c.triangles) + " components " +
                               std::to_string(c.components);
-    const std::string path = scratch("hostile.dpz");
+    // Named apart, so that the fuzzer's corpus can take them as seeds (Testing/Fuzz/corpus/dpz).
+    const std::string path =
+        scratch("limit_v" + std::to_string(c.version) + "_" +
+                (c.layout ? "shapes" : "trajectories") + "_" + std::to_string(i) + ".dpz");
     const std::vector<std::uint8_t> bytes = hostileDpz(c);
     ASSERT_LT(bytes.size(), 32768u) << label;
     writeBytes(path, bytes);
