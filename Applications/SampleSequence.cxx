@@ -5,6 +5,7 @@
 #include "PerFrameMesh.h"
 
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/DepthRig.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 #include "dp/io/FrameSequence.h"
@@ -41,6 +42,28 @@ Sampling:
                         colour for the same material point in every frame: red, green and
                         blue waves over the first frame's shape)
 
+Depth cameras (as depth-camera rigs and single-sensor tools capture; colour and normals always):
+  --rig N               render every frame through N simulated depth cameras around the
+                        subject (1: a single sensor) with a real sensor's resolution, field of
+                        view, depth noise growing with distance and incidence, depth steps,
+                        flying pixels at silhouettes, no return at grazing angles, and each
+                        camera's pose off by a small error; writes the fused cloud per frame
+                        (or with --depth-mesh each camera's open mesh) and rig.json
+  --sensor NAME         kinect-v1, kinect-v2 (default), azure-kinect, d415 or d435
+  --subject-height M    the subject's extent along --up in frame 0, in metres (default 1.7):
+                        the scale of the sensor's noise
+  --up AXIS             the subject's up axis: x, y (default), z, -x, -y or -z
+  --rig-distance M      cameras' distance from the take's centre in metres (default: where
+                        the whole take fills the view)
+  --azimuth DEG         camera 0's side of the subject around --up (default 0)
+  --rotation-error DEG  each camera's pose error, per axis (default 0.1)
+  --translation-error M each camera's position error, per axis, in metres (default 0.002)
+  --floor               a floor under the subject, its patch seen where the cameras reach
+  --depth-mesh          write each camera's depth image triangulated into an open mesh (one
+                        camera: in OUTPUT_FOLDER; more: OUTPUT_FOLDER/camera_K/)
+  --points N            with --rig: thin the fused cloud to about N points a frame (default:
+                        every point)
+
 Per-frame meshes (as volumetric-video studios publish them):
   --per-frame-mesh N    write each frame as a mesh of about N vertices reconstructed from
                         its samples: its own connectivity every frame, the samples' colours
@@ -55,6 +78,13 @@ Output:
   -h, --help            show this help
 )";
 
+dp::RigOptions noRig()
+{
+  dp::RigOptions rig;
+  rig.cameras = 0;
+  return rig;
+}
+
 // What to sample and how; noise and hole radius are shares of the mesh's diagonal.
 struct Request
 {
@@ -65,8 +95,56 @@ struct Request
   double noise = 0, holeRadius = 0.05;
   std::size_t meshVertices = 0; // --per-frame-mesh; 0: points
   bool defects = false;
+  dp::RigOptions rig = noRig(); // with rig.cameras > 0 (--rig)
+  bool depthMesh = false, pointsGiven = false;
   bool help = false;
 };
+
+// The depth-camera options; false for another argument.
+bool parseRigOption(int argc, char** argv, int& i, Request& r)
+{
+  using namespace dp::cli;
+  const std::string arg = argv[i];
+  dp::RigOptions& rig = r.rig;
+  if (arg == "--rig")
+    rig.cameras = parseCount(arg, optionValue(argc, argv, i), 1, 64);
+  else if (arg == "--sensor")
+  {
+    rig.sensor = optionValue(argc, argv, i);
+    try
+    {
+      dp::depthSensorModel(rig.sensor);
+    }
+    catch (const std::invalid_argument& e)
+    {
+      throw UsageError(std::string("option --sensor: ") + e.what());
+    }
+  }
+  else if (arg == "--subject-height")
+    rig.subjectHeight = parseDouble(arg, optionValue(argc, argv, i), 1e-3, 1e3);
+  else if (arg == "--up")
+  {
+    rig.up = optionValue(argc, argv, i);
+    if (rig.up != "x" && rig.up != "y" && rig.up != "z" && rig.up != "-x" && rig.up != "-y" &&
+        rig.up != "-z")
+      throw UsageError("option --up: '" + rig.up + "' is not one of x y z -x -y -z");
+  }
+  else if (arg == "--rig-distance")
+    rig.distance = parseDouble(arg, optionValue(argc, argv, i), 0.1, 100);
+  else if (arg == "--azimuth")
+    rig.azimuth = parseDouble(arg, optionValue(argc, argv, i), -360, 360);
+  else if (arg == "--rotation-error")
+    rig.rotationError = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
+  else if (arg == "--translation-error")
+    rig.translationError = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else if (arg == "--floor")
+    rig.floor = true;
+  else if (arg == "--depth-mesh")
+    r.depthMesh = true;
+  else
+    return false;
+  return true;
+}
 
 // Reads the command line; a UsageError for a bad one.
 Request parseArguments(int argc, char** argv)
@@ -88,7 +166,10 @@ Request parseArguments(int argc, char** argv)
     else if (arg == "--frames")
       r.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
     else if (arg == "--points")
-      r.sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000);
+      r.sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000),
+      r.pointsGiven = true;
+    else if (parseRigOption(argc, argv, i, r))
+      continue;
     else if (arg == "--seed")
       r.sampling.seed = parseCount(arg, optionValue(argc, argv, i), 0, ~0ULL);
     else if (arg == "--noise")
@@ -127,6 +208,13 @@ Request parseArguments(int argc, char** argv)
   }
   if (r.output.empty())
     throw UsageError("no OUTPUT_FOLDER given");
+  if (r.rig.cameras == 0 && (r.depthMesh || r.rig.floor))
+    throw UsageError("--depth-mesh and --floor need --rig");
+  if (r.rig.cameras > 0 && (r.meshVertices > 0 || r.sampling.holes > 0 || r.noise > 0))
+    throw UsageError("--rig makes its own noise and holes: it takes no --noise, --holes or "
+                     "--per-frame-mesh");
+  if (r.rig.cameras > 0 && r.writing.extension != "ply")
+    throw UsageError("--rig writes PLY (points with normals and colours, or meshes)");
   return r;
 }
 
@@ -158,6 +246,17 @@ int run(int argc, char** argv)
     return 0;
   }
   const std::unique_ptr<dp::AnimatedMesh> animation = animationOf(r);
+  if (r.rig.cameras > 0)
+  {
+    r.rig.seed = r.sampling.seed;
+    r.rig.points = r.pointsGiven ? r.sampling.pointsPerFrame : 0;
+    const std::string series =
+        dp::writeRigSequence(*animation, r.rig, r.output, r.writing, r.depthMesh);
+    std::cout << "wrote " << animation->numberOfFrames() << " frames seen by " << r.rig.cameras
+              << " simulated " << r.rig.sensor << " camera" << (r.rig.cameras > 1 ? "s" : "")
+              << (r.depthMesh ? " as depth meshes" : ", fused,") << " to " << series << "\n";
+    return 0;
+  }
   const double diagonal = dp::boundingBoxDiagonal(animation->positions(0));
   r.sampling.noiseStdDev = r.noise * diagonal;
   r.sampling.holeRadius = r.holeRadius * diagonal;

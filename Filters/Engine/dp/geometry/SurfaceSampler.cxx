@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/SurfaceSampler.h"
 
+#include "dp/geometry/DeterministicRandom.h"
+
 #include "dp/io/PointCloudIO.h"
 
 #include <nlohmann/json.hpp>
@@ -20,32 +22,7 @@ namespace dp
 namespace
 {
 
-// Deterministic random numbers: std::mt19937_64's sequence is fixed by the standard, and the
-// conversions below are our own (the standard distributions are implementation-defined).
-class Random
-{
-public:
-  Random(std::uint64_t seed, std::uint64_t stream)
-      : Engine(mix(seed ^ mix(stream + 0x9E3779B97F4A7C15ULL)))
-  {
-  }
-  double uniform() { return static_cast<double>(Engine() >> 11) * 0x1.0p-53; } // [0,1)
-  double gaussian()
-  {
-    // Box-Muller; 1 - u keeps the logarithm's argument in (0,1].
-    const double u = 1.0 - uniform(), v = uniform();
-    return std::sqrt(-2.0 * std::log(u)) * std::cos(6.283185307179586 * v);
-  }
-
-private:
-  static std::uint64_t mix(std::uint64_t x) // SplitMix64 finaliser
-  {
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ULL;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBULL;
-    return x ^ (x >> 31);
-  }
-  std::mt19937_64 Engine;
-};
+using Random = DeterministicRandom;
 
 struct Vec3
 {
@@ -311,8 +288,9 @@ PointCloud sampleSurface(const std::vector<double>& positions,
   return cloud;
 }
 
-std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions& sampling,
-                                 const std::string& outDir, const SequenceWriteOptions& writing)
+std::string writeFrameSequence(
+    const AnimatedMesh& mesh, const std::string& outDir, const SequenceWriteOptions& writing,
+    const std::function<PointCloud(const std::vector<double>&, std::size_t)>& makeFrame)
 {
   std::error_code ec;
   fs::create_directories(outDir, ec);
@@ -324,8 +302,6 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
     if (ec)
       throw FileError(outDir + "/truth", "cannot create folder (" + ec.message() + ")");
   }
-  // A colour fixed to the material: the pattern over the first frame's shape.
-  const std::vector<double> rest = sampling.colours ? mesh.positions(0) : std::vector<double>{};
   nlohmann::json series;
   series["file-series-version"] = "1.0";
   series["files"] = nlohmann::json::array();
@@ -334,13 +310,10 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
     char number[32];
     std::snprintf(number, sizeof(number), "%04zu", f);
     const std::string name = writing.filePrefix + number + "." + writing.extension;
-    const std::vector<double> positions = mesh.positions(f);
-    SamplerOptions options = sampling;
-    options.colourRest = &rest;
-    PointCloud samples = sampleSurface(positions, mesh.triangles(), options, f);
+    PointCloud frame = makeFrame(mesh.positions(f), f);
     if (writing.transform)
-      samples = writing.transform(std::move(samples), f);
-    writePointCloud((fs::path(outDir) / name).string(), samples);
+      frame = writing.transform(std::move(frame), f);
+    writePointCloud((fs::path(outDir) / name).string(), frame);
     if (writing.writeGroundTruth)
     {
       PointCloud truth = mesh.frameMesh(f);
@@ -356,6 +329,18 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
   if (!out)
     throw FileError(seriesPath, "cannot write the .series file");
   return seriesPath;
+}
+
+std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions& sampling,
+                                 const std::string& outDir, const SequenceWriteOptions& writing)
+{
+  // A colour fixed to the material: the pattern over the first frame's shape.
+  const std::vector<double> rest = sampling.colours ? mesh.positions(0) : std::vector<double>{};
+  SamplerOptions options = sampling;
+  options.colourRest = &rest;
+  return writeFrameSequence(mesh, outDir, writing,
+                            [&](const std::vector<double>& positions, std::size_t f)
+                            { return sampleSurface(positions, mesh.triangles(), options, f); });
 }
 
 } // namespace dp

@@ -83,4 +83,11 @@ std::string writeSampledSequence(const AnimatedMesh& mesh, const SamplerOptions&
                                  const std::string& outDir,
                                  const SequenceWriteOptions& writing = {});
 
+/** Writes `makeFrame(positions, f)` (then `writing.transform`) for every frame of `mesh` as
+ *  `outDir/<prefix>NNNN.<ext>`, the truth if asked, and `outDir/points.series`; returns its
+ *  path. */
+std::string writeFrameSequence(
+    const AnimatedMesh& mesh, const std::string& outDir, const SequenceWriteOptions& writing,
+    const std::function<PointCloud(const std::vector<double>&, std::size_t)>& makeFrame);
+
 } // namespace dp
