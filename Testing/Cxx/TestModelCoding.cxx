@@ -148,7 +148,8 @@ TEST(ModelCoding, ValuesBeyondTheLimitAreRefused)
 }
 
 // The prediction over the mesh earns its keep: the tube's positions (a smooth field over the
-// mesh) cost fewer bytes than the same values scattered over the vertices (about half).
+// mesh) cost fewer bytes than the same values scattered over the vertices (measured: 5304 bytes
+// against 10 512), and no more than a few percent over what they cost today.
 TEST(ModelCoding, ASmoothFieldCostsLessThanTheSameValuesScattered)
 {
   const dp::BendingTube tube = tubeMesh(80, 40);
@@ -179,7 +180,8 @@ TEST(ModelCoding, ASmoothFieldCostsLessThanTheSameValuesScattered)
   std::size_t smoothBytes = 0, scatteredBytes = 0;
   expectSameIntegers(q, roundTrip(q, t, &smoothBytes), "smooth");
   expectSameIntegers(scattered, roundTrip(scattered, t, &scatteredBytes), "scattered");
-  EXPECT_LT(3 * smoothBytes, 2 * scatteredBytes);
+  EXPECT_LT(smoothBytes, 5460u);
+  EXPECT_LT(static_cast<double>(smoothBytes), 0.52 * static_cast<double>(scatteredBytes));
 }
 
 TEST(ModelCoding, ACutOrCorruptStreamIsRefusedOrBoundedNeverReadPastItsEnd)

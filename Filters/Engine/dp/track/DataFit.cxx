@@ -220,6 +220,11 @@ void codeSlid(const Take& take, const PcaOptions& options, double allowed,
       continue;
     const std::vector<double> slid =
         slideAlongSurface(take.mesh, take.positions, take.frames, k, layout);
+    // A slide toward fewer components than the motion has moves the motion itself: the slid
+    // take strays from the data before any coding, cannot keep the fit, and its coding rounds
+    // would chase a target the quantiser cannot meet.
+    if (measureDataFit(take.mesh, slid.data(), take.samples, take.reach, &within).rms > allowed)
+      continue;
     const Take slidTake{take.mesh,  slid.data(), take.frames,  take.samples,
                         take.reach, take.times,  take.progress};
     DataFitCompression other;
