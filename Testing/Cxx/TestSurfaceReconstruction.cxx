@@ -4,9 +4,11 @@
 // from estimated normals too, with the data's holes bridged and a patch of wrong normals
 // tolerated; open data give an open mesh; pieces kept by size; bad input refused with a message.
 #include "dp/field/SurfaceReconstruction.h"
+#include "dp/geometry/DepthRig.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "dp/io/AnimatedMesh.h"
 
 #include <gtest/gtest.h>
 
@@ -375,4 +377,64 @@ TEST(SurfaceReconstruction, RefusesBadInputWithAMessage)
     EXPECT_NE(std::string(e.what()).find("voxel size"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("would exceed"), std::string::npos) << e.what();
   }
+}
+
+// A capsule-like bending tube (1.7 units long, as a person is metres tall) captured by a rig of
+// four simulated depth cameras: a layer of noise, stacked views, flying pixels, its caps half
+// unseen. The template from those points is what the rig's subject is: one closed piece of genus
+// 0, no folded edges, within a few layers of the truth.
+TEST(SurfaceReconstruction, ARigsNoisyLayerGivesAClosedGenusZeroTemplate)
+{
+  dp::BendingTube::Options o;
+  o.frames = 1;
+  o.length = 1.7;
+  o.radius = 0.2;
+  const dp::BendingTube tube(o);
+  dp::RigOptions rig;
+  rig.cameras = 4;
+  rig.up = "z";
+  rig.subjectHeight = 1.7;
+  const dp::PointCloud cloud = dp::DepthRig(tube, rig).fusedCloud(tube.positions(0), 0);
+  dp::ReconstructionOptions options;
+  options.targetVertices = 600;
+  const dp::ReconstructedMesh m = dp::reconstructSurface(cloud.points.data(), cloud.normals.data(),
+                                                         cloud.numberOfPoints(), options);
+  EXPECT_TRUE(m.smoothedForNoise);
+  EXPECT_GT(m.strayPoints, 0u);
+  const auto [open, shared] = badEdges(m);
+  EXPECT_EQ(open, 0u);
+  EXPECT_EQ(shared, 0u);
+  const std::size_t vertices = m.positions.size() / 3, faces = m.triangles.size() / 3;
+  EXPECT_EQ(
+      static_cast<long>(vertices) - static_cast<long>(3 * faces / 2) + static_cast<long>(faces), 2)
+      << "Euler characteristic of a sphere";
+  // Folded: the faces of an edge turn more than 120 degrees.
+  const dp::TriangleMesh mesh(m.triangles, vertices);
+  std::vector<double> normals(3 * faces);
+  for (std::size_t t = 0; t < faces; ++t)
+  {
+    const double* a = &m.positions[3 * m.triangles[3 * t]];
+    const double* b = &m.positions[3 * m.triangles[3 * t + 1]];
+    const double* c = &m.positions[3 * m.triangles[3 * t + 2]];
+    const double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+    double n[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+    const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k)
+      normals[3 * t + k] = n[k] / l;
+  }
+  std::map<std::pair<std::int64_t, std::int64_t>, std::vector<std::size_t>> facesOf;
+  for (std::size_t t = 0; t < faces; ++t)
+    for (int e = 0; e < 3; ++e)
+    {
+      const std::int64_t a = m.triangles[3 * t + e], b = m.triangles[3 * t + (e + 1) % 3];
+      facesOf[{std::min(a, b), std::max(a, b)}].push_back(t);
+    }
+  std::size_t folded = 0;
+  for (const auto& [edge, f] : facesOf)
+    folded += f.size() == 2 && normals[3 * f[0]] * normals[3 * f[1]] +
+                                       normals[3 * f[0] + 1] * normals[3 * f[1] + 1] +
+                                       normals[3 * f[0] + 2] * normals[3 * f[1] + 2] <
+                                   -0.5;
+  EXPECT_LE(folded, facesOf.size() / 200) << "at most 0.5 % of the edges folded";
 }

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <map>
 #include <numeric>
+#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
@@ -231,6 +232,10 @@ TemplateMesh fromPoints(const double* points, std::size_t count, const float* no
   m.report.source = "frame 0's points";
   m.report.verticesGiven = count;
   m.report.reconstructed = true;
+  m.report.noise = surface.noise;
+  m.report.smoothedForNoise = surface.smoothedForNoise;
+  m.report.smoothingVoxel = surface.voxelSize;
+  m.report.strayPoints = surface.strayPoints;
   return m;
 }
 } // namespace
@@ -243,6 +248,10 @@ std::string TemplateReport::summary() const
   {
     s << "a surface of " << vertices << " vertices reconstructed from " << verticesGiven
       << " points";
+    if (smoothedForNoise)
+      s << std::setprecision(3) << " (a noisy layer " << noise.thickness
+        << " thick, smoothed over voxels of " << smoothingVoxel << "; " << strayPoints
+        << " stray points left out)";
     return s.str();
   }
   std::vector<std::string> done;

@@ -57,6 +57,10 @@ struct TemplateReport
   std::size_t degenerateTriangles = 0, duplicateTriangles = 0, smallPartTriangles = 0;
   bool remeshed = false, reconstructed = false;
   std::size_t vertices = 0, triangles = 0; // the template's
+  SurfaceNoise noise;                      // a reconstruction's: the points' noise measured
+  bool smoothedForNoise = false;           // a noisy layer: smoothed by its thickness
+  double smoothingVoxel = 0;               // its fine voxel
+  std::size_t strayPoints = 0;             // the stray returns it left out
 
   /** One sentence a user reads: "frame 0's mesh: 12 degenerate triangles removed, remeshed
    *  from 20913 to 1000 vertices". */

@@ -1,0 +1,48 @@
+// SPDX-License-Identifier: BSD-3-Clause
+/**
+ * @file SurfaceNoise.h
+ * @brief How noisy a cloud's surface is, measured in the cloud itself: what a reconstruction's
+ *        smoothing and a frame's judgement of its fit must follow, rather than the point spacing
+ *        alone.
+ *
+ * A real sensor's surface is a layer: each camera's noise, and the cameras' small
+ * misalignments stacked. Around a sample of the points (at most 2000, spread evenly), the
+ * `neighbours` nearest points are fitted with a plane (PCA); the layer's *thickness* is the
+ * median over the sample of the RMS distance of those points from their plane, and the
+ * *surface spacing* the spacing the points would have on one surface, sqrt(pi r^2 / k) for the
+ * k-th neighbour's distance r (a layer's points crowd closer in 3D than that).
+ *
+ * Limits: curvature within a neighbourhood counts as thickness (about r^2 / (4 R) on a sphere of
+ * radius R: 0.1 mm on an arm sampled every 5 mm), as does a second surface within it (two
+ * fingers touching).
+ */
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace dp
+{
+
+struct SurfaceNoise
+{
+  double thickness = 0;      // RMS distance from the local plane, the sample's median
+  double surfaceSpacing = 0; // the points' spacing along the surface
+  double pointSpacing = 0;   // the median distance to the nearest other point
+};
+
+/** The noise of `count` points (x y z each); std::invalid_argument for fewer than 8 points. */
+SurfaceNoise measureSurfaceNoise(const double* points, std::size_t count,
+                                 std::size_t neighbours = 24);
+
+/**
+ * The points that lie on the surface, by index: those that are neither isolated (their 16th
+ * nearest neighbour over three times as far as is usual in the cloud: a flying pixel's trail
+ * behind a silhouette, a stray return) nor off the layer (farther than four thicknesses, and a
+ * surface spacing, from the plane of their neighbours).
+ */
+std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t count,
+                                              const SurfaceNoise& noise);
+
+} // namespace dp
