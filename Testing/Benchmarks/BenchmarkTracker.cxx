@@ -27,6 +27,7 @@
 
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/DepthRig.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
@@ -86,8 +87,41 @@ struct Settings
   // Each frame given as its true mesh (the sequence's own connectivity): a capture without
   // error, to tell what reading a mesh costs from what a capture mesh's error costs.
   bool trueMeshes = false;
+  // Each frame seen by this many simulated depth cameras (dynamicpoints-sample --rig): their
+  // fused cloud, or with `depthMesh` camera 0's depth image as an open mesh (a single sensor).
+  std::size_t rig = 0;
+  std::string sensor = "kinect-v2";
+  bool depthMesh = false;
+  double azimuth = 0;
+  // A frame whose true surface is left uncovered more than this (farther than the uncovered
+  // limit from the tracked one) has lost a part: a flag there is right, a flag elsewhere false.
+  double lostShare = 0.01;
 };
 Settings S;
+
+// The rig around a sequence (made once: its cameras stand where the whole take fills them).
+const dp::DepthRig& rigFor(const dp::AnimatedMesh& mesh)
+{
+  static const dp::AnimatedMesh* made = nullptr;
+  static std::unique_ptr<dp::DepthRig> rig;
+  if (made != &mesh || !rig)
+  {
+    dp::RigOptions o;
+    o.cameras = S.rig;
+    o.sensor = S.sensor;
+    o.seed = S.seed;
+    o.azimuth = S.azimuth;
+    // The sequences are in metres (--height): the subject's extent along y is its height.
+    const std::vector<double> p = mesh.positions(0);
+    double low = 1e300, high = -1e300;
+    for (std::size_t v = 1; v < p.size(); v += 3)
+      low = std::min(low, p[v]), high = std::max(high, p[v]);
+    o.subjectHeight = high - low;
+    rig = std::make_unique<dp::DepthRig>(mesh, o);
+    made = &mesh;
+  }
+  return *rig;
+}
 
 struct Condition
 {
@@ -126,6 +160,9 @@ dp::PointCloud frameData(const dp::AnimatedMesh& mesh, const dp::SamplerOptions&
       truth.addFace(&mesh.triangles()[t], 3);
     return truth;
   }
+  if (S.rig > 0)
+    return S.depthMesh ? rigFor(mesh).depthMesh(mesh.positions(f), 0, f)
+                       : rigFor(mesh).fusedCloud(mesh.positions(f), f);
   dp::PointCloud cloud = dp::sampleSurface(mesh.positions(f), mesh.triangles(), sampling, f);
   return S.perFrameMesh ? dp::cli::perFrameMesh(cloud, S.perFrameMesh, f == 0) : cloud;
 }
@@ -340,7 +377,7 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const dp::Tracker&
     const FrameFigures figures =
         compareFrame(x, t.triangles, truth, groundTruthNormals(t, truthMesh, mesh.triangles()),
                      truthMesh, mesh.triangles(), truthCloud.points, S.uncoveredLimit);
-    sums.add(f, r, x, figures, truth, take.cycleSeconds[i]);
+    sums.add(f, r, x, figures, truth, take.cycleSeconds[i], S.lostShare);
     swim.add(r, truth, f);
     if (report && S.verbose)
       printFrame(f, r, x, figures, truth);
@@ -389,7 +426,10 @@ const char* Usage =
     "             [--noise MM] [--holes N] [--hole-radius MM] [--given-normals]\n"
     "             [--per-frame-mesh N (each frame a mesh of about N vertices reconstructed\n"
     "             from its points, with a capture's defects in frame 0)] [--true-meshes (each\n"
-    "             frame its true mesh)]\n"
+    "             frame its true mesh)] [--rig N (each frame seen by N simulated depth\n"
+    "             cameras, fused)] [--sensor NAME] [--depth-mesh (camera 0's open mesh)]\n"
+    "             [--azimuth DEG (camera 0's side)] [--lost-share S (a frame leaving more of\n"
+    "             its true surface uncovered has lost a part; default 0.01)]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--set NAME=VALUE (repeatable; every option of dp::TrackerOptionTable,\n"
@@ -453,6 +493,16 @@ bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan
     S.perFrameMesh = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
   else if (arg == "--true-meshes")
     S.trueMeshes = true;
+  else if (arg == "--rig")
+    S.rig = parseCount(arg, optionValue(argc, argv, i), 1, 64);
+  else if (arg == "--sensor")
+    S.sensor = optionValue(argc, argv, i);
+  else if (arg == "--depth-mesh")
+    S.depthMesh = true;
+  else if (arg == "--azimuth")
+    S.azimuth = parseDouble(arg, optionValue(argc, argv, i), -360, 360);
+  else if (arg == "--lost-share")
+    S.lostShare = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
   else if (arg == "--template")
   {
     plan.kinds.clear();
@@ -575,6 +625,9 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
               "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
               "", perFrame * r.time.data, perFrame * r.time.prediction, perFrame * r.time.coarse,
               perFrame * r.time.fine, perFrame * r.time.quality, r.retried, r.flagged);
+  std::printf("%14s flags against the truth: %zu frames lost a part (over %.1f %% of the true "
+              "surface uncovered), %zu false flags, %zu missed failures\n",
+              "", r.lost, 100 * S.lostShare, r.falseFlags, r.missed);
   std::printf("%14s steps/frame: coarse %.2f, fine %.2f (kept attempts)\n", "",
               static_cast<double>(r.coarseSteps) / static_cast<double>(r.frames),
               static_cast<double>(r.fineSteps) / static_cast<double>(r.frames));

@@ -23,6 +23,9 @@ struct Run
 {
   dp::FrameTimings time; // summed over the frames
   std::size_t retried = 0, flagged = 0;
+  // Against the truth: frames that lost a part (their true surface left uncovered beyond a
+  // share), flags on frames that did not (false), frames that did without a flag (missed).
+  std::size_t lost = 0, falseFlags = 0, missed = 0;
   // The kept attempts' dependent steps, summed: deterministic, unlike the times.
   std::size_t coarseSteps = 0, fineSteps = 0;
   double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
@@ -39,8 +42,13 @@ class RunSums
 {
 public:
   void add(std::size_t frame, const dp::FrameResult& r, const std::vector<double>& positions,
-           const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds)
+           const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds,
+           double lostShare = 0.01)
   {
+    const bool lost = figures.uncovered > lostShare;
+    R.lost += lost;
+    R.falseFlags += r.failed && !lost;
+    R.missed += lost && !r.failed;
     Seconds += cycleSeconds;
     R.time.data += r.timings.data;
     R.time.prediction += r.timings.prediction;

@@ -57,8 +57,7 @@ TEST(SurfaceNoise, StrayPointsAreLeftOutAndTheLayerKept)
 {
   const std::size_t strays = 200, layer = 150 * 150;
   const std::vector<double> p = noisyPlane(0.005, 0.002, strays);
-  const dp::SurfaceNoise n = dp::measureSurfaceNoise(p.data(), p.size() / 3);
-  const std::vector<std::uint32_t> kept = dp::pointsOnTheSurface(p.data(), p.size() / 3, n);
+  const std::vector<std::uint32_t> kept = dp::pointsOnTheSurface(p.data(), p.size() / 3);
   const std::size_t keptStrays = static_cast<std::size_t>(
       std::count_if(kept.begin(), kept.end(), [&](std::uint32_t i) { return i >= layer; }));
   EXPECT_EQ(keptStrays, 0u);

@@ -497,18 +497,31 @@ std::size_t cutHandles(detail::RemeshedSurface& remeshed, const ReconstructionOp
 {
   if (!remeshed.closed)
     return 0;
-  detail::IndexedMesh coarse;
-  for (std::size_t v = 0; v + 2 < remeshed.positions.size(); v += 3)
-    coarse.positions.push_back(
-        {remeshed.positions[v], remeshed.positions[v + 1], remeshed.positions[v + 2]});
-  for (std::size_t t = 0; t + 2 < remeshed.triangles.size(); t += 3)
-    coarse.triangles.push_back({static_cast<int>(remeshed.triangles[t]),
-                                static_cast<int>(remeshed.triangles[t + 1]),
-                                static_cast<int>(remeshed.triangles[t + 2])});
+  const auto indexed = [](const detail::RemeshedSurface& r)
+  {
+    detail::IndexedMesh m;
+    for (std::size_t v = 0; v + 2 < r.positions.size(); v += 3)
+      m.positions.push_back({r.positions[v], r.positions[v + 1], r.positions[v + 2]});
+    for (std::size_t t = 0; t + 2 < r.triangles.size(); t += 3)
+      m.triangles.push_back({static_cast<int>(r.triangles[t]), static_cast<int>(r.triangles[t + 1]),
+                             static_cast<int>(r.triangles[t + 2])});
+    return m;
+  };
+  detail::IndexedMesh coarse = indexed(remeshed);
   const std::size_t cuts =
       detail::removeHandles(coarse, options.handleLoop * boundingBoxDiagonal(remeshed.positions));
-  if (cuts > 0)
-    remeshed = detail::remeshIsotropic(coarse, options.targetVertices);
+  if (cuts == 0)
+    return 0;
+  remeshed = detail::remeshIsotropic(coarse, options.targetVertices);
+  // The remeshing of the caps' fans may pinch off a sliver of a piece: the surface is one.
+  detail::IndexedMesh one = indexed(remeshed);
+  keepLargePieces(one, 1.0);
+  remeshed.positions.clear();
+  remeshed.triangles.clear();
+  for (const auto& p : one.positions)
+    remeshed.positions.insert(remeshed.positions.end(), p.begin(), p.end());
+  for (const auto& t : one.triangles)
+    remeshed.triangles.insert(remeshed.triangles.end(), t.begin(), t.end());
   return cuts;
 }
 
@@ -559,7 +572,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
   const SurfaceNoise noise = measureSurfaceNoise(points, count);
   if (noise.thickness > NoisyLayer * noise.surfaceSpacing && !options.keepStrayPoints)
   {
-    const std::vector<std::uint32_t> kept = pointsOnTheSurface(points, count, noise);
+    const std::vector<std::uint32_t> kept = pointsOnTheSurface(points, count);
     if (kept.size() < count && kept.size() >= 16)
     {
       std::vector<double> p;

@@ -10,7 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
-#include <vector>
+#include <string>
 
 namespace dp
 {
@@ -20,18 +20,33 @@ namespace
 
 constexpr std::size_t SampleSize = 2000;
 constexpr double Pi = 3.141592653589793;
+// A stray point: its k-th neighbour this many times as far as usual, or this many thicknesses
+// (and a spacing) off its neighbours' plane.
+constexpr double IsolatedReach = 3, OffLayer = 4;
 
-double median(std::vector<double>& values)
+double median(std::vector<double> values)
 {
+  if (values.empty())
+    return 0;
   const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
   std::nth_element(values.begin(), middle, values.end());
   return *middle;
 }
 
-// The distance of `x` from the least-squares plane of the points `ids`.
-double distanceFromPlane(const double* points, const std::uint32_t* ids, std::size_t found,
-                         const double* x)
+// Around one sample: the RMS distance of its neighbours from their plane, the spacing they
+// would have on one surface, the k-th neighbour's distance, the sample's distance from the
+// plane and to its nearest other point.
+struct Neighbourhood
 {
+  double residual = -1, spacing = 0, reach = 0, offPlane = 0, nearest = 0;
+};
+
+Neighbourhood around(const double* points, const double* x, const std::uint32_t* ids,
+                     const double* d2, std::size_t found)
+{
+  Neighbourhood n;
+  if (found < 4 || !(d2[found - 1] > 0))
+    return n;
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   for (std::size_t j = 0; j < found; ++j)
     mean += Eigen::Map<const Eigen::Vector3d>(points + 3 * ids[j]);
@@ -42,85 +57,90 @@ double distanceFromPlane(const double* points, const std::uint32_t* ids, std::si
     const Eigen::Vector3d d = Eigen::Map<const Eigen::Vector3d>(points + 3 * ids[j]) - mean;
     covariance += d * d.transpose();
   }
+  covariance /= static_cast<double>(found);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance);
-  return std::abs(solver.eigenvectors().col(0).dot(Eigen::Map<const Eigen::Vector3d>(x) - mean));
+  n.residual = std::sqrt(std::max(0.0, solver.eigenvalues()[0]));
+  n.spacing = std::sqrt(Pi * d2[found - 1] / static_cast<double>(found));
+  n.reach = std::sqrt(d2[found - 1]);
+  n.offPlane =
+      std::abs(solver.eigenvectors().col(0).dot(Eigen::Map<const Eigen::Vector3d>(x) - mean));
+  for (std::size_t j = 0; j < found && n.nearest == 0; ++j)
+    n.nearest = std::sqrt(d2[j]);
+  return n;
 }
 
 } // namespace
+
+NoiseAtSamples measureNoiseAt(const double* points, const std::vector<std::uint32_t>& samples,
+                              const NearestPoints& nearest, std::size_t neighbours)
+{
+  std::vector<Neighbourhood> at(samples.size());
+  forEachIndex(samples.size(),
+               [&](std::size_t s)
+               {
+                 std::vector<std::uint32_t> ids(neighbours);
+                 std::vector<double> d2(neighbours);
+                 const double* x = points + 3 * static_cast<std::size_t>(samples[s]);
+                 const std::size_t found = nearest(x, neighbours, ids.data(), d2.data());
+                 at[s] = around(points, x, ids.data(), d2.data(), found);
+               });
+  std::vector<double> residuals, spacings, reaches, nearestOther;
+  for (const Neighbourhood& n : at)
+    if (n.residual >= 0)
+    {
+      residuals.push_back(n.residual);
+      spacings.push_back(n.spacing);
+      reaches.push_back(n.reach);
+      if (n.nearest > 0)
+        nearestOther.push_back(n.nearest);
+    }
+  NoiseAtSamples out;
+  out.noise.thickness = median(residuals);
+  out.noise.surfaceSpacing = median(spacings);
+  out.noise.pointSpacing = median(nearestOther);
+  const double usualReach = median(reaches);
+  const double layer = OffLayer * out.noise.thickness + out.noise.surfaceSpacing;
+  out.stray.resize(samples.size());
+  for (std::size_t s = 0; s < at.size(); ++s)
+    out.stray[s] =
+        at[s].residual >= 0 && (at[s].reach > IsolatedReach * usualReach || at[s].offPlane > layer);
+  return out;
+}
 
 SurfaceNoise measureSurfaceNoise(const double* points, std::size_t count, std::size_t neighbours)
 {
   if (count < 8)
     throw std::invalid_argument("the noise of a surface needs at least 8 points, not " +
                                 std::to_string(count));
-  const std::size_t k = std::clamp<std::size_t>(neighbours, 4, count);
   const detail::KdTree tree(points, count);
-  const std::size_t stride = std::max<std::size_t>(1, count / SampleSize);
-  std::vector<double> residuals, spacings, nearest;
-  std::vector<std::uint32_t> ids(k);
-  std::vector<double> d2(k);
-  for (std::size_t i = 0; i < count; i += stride)
-  {
-    const std::size_t found = tree.nearest(points + 3 * i, k, ids.data(), d2.data());
-    if (found < 4 || !(d2[found - 1] > 0))
-      continue;
-    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (std::size_t j = 0; j < found; ++j)
-      mean += Eigen::Map<const Eigen::Vector3d>(points + 3 * ids[j]);
-    mean /= static_cast<double>(found);
-    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-    for (std::size_t j = 0; j < found; ++j)
-    {
-      const Eigen::Vector3d d = Eigen::Map<const Eigen::Vector3d>(points + 3 * ids[j]) - mean;
-      covariance += d * d.transpose();
-    }
-    covariance /= static_cast<double>(found);
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver(covariance, Eigen::EigenvaluesOnly);
-    residuals.push_back(std::sqrt(std::max(0.0, solver.eigenvalues()[0])));
-    spacings.push_back(std::sqrt(Pi * d2[found - 1] / static_cast<double>(found)));
-    for (std::size_t j = 1; j < found; ++j)
-      if (d2[j] > 0)
-      {
-        nearest.push_back(std::sqrt(d2[j]));
-        break;
-      }
-  }
-  if (residuals.empty() || nearest.empty())
+  std::vector<std::uint32_t> samples;
+  for (std::size_t i = 0; i < count; i += std::max<std::size_t>(1, count / SampleSize))
+    samples.push_back(static_cast<std::uint32_t>(i));
+  const SurfaceNoise noise = measureNoiseAt(
+                                 points, samples,
+                                 [&](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
+                                 { return tree.nearest(x, k, ids, d2); },
+                                 std::clamp<std::size_t>(neighbours, 4, count))
+                                 .noise;
+  if (!(noise.pointSpacing > 0))
     throw std::invalid_argument("the noise of a surface: all its points coincide");
-  SurfaceNoise noise;
-  noise.thickness = median(residuals);
-  noise.surfaceSpacing = median(spacings);
-  noise.pointSpacing = median(nearest);
   return noise;
 }
 
-std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t count,
-                                              const SurfaceNoise& noise)
+std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t count)
 {
-  constexpr std::size_t K = 16;
-  std::vector<std::uint32_t> kept;
-  if (count <= K)
-  {
-    for (std::size_t i = 0; i < count; ++i)
-      kept.push_back(static_cast<std::uint32_t>(i));
-    return kept;
-  }
-  const detail::KdTree tree(points, count);
-  std::vector<double> reach(count), offPlane(count);
-  forEachIndex(count,
-               [&](std::size_t i)
-               {
-                 std::uint32_t ids[K];
-                 double d2[K];
-                 const std::size_t found = tree.nearest(points + 3 * i, K, ids, d2);
-                 reach[i] = std::sqrt(d2[found - 1]);
-                 offPlane[i] = distanceFromPlane(points, ids, found, points + 3 * i);
-               });
-  std::vector<double> sorted = reach;
-  const double usual = median(sorted);
-  const double layer = 4 * noise.thickness + noise.surfaceSpacing;
+  std::vector<std::uint32_t> all(count);
   for (std::size_t i = 0; i < count; ++i)
-    if (reach[i] <= 3 * usual && offPlane[i] <= layer)
+    all[i] = static_cast<std::uint32_t>(i);
+  if (count <= StrayNeighbours)
+    return all;
+  const detail::KdTree tree(points, count);
+  const NoiseAtSamples n = measureNoiseAt(points, all,
+                                          [&](const double* x, std::size_t k, std::uint32_t* ids,
+                                              double* d2) { return tree.nearest(x, k, ids, d2); });
+  std::vector<std::uint32_t> kept;
+  for (std::size_t i = 0; i < count; ++i)
+    if (!n.stray[i])
       kept.push_back(static_cast<std::uint32_t>(i));
   return kept;
 }

@@ -20,6 +20,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace dp
@@ -32,17 +33,33 @@ struct SurfaceNoise
   double pointSpacing = 0;   // the median distance to the nearest other point
 };
 
-/** The noise of `count` points (x y z each); std::invalid_argument for fewer than 8 points. */
+/** The k nearest points to x (indices, squared distances, nearest first); returns how many. */
+using NearestPoints =
+    std::function<std::size_t(const double* x, std::size_t k, std::uint32_t* ids, double* d2)>;
+
+/** The neighbours that judge a point stray. */
+constexpr std::size_t StrayNeighbours = 16;
+
+/** The noise measured around `samples` (indices into `points`, x y z each), their neighbours
+ *  found by `nearest`; and per sample whether it is stray: isolated (its `neighbours`-th
+ *  neighbour over three times as far as the samples' median: a flying pixel's trail behind a
+ *  silhouette, a stray return) or off the layer (farther than four thicknesses and a surface
+ *  spacing from its neighbours' plane). */
+struct NoiseAtSamples
+{
+  SurfaceNoise noise;
+  std::vector<char> stray;
+};
+NoiseAtSamples measureNoiseAt(const double* points, const std::vector<std::uint32_t>& samples,
+                              const NearestPoints& nearest,
+                              std::size_t neighbours = StrayNeighbours);
+
+/** The noise of `count` points (x y z each), measured around at most 2000 of them spread
+ *  evenly; std::invalid_argument for fewer than 8 points or points that all coincide. */
 SurfaceNoise measureSurfaceNoise(const double* points, std::size_t count,
                                  std::size_t neighbours = 24);
 
-/**
- * The points that lie on the surface, by index: those that are neither isolated (their 16th
- * nearest neighbour over three times as far as is usual in the cloud: a flying pixel's trail
- * behind a silhouette, a stray return) nor off the layer (farther than four thicknesses, and a
- * surface spacing, from the plane of their neighbours).
- */
-std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t count,
-                                              const SurfaceNoise& noise);
+/** The points that are not stray (measureNoiseAt over every point), by index. */
+std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t count);
 
 } // namespace dp

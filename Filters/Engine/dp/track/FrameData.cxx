@@ -194,6 +194,19 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
                        [&] { chooseSpread(points, count, options); });
   if (!Colours.empty())
     Colour = std::make_unique<ColourField>(Field.points(), Colours.data(), Count, spacing(), Voxel);
+  judgeSpread();
+}
+
+void FrameData::judgeSpread()
+{
+  if (Spread.size() < 8)
+    return;
+  NoiseAtSamples judged =
+      measureNoiseAt(Field.points(), Spread,
+                     [this](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
+                     { return Field.nearestPoints(x, k, ids, d2); });
+  Noise = judged.noise;
+  SpreadStray = std::move(judged.stray);
 }
 
 FrameData::~FrameData() = default;

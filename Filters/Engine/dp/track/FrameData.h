@@ -30,6 +30,7 @@
 
 #include "dp/field/DistanceField.h"
 #include "dp/geometry/NormalEstimation.h"
+#include "dp/geometry/SurfaceNoise.h"
 #include "dp/track/FrameSamples.h"
 
 #include <cstdint>
@@ -111,6 +112,11 @@ public:
   std::size_t mendOrientation(const std::vector<std::int8_t>& spreadVotes);
   /** Indices of the well-spread subsample, in increasing order. */
   const std::vector<std::uint32_t>& spread() const { return Spread; }
+  /** The data's noise, measured around the subsample (SurfaceNoise.h); zero without one. */
+  const SurfaceNoise& noise() const { return Noise; }
+  /** Per subsample point: stray (isolated, or off the layer: a flying pixel, a stray return),
+   *  which no mesh is to explain; empty without a subsample. */
+  const std::vector<char>& strayInSpread() const { return SpreadStray; }
   /** The subsample with its normals, seen in place (valid while the frame lives, and its
    *  normals as they are when read: orient them first). */
   SampleView spreadSamples() const
@@ -132,6 +138,7 @@ private:
   void takeOrEstimateNormals(const double* points, std::size_t count, const float* normals);
   // The well-spread subsample (see the file comment).
   void chooseSpread(const double* points, std::size_t count, const FrameDataOptions& options);
+  void judgeSpread(); // the noise and the stray points of the subsample
 
   std::size_t Count = 0;
   std::size_t OriginalCount = 0;
@@ -142,6 +149,8 @@ private:
   OrientationTree Tree;             // the estimated normals' orientation spread along it
   std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
+  SurfaceNoise Noise;
+  std::vector<char> SpreadStray;
   std::vector<float> Colours;
   double SurfaceArea = 0;
   std::unique_ptr<ColourField> Colour;

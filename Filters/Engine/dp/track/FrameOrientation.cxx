@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameOrientation.h"
 
+#include "dp/detail/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/FrameData.h"
-#include "dp/detail/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

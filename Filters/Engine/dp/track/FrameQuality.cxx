@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameQuality.h"
 
-#include "dp/geometry/SurfaceLocator.h"
 #include "dp/detail/Parallel.h"
+#include "dp/geometry/SurfaceLocator.h"
 
 #include <algorithm>
 #include <cmath>
@@ -10,22 +10,63 @@
 namespace dp
 {
 
+namespace
+{
+// The reach, in the data's layer thicknesses, beyond which a point is far from the mesh.
+constexpr double NoiseReach = 6.0;
+// The nearest points around a far point, three quarters of which must be far for it to count.
+constexpr std::size_t PatchPoints = 12;
+} // namespace
+
 FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
                          const std::vector<double>& mass, double reach, const double* start)
 {
   FrameQuality q;
   if (frame.empty())
     return q;
+  // A noisy layer's points lie off any surface by a few thicknesses: the reach follows it, up
+  // to three times the reach asked (a frame of garbage is no layer to follow).
+  reach = std::max(reach, std::min(NoiseReach * frame.noise().thickness, 3 * reach));
+  q.noise = frame.noise().thickness;
+  q.reach = reach;
   const SurfaceLocator locator(mesh, x);
   const auto& spread = frame.spread();
+  const auto& stray = frame.strayInSpread();
   std::vector<std::uint8_t> far(spread.size(), 0);
-  forEachIndex(spread.size(), [&](std::size_t i)
-               { far[i] = locator.closest(frame.point(spread[i]), reach).triangle < 0; });
-  std::size_t count = 0;
+  forEachIndex(spread.size(),
+               [&](std::size_t i)
+               {
+                 // A stray point (a flying pixel, a stray return) is no surface to explain.
+                 far[i] = stray.empty() || !stray[i]
+                              ? 1 + (locator.closest(frame.point(spread[i]), reach).triangle < 0)
+                              : 0;
+               });
+  // A far point counts when the surface around it is far too (most of its nearest points): a
+  // part the mesh let go of, not a point beyond the reach by noise or by detail the template's
+  // resolution cannot hold (scattered fingertips, folds).
+  forEachIndex(spread.size(),
+               [&](std::size_t i)
+               {
+                 if (far[i] != 2)
+                   return;
+                 std::uint32_t ids[PatchPoints];
+                 double d2[PatchPoints];
+                 const std::size_t n = frame.nearest(frame.point(spread[i]), PatchPoints, ids, d2);
+                 std::size_t farAround = 0;
+                 for (std::size_t j = 0; j < n; ++j)
+                   farAround += locator.closest(frame.point(ids[j]), reach).triangle < 0;
+                 if (4 * farAround < 3 * PatchPoints)
+                   far[i] = 1;
+               });
+  std::size_t count = 0, judged = 0;
   for (std::uint8_t f : far)
-    count += f;
-  q.unexplained =
-      spread.empty() ? 0.0 : static_cast<double>(count) / static_cast<double>(spread.size());
+  {
+    judged += f > 0;
+    count += f == 2;
+  }
+  q.samples = judged;
+  q.unexplained = judged == 0 ? 0.0 : static_cast<double>(count) / static_cast<double>(judged);
+
   const std::size_t nv = mesh.numberOfVertices();
   std::vector<double> lonely(nv, 0.0), left(nv, 0.0);
   const auto distance2 = [&](const double* p)

@@ -6,8 +6,10 @@
  *        what the output and report carry per frame.
  *
  *   unexplained  the share of the frame's well-spread points farther than `reach` from the mesh
- *                surface: data the mesh has let go of (a lost limb shows here, while the paper's
- *                mesh -> points energy stays low);
+ *                surface, with three quarters of their 12 nearest points: a patch of data the
+ *                mesh has let go of (a lost limb shows here, while the paper's mesh -> points
+ *                energy stays low); points beyond the reach alone, scattered by noise or by
+ *                detail finer than the template (fingertips, folds), do not count;
  *   unsupported  the share of the mesh (by vertex area) farther than `reach` from any point:
  *                mesh where there are no data (holes in the data, or a part in the wrong place);
  *   departed     the part of it the solve took off its data: within half `reach` of a point
@@ -17,6 +19,11 @@
  *                lengths (largestEdgeGrowth): a limb caught by another limb's data as it passes
  *                is stretched between them in a strip that covers almost nothing, which neither
  *                share sees.
+ *
+ * Judged against the data's noise: the reach is at least six times the layer thickness the frame's
+ * points have (FrameData::noise; at most three times the reach asked), and stray points (flying
+ * pixels, stray returns: isolated or off the layer) count for neither share, so a frame that fits
+ * as well as its noise allows explains its points.
  *
  * With well-spread points both are shares of surface area. Limits: data the scanner saw but the
  * template lacks (a prop, a second person) count as unexplained; holes as unsupported.
@@ -37,6 +44,9 @@ struct FrameQuality
   double unsupported = 0;
   double departed = 0;
   double tear = 0;
+  std::size_t samples = 0; // the points the unexplained share is of (stray ones left out)
+  double noise = 0;        // the data's layer thickness, measured (SurfaceNoise.h)
+  double reach = 0;        // the distance beyond which a point or a vertex was far
 };
 
 /** The quality of positions x (3 per vertex) against the frame; `mass` per vertex sums to 1;

@@ -2,6 +2,7 @@
 #include "dp/track/RecoveryPolicy.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace dp
 {
@@ -24,7 +25,12 @@ double usual(const std::vector<FrameQuality>& recent, double FrameQuality::*shar
 
 bool RecoveryPolicy::beyondUsual(const FrameQuality& q, double FrameQuality::*share) const
 {
-  return q.*share > usual(Recent, share) + Options.margin;
+  // The margin: the option's, or three standard errors of the usual share among the points
+  // judged, whichever is larger (a share measured on fewer points varies more by chance).
+  const double u = usual(Recent, share);
+  const double n = static_cast<double>(q.samples);
+  const double chance = q.samples > 0 ? 3 * std::sqrt(u * (1 - u) / n) : 0.0;
+  return q.*share > u + std::max(Options.margin, chance);
 }
 
 bool RecoveryPolicy::torn(const FrameQuality& q) const
@@ -69,7 +75,9 @@ void RecoveryPolicy::frameKept(const FrameQuality& kept)
 {
   InDoubt = Options.enabled && doubtful(kept);
   InDoubtInARow = InDoubt ? InDoubtInARow + 1 : 0;
-  if (referencesFollow())
+  // Only frames that fit set the usual: a run of frames in doubt (a limb lost for many frames)
+  // never becomes what the take usually is, so each of its frames stays retried and flagged.
+  if (!InDoubt)
     Recent.push_back(kept);
   if (Recent.size() > Options.window)
     Recent.erase(Recent.begin());

@@ -7,14 +7,17 @@
  * Beyond the paper (which has no failure detection). A frame's quality (FrameQuality) is compared
  * with what is usual in the take: the median of each share over the last `window` frames kept.
  * A frame is *in doubt* (worth other starts) when any share exceeds the usual by more than
- * `margin`, or a limb tore (a stiff edge grew beyond `tearGrowth` mean edge lengths); it is
- * *failed* (flagged) only for unexplained data, departed mesh or a tear: mesh without data looks
- * just like a hole in the data. The first frame sets what is usual and is never in doubt. A frame
- * in doubt sets no baseline, unless `persistentFailures` frames in a row were: then the take
- * itself has changed, and the baseline follows it (as does the coarse level's reference).
+ * the margin (`margin`, or three standard errors of the usual share among the points judged,
+ * whichever is larger), or a limb tore (a stiff edge grew beyond `tearGrowth` mean edge lengths);
+ * it is *failed* (flagged) only for unexplained data, departed mesh or a tear: mesh without data
+ * looks just like a hole in the data. The first frame sets what is usual and is never in doubt.
+ * A frame in doubt never sets the usual, however many follow it: a limb lost for a hundred
+ * frames is flagged and retried in each. After `persistentFailures` frames in doubt in a row the
+ * coarse level's reference follows the take (referencesFollow), so that tracking goes on.
  *
  * Limits: the usual is a median of a few frames, so a take that starts badly has a lax baseline
- * until it improves.
+ * until it improves; data the template lacks (a prop brought in) stay unexplained, and flagged,
+ * for as long as they stay.
  */
 #pragma once
 

@@ -3,6 +3,7 @@
 
 #include "dp/geometry/MeshSurfaceSamples.h"
 
+#include "dp/detail/Parallel.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
 #include "dp/geometry/SurfaceLocator.h"
@@ -18,7 +19,6 @@
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
 #include "dp/track/MotionPredictor.h"
-#include "dp/detail/Parallel.h"
 #include "dp/track/RecoveryPolicy.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
