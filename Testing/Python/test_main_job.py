@@ -299,12 +299,18 @@ class TestDefaultRun(TempDirTestCase):
         # The same figures, by the same names, as the track filter's field data (one table).
         fields = {"FrameIndex", "Points", "Iterations", "CoarseIterations", "InternalEnergy",
                   "DistanceEnergy", "Seconds", "OverlappedSeconds", "EmptyFrame", "Unexplained",
-                  "Unsupported", "LargestStretch", "Retries", "Failed", "DataReach"}
+                  "Unsupported", "LargestStretch", "Retries", "Failed", "DataReach", "DataNoise",
+                  "Seen"}
         fields |= {k[0].upper() + k[1:] + "Seconds" for k in STAGES}
         self.assertEqual({k[0].upper() + k[1:] for k in report["perFrame"][0]}
                          - {"Frame", "Time", "RmsResidual", "MaxResidual", "DetailSeconds"},
                          fields)
         self.assertTrue(all(f["detailSeconds"] > 0 for f in report["perFrame"]))
+        # The built-in samples are clean: no noise worth a layer, and the tube seen all over.
+        for f in report["perFrame"]:
+            self.assertLess(f["dataNoise"], 0.002 * report["boundingBoxDiagonal"], f)
+            self.assertAlmostEqual(f["seen"], 1 - f["unsupported"], places=12)
+            self.assertGreater(f["seen"], 0.95, f)
         medians = report["medianStageSecondsPerFrame"]
         self.assertEqual(set(medians), {k + "Seconds" for k in STAGES} | {"detailSeconds"})
         # The built-in tube's points hold detail the 1000-vertex mesh cannot carry: two levels.

@@ -43,6 +43,10 @@ const std::vector<FrameFigures::Field>& FrameFigures::fields()
        "1: the frame still failed after its retries; do not trust it"},
       {"DataReach", &F::dataReach, Kind::Number,
        "how far from the mesh a point still counts as explained"},
+      {"DataNoise", &F::dataNoise, Kind::Number,
+       "the data's noise: the RMS distance of points from their local plane (a sensor's layer "
+       "thickness); the quality's reach is at least six times it"},
+      {"Seen", &F::seen, Kind::Number, "share of the mesh the data see (1 - Unsupported)"},
   };
   return table;
 }
@@ -89,6 +93,8 @@ FrameFigures FrameFigures::of(const FrameResult& r, std::size_t frame, double re
   f.retries = r.retries;
   f.failed = r.failed ? 1 : 0;
   f.dataReach = reach;
+  f.dataNoise = r.noise;
+  f.seen = r.emptyFrame ? 0.0 : 1.0 - r.unsupported;
   return f;
 }
 

@@ -44,6 +44,8 @@ struct FrameFigures
   double retries = 0;
   double failed = 0;
   double dataReach = 0; // how far from the mesh a point still counts as explained
+  double dataNoise = 0; // the data's layer thickness, measured around the frame's points
+  double seen = 0;      // share of the mesh the data see (within the reach of a point)
 
   enum class Kind
   {

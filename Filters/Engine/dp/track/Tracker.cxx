@@ -498,6 +498,7 @@ void Tracker::keep(Attempt&& best, FrameResult& result)
   result.unexplained = best.quality.unexplained;
   result.unsupported = best.quality.unsupported;
   result.tear = best.quality.tear;
+  result.noise = best.quality.noise;
   result.timings.prediction = best.timings.prediction;
   result.timings.coarse = best.timings.coarse;
   result.timings.fine = best.timings.fine;

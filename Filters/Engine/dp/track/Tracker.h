@@ -87,6 +87,7 @@ struct FrameResult
   double unexplained = 0; // share of the data farther than 3 voxels from the mesh (FrameQuality)
   double unsupported = 0; // share of the mesh farther than 3 voxels from the data
   double tear = 0;        // the most a stiff edge grew, in mean edge lengths (largestEdgeGrowth)
+  double noise = 0;       // the data's layer thickness, measured (FrameData::noise)
   int retries = 0;        // attempts after the first (the frame's quality failed)
   // Which attempt was kept: 0 the first, 1 a retry from another start, 2 the stiff retry.
   int kept = 0;
