@@ -91,6 +91,7 @@ struct Settings
   // fused cloud, or with `depthMesh` camera 0's depth image as an open mesh (a single sensor).
   std::size_t rig = 0;
   std::string sensor = "kinect-v2";
+  std::size_t rigPoints = 0; // the fused cloud thinned to about this many (0: all)
   bool depthMesh = false;
   double azimuth = 0;
   // A frame whose true surface is left uncovered more than this (farther than the uncovered
@@ -111,6 +112,7 @@ const dp::DepthRig& rigFor(const dp::AnimatedMesh& mesh)
     o.sensor = S.sensor;
     o.seed = S.seed;
     o.azimuth = S.azimuth;
+    o.points = S.rigPoints;
     // The sequences are in metres (--height): the subject's extent along y is its height.
     const std::vector<double> p = mesh.positions(0);
     double low = 1e300, high = -1e300;
@@ -428,6 +430,7 @@ const char* Usage =
     "             from its points, with a capture's defects in frame 0)] [--true-meshes (each\n"
     "             frame its true mesh)] [--rig N (each frame seen by N simulated depth\n"
     "             cameras, fused)] [--sensor NAME] [--depth-mesh (camera 0's open mesh)]\n"
+    "             [--rig-points N (the fused cloud thinned to about N)]\n"
     "             [--azimuth DEG (camera 0's side)] [--lost-share S (a frame leaving more of\n"
     "             its true surface uncovered has lost a part; default 0.01)]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
@@ -499,6 +502,8 @@ bool parseDataOption(const std::string& arg, int argc, char** argv, int& i, Plan
     S.sensor = optionValue(argc, argv, i);
   else if (arg == "--depth-mesh")
     S.depthMesh = true;
+  else if (arg == "--rig-points")
+    S.rigPoints = parseCount(arg, optionValue(argc, argv, i), 100, 100000000);
   else if (arg == "--azimuth")
     S.azimuth = parseDouble(arg, optionValue(argc, argv, i), -360, 360);
   else if (arg == "--lost-share")
