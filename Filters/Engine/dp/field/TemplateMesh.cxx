@@ -8,9 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
 #include <map>
 #include <numeric>
-#include <iomanip>
 #include <sstream>
 #include <stdexcept>
 #include <unordered_map>
