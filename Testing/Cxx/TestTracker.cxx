@@ -2,6 +2,7 @@
 // Tracking a generated sequence against its ground truth: solvers, units, threads, holes.
 #include "dp/field/SurfaceReconstruction.h"
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/DepthRig.h"
 #include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/geometry/TriangleMesh.h"
@@ -300,6 +301,55 @@ TEST(Tracker, TracksTheSameInAnyUnits)
   }
   for (std::size_t f = 0; f < s.frames.size(); ++f)
     EXPECT_LT(vertexRms(results[0][f], results[1][f]), 1e-6 * s.diagonal) << "frame " << f;
+}
+
+// A take seen by a simulated 4-camera rig (noise, flying pixels, the cameras' layer), and the
+// same take 128 times larger: the same tracked positions scaled, the same flags, the data's noise
+// measured 128 times larger. Nothing in the noise measures, the stray points, the patches or the
+// reach depends on units; a power of two scales every rounding too, so this holds to the last
+// bits. (At a factor of 100 the roundings differ, and a frame at the edge of its flag, frame 3
+// here, can fall either side.)
+TEST(Tracker, ARigsTakeTracksTheSameInAnyUnits)
+{
+  const Sequence s = makeSequence(4, 0, 0, 100);
+  dp::RigOptions rig;
+  rig.cameras = 4;
+  rig.up = "z";
+  rig.subjectHeight = 1.7;
+  std::vector<std::vector<double>> positions[2];
+  std::vector<bool> failed[2];
+  std::vector<double> noise[2];
+  for (int k = 0; k < 2; ++k)
+  {
+    const double scale = k == 0 ? 1.0 : 128.0;
+    std::vector<double> rest = s.animation.positions(0);
+    for (double& v : rest)
+      v *= scale;
+    const dp::DepthRig cameras(s.animation, rig);
+    dp::Tracker tracker(dp::TriangleMesh(s.animation.triangles(), s.animation.numberOfVertices()),
+                        rest, dp::TrackerOptions{});
+    for (std::size_t f = 0; f < 4; ++f)
+    {
+      dp::PointCloud frame = cameras.fusedCloud(s.animation.positions(f), f);
+      for (double& v : frame.points)
+        v *= scale;
+      const dp::FrameResult r =
+          tracker.track(frame.points.data(), frame.numberOfPoints(), frame.normals.data());
+      std::vector<double> x = r.positions;
+      for (double& v : x)
+        v /= scale;
+      positions[k].push_back(x);
+      failed[k].push_back(r.failed);
+      noise[k].push_back(r.noise / scale);
+    }
+  }
+  for (std::size_t f = 0; f < 4; ++f)
+  {
+    EXPECT_LT(vertexRms(positions[0][f], positions[1][f]), 1e-9 * s.diagonal) << "frame " << f;
+    EXPECT_EQ(failed[0][f], failed[1][f]) << "frame " << f;
+    EXPECT_GT(noise[0][f], 0) << "frame " << f;
+    EXPECT_NEAR(noise[1][f] / noise[0][f], 1.0, 1e-12) << "frame " << f;
+  }
 }
 
 TEST(Tracker, OneThreadGivesTheSameBitsAsAll)
