@@ -9,6 +9,8 @@
 #include "dp/io/PointCloud.h"
 #include "dp/io/PointCloudIO.h"
 
+#include "TestUtilities.h"
+
 #include <gtest/gtest.h>
 #include <zlib.h>
 #include <zstd.h>
@@ -170,18 +172,8 @@ std::vector<std::uint8_t> hostileDpz(const Claim& c)
 // The sequence of a bending tube, compressed, with colour and a detail layer of two levels.
 dp::CompressedSequence honestTake(std::size_t frames)
 {
-  dp::BendingTube::Options o;
-  o.frames = frames;
-  const dp::BendingTube tube(o);
-  std::vector<double> positions;
-  for (std::size_t t = 0; t < frames; ++t)
-  {
-    const std::vector<double> p = tube.positions(t);
-    positions.insert(positions.end(), p.begin(), p.end());
-  }
-  const std::size_t nv = tube.numberOfVertices();
-  dp::CompressedSequence s =
-      dp::compressSequence(positions.data(), nv, frames, dp::PcaOptions{}, tube.triangles());
+  dp::CompressedSequence s = dp::test::compressedTube(frames);
+  const std::size_t nv = s.pca.model.vertices;
   const dp::SubdivisionMap map(s.triangles, nv, 2);
   std::vector<double> displacements(map.fineVertices() * frames);
   for (std::size_t i = 0; i < displacements.size(); ++i)

@@ -6,6 +6,8 @@
 #include "dp/export/GltfExport.h"
 #include "dp/io/AnimatedMesh.h"
 
+#include "TestUtilities.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -24,17 +26,7 @@ namespace
 // The bending tube's first `frames` frames, compressed with the default options.
 dp::CompressedSequence tube(std::size_t frames)
 {
-  dp::BendingTube::Options o;
-  o.frames = frames;
-  const dp::BendingTube mesh(o);
-  std::vector<double> positions;
-  for (std::size_t t = 0; t < frames; ++t)
-  {
-    const std::vector<double> p = mesh.positions(t);
-    positions.insert(positions.end(), p.begin(), p.end());
-  }
-  return dp::compressSequence(positions.data(), mesh.numberOfVertices(), frames, dp::PcaOptions{},
-                              mesh.triangles());
+  return dp::test::compressedTube(frames);
 }
 
 // Colour as a tracker gives it: each vertex its own colour, a few steps of noise from frame to

@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// Helpers for the C++ tests: a temporary folder that cleans up, file text in and out, and a
-// check that a call throws dp::FileError naming the right file.
+// Helpers for the C++ tests: a temporary folder that cleans up, file text in and out, a check
+// that a call throws dp::FileError naming the right file, and the bending tube compressed.
 #pragma once
 
+#include "dp/compress/PcaCompression.h"
+#include "dp/io/AnimatedMesh.h"
 #include "dp/io/PointCloud.h"
 
 #include <gtest/gtest.h>
@@ -16,6 +18,22 @@
 
 namespace dp::test
 {
+
+/** The bending tube's first `frames` frames, compressed with the default options. */
+inline dp::CompressedSequence compressedTube(std::size_t frames)
+{
+  dp::BendingTube::Options o;
+  o.frames = frames;
+  const dp::BendingTube mesh(o);
+  std::vector<double> positions;
+  for (std::size_t t = 0; t < frames; ++t)
+  {
+    const std::vector<double> p = mesh.positions(t);
+    positions.insert(positions.end(), p.begin(), p.end());
+  }
+  return dp::compressSequence(positions.data(), mesh.numberOfVertices(), frames, dp::PcaOptions{},
+                              mesh.triangles());
+}
 
 class TempDir
 {

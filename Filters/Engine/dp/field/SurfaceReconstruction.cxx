@@ -23,7 +23,6 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <mutex>
 #include <numeric>
 #include <stdexcept>
@@ -458,26 +457,33 @@ struct Smoothing
   std::vector<float> normals; // empty: the given ones
 };
 
+constexpr double Pi = 3.141592653589793;
 constexpr double AllRound = 0.2;   // the mean normal's length under which data are seen all round
 constexpr double NoisyLayer = 0.2; // thickness over surface spacing beyond which it is smoothed
 constexpr double NoiseVoxel = 4.0; // the voxel, in thicknesses
 constexpr double NoiseReach = 4.0; // the averaging disc's radius, in thicknesses
 constexpr std::size_t FewestNoisyNeighbours = 32, MostNeighbours = 96;
 
+bool noisy(const SurfaceNoise& noise)
+{
+  return noise.thickness > NoisyLayer * noise.surfaceSpacing;
+}
+
 Smoothing smoothingFor(const double* points, const float* normals, std::size_t count,
-                       double spacing, const ReconstructionOptions& options)
+                       double spacing, const SurfaceNoise& noise,
+                       const ReconstructionOptions& options)
 {
   Smoothing s;
   s.voxel = options.voxelSize > 0 ? options.voxelSize : VoxelPerSpacing * spacing;
   s.neighbours = std::max<std::size_t>(1, std::min(options.neighbours, count));
-  s.noise = measureSurfaceNoise(points, count);
-  if (!(s.noise.thickness > NoisyLayer * s.noise.surfaceSpacing))
+  s.noise = noise;
+  if (!noisy(noise))
     return s;
   if (options.voxelSize <= 0)
     s.voxel = std::max(s.voxel, NoiseVoxel * s.noise.thickness);
   const double radius = std::max(NoiseReach * s.noise.thickness, s.voxel);
   const double share = radius / s.noise.surfaceSpacing;
-  s.neighbours = std::clamp<std::size_t>(static_cast<std::size_t>(3.14159 * share * share),
+  s.neighbours = std::clamp<std::size_t>(static_cast<std::size_t>(Pi * share * share),
                                          FewestNoisyNeighbours, std::min(MostNeighbours, count));
   s.normals = unorientedNormals(points, count, s.neighbours);
   for (std::size_t i = 0; i < count; ++i)
@@ -561,34 +567,42 @@ void orientLikeTheData(ReconstructedMesh& mesh, const Input& in)
     for (std::size_t t = 0; t < mesh.triangles.size(); t += 3)
       std::swap(mesh.triangles[t + 1], mesh.triangles[t + 2]);
 }
+
+// The points of a noisy cloud (a sensor's) without its stray returns: isolated points and flying
+// pixels off the layer would each grow a patch of surface, or open the outside to the inside.
+// Returns how many were left out (none for a clean cloud).
+std::size_t leaveOutStrayPoints(const double*& points, const float*& normals, std::size_t& count,
+                                const SurfaceNoise& noise, std::vector<double>& keptPoints,
+                                std::vector<float>& keptNormals)
+{
+  if (!noisy(noise))
+    return 0;
+  const std::vector<std::uint32_t> kept = pointsOnTheSurface(points, count);
+  if (kept.size() == count || kept.size() < 16)
+    return 0;
+  for (std::uint32_t i : kept)
+  {
+    keptPoints.insert(keptPoints.end(), points + 3 * i, points + 3 * i + 3);
+    keptNormals.insert(keptNormals.end(), normals + 3 * i, normals + 3 * i + 3);
+  }
+  const std::size_t left = count - kept.size();
+  points = keptPoints.data();
+  normals = keptNormals.data();
+  count = kept.size();
+  return left;
+}
+
 } // namespace
 
 ReconstructedMesh reconstructSurface(const double* points, const float* normals, std::size_t count,
                                      const ReconstructionOptions& options)
 {
   validateReconstruction(points, normals, count, options);
-  // A noisy cloud (a sensor's) loses its stray returns first: isolated points and flying pixels
-  // off the layer would each grow a patch of surface, or open the outside to the inside.
   const SurfaceNoise noise = measureSurfaceNoise(points, count);
-  if (noise.thickness > NoisyLayer * noise.surfaceSpacing && !options.keepStrayPoints)
-  {
-    const std::vector<std::uint32_t> kept = pointsOnTheSurface(points, count);
-    if (kept.size() < count && kept.size() >= 16)
-    {
-      std::vector<double> p;
-      std::vector<float> n;
-      for (std::uint32_t i : kept)
-      {
-        p.insert(p.end(), points + 3 * i, points + 3 * i + 3);
-        n.insert(n.end(), normals + 3 * i, normals + 3 * i + 3);
-      }
-      ReconstructionOptions again = options;
-      again.keepStrayPoints = true;
-      ReconstructedMesh mesh = reconstructSurface(p.data(), n.data(), kept.size(), again);
-      mesh.strayPoints = count - kept.size();
-      return mesh;
-    }
-  }
+  std::vector<double> keptPoints;
+  std::vector<float> keptNormals;
+  const std::size_t strayPoints =
+      leaveOutStrayPoints(points, normals, count, noise, keptPoints, keptNormals);
   static std::once_flag once;
   std::call_once(once, [] { openvdb::initialize(); });
 
@@ -599,7 +613,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
 
   const detail::KdTree tree(points, count);
   const double spacing = typicalSpacing(tree, points, count);
-  const Smoothing smoothing = smoothingFor(points, normals, count, spacing, options);
+  const Smoothing smoothing = smoothingFor(points, normals, count, spacing, noise, options);
   const Input in{points, smoothing.normals.empty() ? normals : smoothing.normals.data(), count,
                  tree, spacing};
   const double h = smoothing.voxel;
@@ -636,6 +650,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
   const std::size_t handles = options.handleLoop > 0 ? cutHandles(remeshed, options) : 0;
   ReconstructedMesh mesh;
   mesh.handlesCut = handles;
+  mesh.strayPoints = strayPoints;
   mesh.voxelSize = h;
   mesh.noise = smoothing.noise;
   mesh.neighbours = k;

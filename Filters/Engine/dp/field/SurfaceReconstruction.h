@@ -64,19 +64,17 @@ struct ReconstructionOptions
   std::size_t targetVertices = 1000;        // wanted vertex count
   std::size_t neighbours = 8;               // points whose planes each voxel averages
   std::size_t maxActiveVoxels = 50'000'000; // refuse larger grids (memory guard)
-  double voxelSize = 0;         // of the fine grid; 0: 1.5 times the points' median spacing
-  double holeReach = 0.035;     // holes in the data are bridged up to about this distance from
-                                // their rim, as a fraction of the bounding box diagonal (0.035:
-                                // 6.7 cm on a person 1.70 m tall; 0: only gaps of a few voxels)
-  double handleLoop = 0.3;      // a closed surface's handles whose loop is shorter than this
-                                // share of the diagonal are cut (HandleRemoval.h): noise and
-                                // closing make such bridges; a body has none (0: none cut)
-  bool keepStrayPoints = false; // a noisy cloud's isolated and off-layer points are dropped
-                                // first (pointsOnTheSurface), unless this is set
-  double keptPieceShare = 1;    // pieces with at least this share of the largest piece's triangles
-                                // are kept (1: the largest alone, as a template needs; a small
-                                // share keeps what a capture's marching cubes keep, a tail cut off
-                                // by a hole, and drops the floaters of noise)
+  double voxelSize = 0;      // of the fine grid; 0: 1.5 times the points' median spacing
+  double holeReach = 0.035;  // holes in the data are bridged up to about this distance from
+                             // their rim, as a fraction of the bounding box diagonal (0.035:
+                             // 6.7 cm on a person 1.70 m tall; 0: only gaps of a few voxels)
+  double handleLoop = 0.3;   // a closed surface's handles whose loop is shorter than this
+                             // share of the diagonal are cut (HandleRemoval.h): noise and
+                             // closing make such bridges; a body has none (0: none cut)
+  double keptPieceShare = 1; // pieces with at least this share of the largest piece's triangles
+                             // are kept (1: the largest alone, as a template needs; a small
+                             // share keeps what a capture's marching cubes keep, a tail cut off
+                             // by a hole, and drops the floaters of noise)
 };
 
 struct ReconstructedMesh

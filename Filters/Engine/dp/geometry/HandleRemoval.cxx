@@ -32,10 +32,11 @@ struct Edges
   std::vector<std::pair<int, int>> ends;
   std::vector<std::array<int, 2>> faces; // -1: none
   std::vector<std::vector<int>> ofVertex;
+  std::vector<std::array<int, 3>> ofFace;
   std::unordered_map<std::uint64_t, int> index;
   bool manifoldAndClosed = true;
 
-  explicit Edges(const IndexedMesh& m) : ofVertex(m.positions.size())
+  explicit Edges(const IndexedMesh& m) : ofVertex(m.positions.size()), ofFace(m.triangles.size())
   {
     for (std::size_t f = 0; f < m.triangles.size(); ++f)
       for (int k = 0; k < 3; ++k)
@@ -43,6 +44,7 @@ struct Edges
         const int a = m.triangles[f][k], b = m.triangles[f][(k + 1) % 3];
         const auto [it, added] =
             index.emplace(key(std::min(a, b), std::max(a, b)), static_cast<int>(ends.size()));
+        ofFace[f][k] = it->second;
         if (added)
         {
           ends.push_back({std::min(a, b), std::max(a, b)});
@@ -66,11 +68,11 @@ double length(const IndexedMesh& m, int a, int b)
   return norm(d);
 }
 
-// The shortest non-separating loop through the tree of `root` (vertices in order), and its
-// length: tree-cotree, the leftover edge of the shortest loop.
-std::pair<double, std::vector<int>> loopFrom(const IndexedMesh& m, const Edges& e, int root)
+// The shortest-path tree from `root` (edge lengths): each vertex's edge to its parent (-1: the
+// root, or unreached).
+std::vector<int> shortestPathTree(const IndexedMesh& m, const Edges& e, int root)
 {
-  const std::size_t nv = m.positions.size(), nf = m.triangles.size();
+  const std::size_t nv = m.positions.size();
   std::vector<double> distance(nv, std::numeric_limits<double>::infinity());
   std::vector<int> parentEdge(nv, -1);
   using Item = std::pair<double, int>;
@@ -95,23 +97,21 @@ std::pair<double, std::vector<int>> loopFrom(const IndexedMesh& m, const Edges& 
       }
     }
   }
-  std::vector<char> inTree(e.ends.size(), 0), inCotree(e.ends.size(), 0);
-  for (int edge : parentEdge)
-    if (edge >= 0)
-      inTree[edge] = 1;
-  // A spanning tree of the faces across the edges outside the tree.
-  std::vector<char> reached(nf, 0);
+  return parentEdge;
+}
+
+// The edges a spanning tree of the faces crosses, never crossing an edge of `inTree`.
+std::vector<char> cotree(const IndexedMesh& m, const Edges& e, const std::vector<char>& inTree)
+{
+  const std::size_t nf = m.triangles.size();
+  std::vector<char> reached(nf, 0), inCotree(e.ends.size(), 0);
   std::vector<int> stack = {0};
   reached[0] = 1;
-  std::vector<std::vector<int>> edgesOfFace(nf);
-  for (std::size_t edge = 0; edge < e.ends.size(); ++edge)
-    for (int f : e.faces[edge])
-      edgesOfFace[f].push_back(static_cast<int>(edge));
   while (!stack.empty())
   {
     const int f = stack.back();
     stack.pop_back();
-    for (int edge : edgesOfFace[f])
+    for (int edge : e.ofFace[f])
     {
       const int g = e.faces[edge][0] == f ? e.faces[edge][1] : e.faces[edge][0];
       if (inTree[edge] || g < 0 || reached[g])
@@ -121,8 +121,13 @@ std::pair<double, std::vector<int>> loopFrom(const IndexedMesh& m, const Edges& 
       stack.push_back(g);
     }
   }
-  // Each leftover edge closes a loop: up the tree from one end to where the two paths meet,
-  // then down to the other end. The shortest loop wins.
+  return inCotree;
+}
+
+// The loop a leftover edge closes: up the tree from one end to where the two paths meet, then
+// down to the other end.
+std::vector<int> loopOf(const Edges& e, const std::vector<int>& parentEdge, int edge)
+{
   const auto pathUp = [&](int v)
   {
     std::vector<int> path = {v};
@@ -134,17 +139,31 @@ std::pair<double, std::vector<int>> loopFrom(const IndexedMesh& m, const Edges& 
     }
     return path;
   };
+  std::vector<int> up = pathUp(e.ends[edge].first), down = pathUp(e.ends[edge].second);
+  while (up.size() > 1 && down.size() > 1 && up[up.size() - 2] == down[down.size() - 2])
+    up.pop_back(), down.pop_back();
+  std::vector<int> loop(up.begin(), up.end());
+  loop.insert(loop.end(), down.rbegin() + 1, down.rend());
+  return loop;
+}
+
+// The shortest non-separating loop through the tree of `root` (vertices in order), and its
+// length: tree-cotree, each edge in neither tree closing one.
+std::pair<double, std::vector<int>> loopFrom(const IndexedMesh& m, const Edges& e, int root)
+{
+  const std::vector<int> parentEdge = shortestPathTree(m, e, root);
+  std::vector<char> inTree(e.ends.size(), 0);
+  for (int edge : parentEdge)
+    if (edge >= 0)
+      inTree[edge] = 1;
+  const std::vector<char> inCotree = cotree(m, e, inTree);
   double best = std::numeric_limits<double>::infinity();
   std::vector<int> shortest;
   for (std::size_t edge = 0; edge < e.ends.size(); ++edge)
   {
     if (inTree[edge] || inCotree[edge])
       continue;
-    std::vector<int> up = pathUp(e.ends[edge].first), down = pathUp(e.ends[edge].second);
-    while (up.size() > 1 && down.size() > 1 && up[up.size() - 2] == down[down.size() - 2])
-      up.pop_back(), down.pop_back();
-    std::vector<int> loop(up.begin(), up.end());
-    loop.insert(loop.end(), down.rbegin() + 1, down.rend());
+    std::vector<int> loop = loopOf(e, parentEdge, static_cast<int>(edge));
     double l = 0;
     for (std::size_t i = 0; i < loop.size(); ++i)
       l += length(m, loop[i], loop[(i + 1) % loop.size()]);
