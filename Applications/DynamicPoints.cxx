@@ -40,7 +40,7 @@ connectivity, tracked frame by frame; then compresses it and writes it for ParaV
 and glTF viewers.
 
 INPUT is a folder of point files (one per frame), a ParaView .series file, or one point
-file. Readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk.
+file. Readable: .ply .pcd .xyz .pts .csv .txt .obj .drc .vtp .vtu .vtk.
 Without INPUT, the built-in sample sequence is generated first: a bending, twisting tube,
 30 frames of 20000 random surface points with normals, written to OUTPUT/input/.
 With several INPUTs (a batch of takes), each is done as alone into OUTPUT/<name>/ (its

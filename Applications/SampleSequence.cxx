@@ -72,7 +72,7 @@ Per-frame meshes (as volumetric-video studios publish them):
                         duplicate vertices, triangles without area, a small stray part
 
 Output:
-  --format EXT          ply (binary, default), pcd, xyz, csv or obj
+  --format EXT          ply (binary, default), pcd, xyz, csv, obj or drc (Draco)
   --interval T          time between frames in points.series (default 1)
   --truth               also write the true mesh of each frame to OUTPUT_FOLDER/truth/
   -h, --help            show this help
@@ -192,8 +192,8 @@ Request parseArguments(int argc, char** argv)
     {
       r.writing.extension = optionValue(argc, argv, i);
       const std::string& e = r.writing.extension;
-      if (e != "ply" && e != "pcd" && e != "xyz" && e != "csv" && e != "obj")
-        throw UsageError("option --format: '" + e + "' is not one of ply pcd xyz csv obj");
+      if (e != "ply" && e != "pcd" && e != "xyz" && e != "csv" && e != "obj" && e != "drc")
+        throw UsageError("option --format: '" + e + "' is not one of ply pcd xyz csv obj drc");
     }
     else if (arg == "--interval")
       r.writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);

@@ -288,8 +288,8 @@ vtkIdType readFrame(const std::string& path, vtkPolyData* output)
   }
   if (format != dp::PointFileFormat::Unknown)
     return readVTKFile(path, format, output);
-  throw dp::FileError(path, "unknown file extension; readable: .ply .pcd .xyz .pts "
-                            ".csv .txt .obj .vtp .vtu .vtk");
+  throw dp::FileError(path,
+                      std::string("unknown file extension; readable: ") + dp::readableExtensions());
 }
 
 // The field data naming the frame: FrameIndex and FileName.

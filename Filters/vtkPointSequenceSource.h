@@ -19,7 +19,7 @@
  *
  * Formats: PLY (ASCII and binary of either endianness; normals, colours, other vertex
  * properties, faces), PCD (ascii, binary, binary_compressed as PCL writes it), XYZ / PTS /
- * CSV / TXT (x y z [nx ny nz], optional header naming the columns), OBJ, and VTK's .vtp,
+ * CSV / TXT (x y z [nx ny nz], optional header naming the columns), OBJ, Draco (.drc), and VTK's .vtp,
  * .vtu and .vtk (read with VTK's own readers).
  *
  * The output is vtkPolyData with one vertex cell per point, the point arrays found in the file

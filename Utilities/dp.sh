@@ -29,7 +29,7 @@ build_packages=(
   libboost-dev libboost-iostreams-dev libavcodec-dev libavformat-dev libavutil-dev
   libswscale-dev
   libeigen3-dev libopenvdb-dev libtbb-dev libgtest-dev nlohmann-json3-dev libnanoflann-dev
-  liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev libmetis-dev
+  liblbfgs-dev libzstd-dev libtinygltf-dev libmeshoptimizer-dev libdraco-dev libmetis-dev
   libsuitesparse-dev libopenblas0-serial nodejs
 )
 # What only the tests use: clang (fuzzing, sanitizers), Open3D and SciPy (peers' results), the

@@ -10,13 +10,13 @@
 # reader allocates is bounded by its input, and the inputs are small). Each run's executions
 # and coverage are added to $build/runs.tsv (target, date, runs, edges, features).
 #   bash Utilities/fuzz.sh [SECONDS] [TARGET ...]
-#   targets: ply pcd xyz obj series template_ply template_obj track dpz (default: all)
+#   targets: ply pcd xyz obj drc series template_ply template_obj track dpz (default: all)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 seconds="${1:-60}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz obj series template_ply template_obj track dpz)
+[ ${#targets[@]} -gt 0 ] || targets=(ply pcd xyz obj drc series template_ply template_obj track dpz)
 build="${DP_FUZZ_BUILD:-$root/build-fuzz}"
 scratch=/dev/shm; [ -w "$scratch" ] || scratch="${TMPDIR:-/tmp}" # the input file, rewritten per run
 limit=(-max_total_time="$seconds") span="$seconds s"

@@ -17,7 +17,7 @@ class TestCommandLineTools(TempDirTestCase):
     def test_sampler_wrong_options_exit_2_with_a_hint(self):
         for args, message in ((["--points", "-5", "x"], "is not a whole number"),
                               (["--noise", "abc", "x"], "is not a number"),
-                              (["--format", "las", "x"], "not one of ply pcd xyz csv obj"),
+                              (["--format", "las", "x"], "not one of ply pcd xyz csv obj drc"),
                               ([], "no OUTPUT_FOLDER")):
             result = run_tool("dynamicpoints-sample", *args, check=False)
             self.assertEqual(result.returncode, 2, args)

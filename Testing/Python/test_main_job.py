@@ -606,6 +606,25 @@ class TestBadInput(TempDirTestCase):
         with open(self.path("out", "report.json")) as f:
             self.assertEqual(json.load(f)["framesTracked"], 2)
 
+    def test_draco_frames_are_tracked_and_a_corrupt_one_stops_there_keeping_the_frames_before(self):
+        # Per-frame meshes stored as Draco files, as capture tools and game-engine players keep
+        # takes; frame 3 cut short.
+        run_tool("dynamicpoints-sample", "--frames", 5, "--per-frame-mesh", 2000, "--format",
+                 "drc", self.path("drc"))
+        with open(self.path("drc", "frame_0003.drc"), "r+b") as f:
+            f.truncate(os.path.getsize(self.path("drc", "frame_0003.drc")) // 3)
+        result = self.run_main(self.path("drc"), "--vertices", 300, "--no-view")
+        self.assertEqual(result.returncode, 1, result.stdout + result.stderr)
+        self.assertIn("frame_0003.drc: not a readable Draco file", result.stderr)
+        self.assertIn("tracking stopped at frame 3", result.stderr)
+        self.assertIn("3 of 5 frame(s) tracked", result.stdout)
+        self.assertEqual(len(pvd_files(self.path("out", "tracked.pvd"))), 3)
+        with open(self.path("out", "report.json")) as f:
+            report = json.load(f)
+        self.assertEqual(report["framesTracked"], 3)
+        # Read as meshes: the frames' own surfaces, a few mm from the tracked mesh.
+        self.assertLess(max(f["rmsResidual"] for f in report["perFrame"]), 0.02)
+
     def test_wrong_options_exit_2_with_a_hint(self):
         for args, message in ((["--bogus"], "unknown option '--bogus'"),
                               (["--output"], "option --output needs a value"),

@@ -2,6 +2,7 @@
 and by the product's own sampler, and on bad input."""
 import json
 import os
+import subprocess
 import unittest
 
 import numpy as np
@@ -64,6 +65,53 @@ class TestImport(unittest.TestCase):
         self.assertTrue(source.CanReadFile("scan.PCD"))
         self.assertTrue(source.CanReadFile("frames.series"))
         self.assertFalse(source.CanReadFile("scan.las"))
+
+
+class TestFilesFromDraco(TempDirTestCase):
+    """Google Draco's own tools (Debian's draco): draco_encoder writes the .drc frames a capture
+    tool would, draco_decoder gives the reference; and our .drc files are read by Draco."""
+
+    def draco(self, tool, *args):
+        result = subprocess.run([tool, *map(str, args)], capture_output=True, text=True,
+                                timeout=120)
+        self.assertEqual(result.returncode, 0, result.stdout + result.stderr)
+
+    def expect_same(self, drc, reference_ply, faces):
+        ours, _, rec = read_one(drc)
+        self.assertEqual(rec.errors, [])
+        theirs, _, _ = read_one(reference_ply)
+        self.assertGreater(ours.GetNumberOfPoints(), 100)
+        np.testing.assert_array_equal(ours.Points, theirs.Points)
+        np.testing.assert_array_equal(ours.PointData["RGB"], theirs.PointData["RGB"])
+        self.assertEqual(ours.GetNumberOfPolys(), faces)
+        if faces:
+            np.testing.assert_array_equal(ours.Polygons, theirs.Polygons)
+        return ours
+
+    def test_draco_encoder_meshes_and_point_clouds_read_as_draco_decoder_gives_them(self):
+        run_tool("dynamicpoints-sample", "--frames", 1, "--per-frame-mesh", 2000, "--colour",
+                 self.path("meshes"))
+        run_tool("dynamicpoints-sample", "--frames", 1, "--points", 3000, "--colour",
+                 self.path("points"))
+        mesh_ply = self.path("meshes", "frame_0000.ply")
+        faces = read_one(mesh_ply)[0].GetNumberOfPolys()
+        self.assertGreater(faces, 3000)
+        for name, source, extra, expected_faces in (
+                ("mesh", mesh_ply, ["-cl", 7], faces),
+                ("cloud", self.path("points", "frame_0000.ply"), ["-point_cloud"], 0)):
+            drc, back = self.path(name + ".drc"), self.path(name + "_decoded.ply")
+            self.draco("draco_encoder", "-i", source, "-o", drc, "-qp", 14, *extra)
+            self.draco("draco_decoder", "-i", drc, "-o", back)
+            self.expect_same(drc, back, expected_faces)
+
+    def test_our_drc_frames_are_read_by_draco_decoder(self):
+        run_tool("dynamicpoints-sample", "--frames", 2, "--per-frame-mesh", 2000, "--colour",
+                 "--format", "drc", self.path("take"))
+        drc = self.path("take", "frame_0001.drc")
+        back = self.path("decoded.ply")
+        self.draco("draco_decoder", "-i", drc, "-o", back)
+        ours = self.expect_same(drc, back, read_one(back)[0].GetNumberOfPolys())
+        self.assertGreater(ours.GetNumberOfPolys(), 3000)
 
 
 class TestFilesFromOpen3D(TempDirTestCase):

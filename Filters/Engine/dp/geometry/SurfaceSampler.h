@@ -67,7 +67,7 @@ std::vector<double> holeCentres(const std::vector<double>& positions,
 struct SequenceWriteOptions
 {
   std::string filePrefix = "frame_";
-  std::string extension = "ply"; // any format the product writes: ply pcd xyz csv obj
+  std::string extension = "ply"; // any format the product writes: ply pcd xyz csv obj drc
   double frameInterval = 1.0;    // times written into the .series file
   bool writeGroundTruth = false; // also truth/<prefix>NNNN.ply: the mesh of each frame
   // Applied to each frame's samples before they are written (frame index given), e.g. to turn

@@ -153,9 +153,8 @@ FrameSequence FrameSequence::fromDirectory(const std::string& directory, const s
   }
   if (names.empty())
   {
-    throw FileError(directory,
-                    "no point files match the pattern '" + pattern +
-                        "' (readable: .ply .pcd .xyz .pts .csv .txt .obj .vtp .vtu .vtk)");
+    throw FileError(directory, "no point files match the pattern '" + pattern +
+                                   "' (readable: " + readableExtensions() + ")");
   }
   std::sort(names.begin(), names.end(), naturalLess);
   std::vector<std::string> paths;

@@ -125,6 +125,8 @@ PointFileFormat formatFromFileName(const std::string& path)
     return PointFileFormat::Text;
   if (ext == "obj")
     return PointFileFormat::OBJ;
+  if (ext == "drc")
+    return PointFileFormat::Draco;
   if (ext == "vtp")
     return PointFileFormat::VTKXMLPolyData;
   if (ext == "vtu")
@@ -137,7 +139,13 @@ PointFileFormat formatFromFileName(const std::string& path)
 bool isEngineFormat(PointFileFormat format)
 {
   return format == PointFileFormat::PLY || format == PointFileFormat::PCD ||
-         format == PointFileFormat::Text || format == PointFileFormat::OBJ;
+         format == PointFileFormat::Text || format == PointFileFormat::OBJ ||
+         format == PointFileFormat::Draco;
+}
+
+const char* readableExtensions()
+{
+  return ".ply .pcd .xyz .pts .csv .txt .obj .drc .vtp .vtu .vtk";
 }
 
 PointCloud readPointCloud(const std::string& path, ReadReport* report)
@@ -157,9 +165,12 @@ PointCloud readPointCloud(const std::string& path, ReadReport* report)
   case PointFileFormat::OBJ:
     cloud = readOBJ(path);
     break;
+  case PointFileFormat::Draco:
+    cloud = readDRC(path);
+    break;
   case PointFileFormat::Unknown:
-    throw FileError(path, "unknown file extension; expected one of .ply .pcd .xyz .pts .csv "
-                          ".txt .obj .vtp .vtu .vtk");
+    throw FileError(path,
+                    std::string("unknown file extension; expected one of ") + readableExtensions());
   default:
     throw FileError(path, "VTK formats are read by the VTK layer, not by the engine");
   }
@@ -192,8 +203,10 @@ void writePointCloud(const std::string& path, const PointCloud& cloud)
     return writeTextPoints(path, cloud);
   case PointFileFormat::OBJ:
     return writeOBJ(path, cloud);
+  case PointFileFormat::Draco:
+    return writeDRC(path, cloud);
   default:
-    throw FileError(path, "cannot write this extension; use .ply .pcd .xyz .csv .txt or .obj");
+    throw FileError(path, "cannot write this extension; use .ply .pcd .xyz .csv .txt .obj or .drc");
   }
 }
 

@@ -6,7 +6,8 @@
  * Formats: PLY (ASCII, binary little and big endian; vertices with any scalar properties,
  * normals nx/ny/nz, colours red/green/blue[/alpha], faces), PCD (ASCII and binary as PCL
  * writes it, with packed `rgb`/`rgba`), plain text (XYZ, PTS, CSV, TXT: x y z [nx ny nz],
- * optional header line naming the columns) and OBJ (v, vn, f; point-only files too).
+ * optional header line naming the columns), OBJ (v, vn, f; point-only files too) and Draco
+ * (.drc meshes and point clouds, through Google's library: DracoFormat.cxx).
  * VTK's own formats (.vtp, .vtu, .vtk) are read by the VTK layer with VTK's readers.
  *
  * Every reader reads the whole file with one system call, checks it against its header
@@ -18,7 +19,8 @@
  * anything is allocated, so a file costs at most, resident, per byte of it (its densest records;
  * TestMemoryBudget holds these): binary PLY 12, ASCII PLY 10, binary PCD 18, ASCII PCD 10, text
  * 12, OBJ 10; a .series file (FrameSequence) 16. Compressed PCD may hold 88 times its size: what
- * its points will take is asked of the memory budget first (MemoryBudget.h).
+ * its points will take is asked of the memory budget first (MemoryBudget.h), as is what a
+ * Draco file's counts make its decoder and the decoded frame hold.
  */
 #pragma once
 
@@ -36,6 +38,7 @@ enum class PointFileFormat
   PCD,
   Text, // .xyz .pts .csv .txt
   OBJ,
+  Draco,                  // .drc
   VTKXMLPolyData,         // .vtp
   VTKXMLUnstructuredGrid, // .vtu
   VTKLegacy               // .vtk
@@ -46,6 +49,9 @@ PointFileFormat formatFromFileName(const std::string& path);
 
 /** True for the formats readPointCloud() parses (not the VTK formats, not Unknown). */
 bool isEngineFormat(PointFileFormat format);
+
+/** Every extension a point sequence may have, for messages: ".ply .pcd ... .vtk". */
+const char* readableExtensions();
 
 struct ReadReport
 {
@@ -59,6 +65,7 @@ PointCloud readPLY(const std::string& path);
 PointCloud readPCD(const std::string& path);
 PointCloud readTextPoints(const std::string& path);
 PointCloud readOBJ(const std::string& path);
+PointCloud readDRC(const std::string& path);
 
 enum class PlyEncoding
 {
@@ -80,7 +87,11 @@ void writeTextPoints(const std::string& path, const PointCloud& cloud);
 /** Writes v [vn] and f lines. */
 void writeOBJ(const std::string& path, const PointCloud& cloud);
 
-/** Writes in the format the extension names (binary PLY, binary PCD, text, OBJ). */
+/** Writes a Draco mesh (edgebreaker) when every face is a triangle, else a Draco point cloud;
+ *  positions quantised to 14 bits of the bounding box, normals 10, colours lossless. */
+void writeDRC(const std::string& path, const PointCloud& cloud);
+
+/** Writes in the format the extension names (binary PLY, binary PCD, text, OBJ, Draco). */
 void writePointCloud(const std::string& path, const PointCloud& cloud);
 
 } // namespace dp
