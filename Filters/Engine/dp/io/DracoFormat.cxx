@@ -142,13 +142,21 @@ std::uint8_t toByte(float value, const draco::PointAttribute& colour)
   return static_cast<std::uint8_t>(std::clamp(std::lround(value), 0L, 255L));
 }
 
+// Numbers Draco's conversion can read: not its booleans (a byte other than 0 or 1 is no bool),
+// not an invalid type.
+bool numeric(const draco::PointAttribute& attribute)
+{
+  const draco::DataType type = attribute.data_type();
+  return type != draco::DT_BOOL && type != draco::DT_INVALID && type < draco::DT_TYPES_COUNT;
+}
+
 void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
 {
   const std::size_t n = source.num_points();
   const draco::PointAttribute* position =
       source.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (!position || position->num_components() < 3)
-    throw std::runtime_error("it has no 3-component positions");
+  if (!position || position->num_components() < 3 || !numeric(*position))
+    throw std::runtime_error("it has no positions of 3 numbers");
   cloud.points.resize(3 * n);
   float value[4] = {0, 0, 0, 0};
   for (std::size_t i = 0; i < n; ++i)
@@ -157,7 +165,7 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
     std::copy(value, value + 3, cloud.points.begin() + 3 * i);
   }
   const draco::PointAttribute* normal = source.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
-  if (normal && normal->num_components() == 3)
+  if (normal && normal->num_components() == 3 && numeric(*normal))
   {
     cloud.normals.resize(3 * n);
     for (std::size_t i = 0; i < n; ++i)
@@ -165,7 +173,8 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
                                   cloud.normals.data() + 3 * i);
   }
   const draco::PointAttribute* colour = source.GetNamedAttribute(draco::GeometryAttribute::COLOR);
-  if (colour && (colour->num_components() == 3 || colour->num_components() == 4))
+  if (colour && (colour->num_components() == 3 || colour->num_components() == 4) &&
+      numeric(*colour))
   {
     const int channels = colour->num_components();
     cloud.colorComponents = channels;
