@@ -306,7 +306,8 @@ TEST(Tracker, TracksTheSameInAnyUnits)
 // A take seen by a simulated 4-camera rig (noise, flying pixels, the cameras' layer), and the
 // same take 128 times larger: the same tracked positions scaled, the same flags, the data's noise
 // measured 128 times larger. Nothing in the noise measures, the stray points, the patches or the
-// reach depends on units; a power of two scales every rounding too, so this holds to the last
+// reach depends on units; a power of two scales nearly every rounding too, so the positions agree
+// to about 1e-8 of the diagonal (held at 1e-7: nanometres on a person) and the noise to the last
 // bits. (At a factor of 100 the roundings differ, and a frame at the edge of its flag, frame 3
 // here, can fall either side.)
 TEST(Tracker, ARigsTakeTracksTheSameInAnyUnits)
@@ -345,7 +346,7 @@ TEST(Tracker, ARigsTakeTracksTheSameInAnyUnits)
   }
   for (std::size_t f = 0; f < 4; ++f)
   {
-    EXPECT_LT(vertexRms(positions[0][f], positions[1][f]), 1e-9 * s.diagonal) << "frame " << f;
+    EXPECT_LT(vertexRms(positions[0][f], positions[1][f]), 1e-7 * s.diagonal) << "frame " << f;
     EXPECT_EQ(failed[0][f], failed[1][f]) << "frame " << f;
     EXPECT_GT(noise[0][f], 0) << "frame " << f;
     EXPECT_NEAR(noise[1][f] / noise[0][f], 1.0, 1e-12) << "frame " << f;

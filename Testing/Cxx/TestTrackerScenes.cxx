@@ -255,4 +255,72 @@ TEST(Tracker, KeepsALegThatPassesAnother)
   }
 }
 
+// The samples of `cloud` whose normal faces `view` (a single sensor's side), with their normals.
+dp::PointCloud seenFrom(const dp::PointCloud& cloud, const double view[3])
+{
+  dp::PointCloud seen;
+  for (std::size_t i = 0; i < cloud.numberOfPoints(); ++i)
+  {
+    const float* n = &cloud.normals[3 * i];
+    if (n[0] * view[0] + n[1] * view[1] + n[2] * view[2] > 0.2)
+    {
+      seen.points.insert(seen.points.end(), &cloud.points[3 * i], &cloud.points[3 * i] + 3);
+      seen.normals.insert(seen.normals.end(), n, n + 3);
+    }
+  }
+  return seen;
+}
+
+TEST(Tracker, KeepsTheUnseenSideOfABodySeenFromOneSide)
+{
+  // A bending tube seen from one side only, as by a single depth sensor: each vertex is pulled to
+  // its nearest point only where no other part of the mesh is nearer to that point, so the
+  // unseen side, whose nearest points are the seen side's (its rims), is not pulled onto them;
+  // it follows the seen side. Without that test it is drawn in toward the seen side's rims.
+  dp::BendingTube::Options o;
+  o.frames = 30;
+  o.rings = 24;
+  o.segments = 16;
+  o.radius = 0.15;
+  const dp::BendingTube tube(o);
+  const dp::TriangleMesh mesh(tube.triangles(), tube.numberOfVertices());
+  dp::SamplerOptions sampling;
+  sampling.pointsPerFrame = 12000;
+  const double view[3] = {0, 1, 0};
+  dp::TrackerOptions oneSided;
+  oneSided.distance.reciprocal = false;
+  double unseenRms[2] = {0, 0};
+  int run = 0;
+  for (const dp::TrackerOptions& options : {oneSided, dp::TrackerOptions{}})
+  {
+    dp::Tracker tracker(mesh, tube.positions(0), options);
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t f = 0; f < 10; ++f)
+    {
+      const dp::PointCloud c =
+          seenFrom(dp::sampleSurface(tube.positions(f), tube.triangles(), sampling, f), view);
+      const dp::FrameResult r =
+          tracker.track(c.points.data(), c.numberOfPoints(), c.normals.data());
+      // The unseen side's vertices against the true surface (a tube's twist slides vertices
+      // along it unseen, from any side).
+      const std::vector<double> truth = tube.positions(f);
+      const dp::SurfaceLocator trueSurface(mesh, truth.data());
+      std::vector<double> normals(truth.size());
+      mesh.vertexNormals(truth.data(), normals.data());
+      for (std::size_t i = 0; i < truth.size(); i += 3)
+        if (normals[i] * view[0] + normals[i + 1] * view[1] + normals[i + 2] * view[2] < -0.2)
+        {
+          sum += trueSurface.closest(&r.positions[i]).squaredDistance;
+          ++count;
+        }
+    }
+    unseenRms[run++] = std::sqrt(sum / static_cast<double>(count));
+  }
+  // Measured: 4.8 cm off the true surface without the test, 1.2 cm with it (radius 15 cm).
+  EXPECT_GT(unseenRms[0], 0.03) << "without the test the unseen side was expected to collapse";
+  EXPECT_LT(unseenRms[1], 0.5 * unseenRms[0]);
+  EXPECT_LT(unseenRms[1], 0.016) << "the unseen side left the body";
+}
+
 } // namespace

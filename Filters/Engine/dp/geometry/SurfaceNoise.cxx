@@ -69,6 +69,13 @@ Neighbourhood around(const double* points, const double* x, const std::uint32_t*
   return n;
 }
 
+// Isolated (its k-th neighbour far beyond the usual reach) or off the layer.
+bool isStray(const Neighbourhood& n, const NoiseAtSamples& judged)
+{
+  const double layer = OffLayer * judged.noise.thickness + judged.noise.surfaceSpacing;
+  return n.residual >= 0 && (n.reach > IsolatedReach * judged.usualReach || n.offPlane > layer);
+}
+
 } // namespace
 
 NoiseAtSamples measureNoiseAt(const double* points, const std::vector<std::uint32_t>& samples,
@@ -98,13 +105,20 @@ NoiseAtSamples measureNoiseAt(const double* points, const std::vector<std::uint3
   out.noise.thickness = median(residuals);
   out.noise.surfaceSpacing = median(spacings);
   out.noise.pointSpacing = median(nearestOther);
-  const double usualReach = median(reaches);
-  const double layer = OffLayer * out.noise.thickness + out.noise.surfaceSpacing;
+  out.usualReach = median(reaches);
   out.stray.resize(samples.size());
   for (std::size_t s = 0; s < at.size(); ++s)
-    out.stray[s] =
-        at[s].residual >= 0 && (at[s].reach > IsolatedReach * usualReach || at[s].offPlane > layer);
+    out.stray[s] = isStray(at[s], out);
   return out;
+}
+
+bool isStrayPoint(const double* points, const double* x, const NearestPoints& nearest,
+                  const NoiseAtSamples& judged, std::size_t neighbours)
+{
+  std::vector<std::uint32_t> ids(neighbours);
+  std::vector<double> d2(neighbours);
+  const std::size_t found = nearest(x, neighbours, ids.data(), d2.data());
+  return isStray(around(points, x, ids.data(), d2.data(), found), judged);
 }
 
 SurfaceNoise measureSurfaceNoise(const double* points, std::size_t count, std::size_t neighbours)

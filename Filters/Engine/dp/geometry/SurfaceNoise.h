@@ -49,10 +49,16 @@ struct NoiseAtSamples
 {
   SurfaceNoise noise;
   std::vector<char> stray;
+  double usualReach = 0; // the samples' median distance to their `neighbours`-th neighbour
 };
 NoiseAtSamples measureNoiseAt(const double* points, const std::vector<std::uint32_t>& samples,
                               const NearestPoints& nearest,
                               std::size_t neighbours = StrayNeighbours);
+
+/** Whether the point at `x` is stray by the measures of `judged` (its neighbours found by
+ *  `nearest`, `neighbours` of them as for the samples): any point of the cloud, judged alike. */
+bool isStrayPoint(const double* points, const double* x, const NearestPoints& nearest,
+                  const NoiseAtSamples& judged, std::size_t neighbours = StrayNeighbours);
 
 /** The noise of `count` points (x y z each), measured around at most 2000 of them spread
  *  evenly; std::invalid_argument for fewer than 8 points or points that all coincide. */

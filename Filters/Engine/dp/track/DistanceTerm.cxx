@@ -3,6 +3,8 @@
 
 #include "dp/track/RobustKernel.h"
 
+#include "dp/geometry/SurfaceLocator.h"
+
 #include "dp/detail/Parallel.h"
 
 #include <cmath>
@@ -14,6 +16,28 @@ namespace
 constexpr double Pi = 3.14159265358979323846;
 // Planes: how far from a data point (in voxels) its tangent plane stands for the surface.
 constexpr double PlaneReach = 2.0;
+// Reciprocal test: how much nearer (in voxels) another part of the mesh may be to a vertex's
+// nearest point before the vertex no longer answers for it.
+constexpr double ReciprocalTolerance = 2.0;
+
+double squaredDistance(const double* a, const double* b)
+{
+  const double d[3] = {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+  return d[0] * d[0] + d[1] * d[1] + d[2] * d[2];
+}
+
+// Whether the vertex at `vertex` answers for its nearest point `point`: no part of the surface
+// is nearer to the point by more than `tolerance` (else the point is another part's data, and
+// the vertex's own surface is unseen: the back of a body seen from the front).
+bool answersForItsPoint(const SurfaceLocator& surface, const double* vertex, const double* point,
+                        double tolerance)
+{
+  const double toVertex = std::sqrt(squaredDistance(vertex, point));
+  if (toVertex <= tolerance)
+    return true;
+  const SurfaceLocator::Hit hit = surface.closest(point, toVertex - tolerance);
+  return hit.triangle < 0;
+}
 
 // The Gauss-Newton model of D^2 around a sample: (D + g.(y - x))^2.
 PlaneQuadric quadricOf(const DistanceSample& s)
@@ -155,28 +179,35 @@ std::size_t DistanceTerm::decide(const double* x)
   Mesh.vertexNormals(x, normals.data());
   const RobustKernel kernel{RobustKernel::Kind::GemanMcClure, Options.robustScale};
   const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
+  const SurfaceLocator surface = Options.reciprocal ? SurfaceLocator(Mesh, x) : SurfaceLocator();
+  const double tolerance = ReciprocalTolerance * Voxel;
   std::vector<std::uint8_t> changed(nv, 0);
-  forEachIndex(nv,
-               [&](std::size_t v)
-               {
-                 const DistanceSample s = Frame.field().sample(&x[3 * v], &Cells[v]);
-                 bool keep = Options.outlierDistance <= 0 || s.distance <= Options.outlierDistance;
-                 if (keep && Options.normalTestDegrees < 180)
-                 {
-                   const float* n = Frame.normal(static_cast<std::size_t>(s.nearest));
-                   keep = normals[3 * v] * n[0] + normals[3 * v + 1] * n[1] +
-                              normals[3 * v + 2] * n[2] >=
-                          cosLimit;
-                 }
-                 double weight = keep ? 1.0 : 0.0;
-                 if (keep && kernel.active())
-                 {
-                   const double u = sample(&x[3 * v], v).distance / kernel.scale;
-                   weight = kernel.weightOfSquaredRatio(u * u);
-                 }
-                 changed[v] = (Weights[v] != 0) != keep;
-                 Weights[v] = weight;
-               });
+  forEachIndex(
+      nv,
+      [&](std::size_t v)
+      {
+        const DistanceSample s = Frame.field().sample(&x[3 * v], &Cells[v]);
+        bool keep = Options.outlierDistance <= 0 || s.distance <= Options.outlierDistance;
+        if (keep && Options.normalTestDegrees < 180)
+        {
+          const float* n = Frame.normal(static_cast<std::size_t>(s.nearest));
+          keep = normals[3 * v] * n[0] + normals[3 * v + 1] * n[1] + normals[3 * v + 2] * n[2] >=
+                 cosLimit;
+        }
+        // A stray point (a flying pixel, a stray return) is no surface to pull to.
+        keep = keep && !Frame.isStray(static_cast<std::size_t>(s.nearest));
+        if (keep && Options.reciprocal)
+          keep = answersForItsPoint(surface, &x[3 * v],
+                                    Frame.point(static_cast<std::size_t>(s.nearest)), tolerance);
+        double weight = keep ? 1.0 : 0.0;
+        if (keep && kernel.active())
+        {
+          const double u = sample(&x[3 * v], v).distance / kernel.scale;
+          weight = kernel.weightOfSquaredRatio(u * u);
+        }
+        changed[v] = (Weights[v] != 0) != keep;
+        Weights[v] = weight;
+      });
   std::size_t count = 0;
   for (std::uint8_t c : changed)
     count += c;

@@ -8,7 +8,11 @@
  *
  * with m_i the vertex masses (area shares, summing to 1), L = sqrt(template area), and w_i the
  * data weight of vertex i: 0 when it fails the normal test (its normal and its nearest point's
- * normal differ by more than normalTestDegrees) or lies beyond outlierDistance, else 1 or, with
+ * normal differ by more than normalTestDegrees), lies beyond outlierDistance, its nearest point
+ * is stray (FrameData::isStray: a flying pixel, a stray return), or, with `reciprocal`, another
+ * part of the mesh is nearer to that point by more than two voxels (the point is that part's
+ * data: a body seen from one side, whose unseen side's nearest points are the seen side's
+ * rims; a hole, whose vertices' nearest points are its rim's), else 1 or, with
  * a robust scale s, the Geman-McClure weight 1 / (1 + (D/s)^2)^2 decided at the last
  * linearisation (iteratively reweighted least squares: far vertices, in holes or on another
  * part of the data, pull little). D is the distance to the tangent planes of the nearest points

@@ -199,14 +199,38 @@ FrameData::FrameData(const double* points, std::size_t count, const float* norma
 
 void FrameData::judgeSpread()
 {
+  SpreadOnSurface = Spread;
   if (Spread.size() < 8)
     return;
-  NoiseAtSamples judged =
-      measureNoiseAt(Field.points(), Spread,
-                     [this](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
-                     { return Field.nearestPoints(x, k, ids, d2); });
-  Noise = judged.noise;
-  SpreadStray = std::move(judged.stray);
+  Judged = measureNoiseAt(Field.points(), Spread,
+                          [this](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
+                          { return Field.nearestPoints(x, k, ids, d2); });
+  Noise = Judged.noise;
+  SpreadOnSurface.clear();
+  for (std::size_t i = 0; i < Spread.size(); ++i)
+    if (!Judged.stray[i])
+      SpreadOnSurface.push_back(Spread[i]);
+  StrayKnown = std::make_unique<std::atomic<std::uint8_t>[]>(Count);
+}
+
+bool FrameData::isStray(std::size_t i) const
+{
+  if (!StrayKnown)
+    return false;
+  std::uint8_t known = StrayKnown[i].load(std::memory_order_relaxed);
+  if (known == 0)
+  {
+    // A pure function of the point: threads that judge it at once agree.
+    known = isStrayPoint(
+                Field.points(), point(i),
+                [this](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
+                { return Field.nearestPoints(x, k, ids, d2); },
+                Judged)
+                ? 2
+                : 1;
+    StrayKnown[i].store(known, std::memory_order_relaxed);
+  }
+  return known == 2;
 }
 
 FrameData::~FrameData() = default;

@@ -33,6 +33,7 @@
 #include "dp/geometry/SurfaceNoise.h"
 #include "dp/track/FrameSamples.h"
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -116,12 +117,16 @@ public:
   const SurfaceNoise& noise() const { return Noise; }
   /** Per subsample point: stray (isolated, or off the layer: a flying pixel, a stray return),
    *  which no mesh is to explain; empty without a subsample. */
-  const std::vector<char>& strayInSpread() const { return SpreadStray; }
-  /** The subsample with its normals, seen in place (valid while the frame lives, and its
-   *  normals as they are when read: orient them first). */
+  const std::vector<char>& strayInSpread() const { return Judged.stray; }
+  /** Whether point i is stray, judged as the subsample's points are (SurfaceNoise.h); judged
+   *  when first asked and remembered (thread-safe). False without a subsample. */
+  bool isStray(std::size_t i) const;
+  /** The subsample without its stray points, with its normals, seen in place (valid while the
+   *  frame lives, and its normals as they are when read: orient them first): what the data
+   *  terms fit. */
   SampleView spreadSamples() const
   {
-    return {Field.points(), Normals.data(), Spread.data(), Spread.size(), Voxel};
+    return {Field.points(), Normals.data(), SpreadOnSurface.data(), SpreadOnSurface.size(), Voxel};
   }
   /** A copy of the subsample with its normals as they are now. */
   FrameSamples copySamples() const;
@@ -150,7 +155,9 @@ private:
   std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
   SurfaceNoise Noise;
-  std::vector<char> SpreadStray;
+  NoiseAtSamples Judged;                      // the subsample's noise and strays
+  std::vector<std::uint32_t> SpreadOnSurface; // the subsample without its strays
+  mutable std::unique_ptr<std::atomic<std::uint8_t>[]> StrayKnown; // 0 unknown, 1 on, 2 stray
   std::vector<float> Colours;
   double SurfaceArea = 0;
   std::unique_ptr<ColourField> Colour;

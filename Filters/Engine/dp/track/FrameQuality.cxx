@@ -87,10 +87,21 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
                  if (start && distance2(start + 3 * v) <= 0.25 * reach * reach)
                    left[v] = mass[v];
                });
+  // A vertex departed counts where its neighbours departed too (a part that left its data), not
+  // alone (a vertex over a hole's rim, a fold the template cannot hold).
+  std::vector<std::uint32_t> around(nv, 0), leftAround(nv, 0);
+  for (const auto& e : mesh.edges())
+  {
+    ++around[e[0]];
+    ++around[e[1]];
+    leftAround[e[0]] += left[e[1]] > 0;
+    leftAround[e[1]] += left[e[0]] > 0;
+  }
   for (std::size_t v = 0; v < nv; ++v)
   {
     q.unsupported += lonely[v];
-    q.departed += left[v];
+    if (2 * leftAround[v] >= around[v])
+      q.departed += left[v];
   }
   return q;
 }

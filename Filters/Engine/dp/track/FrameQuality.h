@@ -13,8 +13,9 @@
  *   unsupported  the share of the mesh (by vertex area) farther than `reach` from any point:
  *                mesh where there are no data (holes in the data, or a part in the wrong place);
  *   departed     the part of it the solve took off its data: within half `reach` of a point
- *                where the solve started. A hole is no departure: there the start lies over the
- *                same missing data;
+ *                where the solve started, and most of its neighbours too (a part; a vertex
+ *                alone over a hole's rim is none). A hole is no departure: there the start lies
+ *                over the same missing data;
  *   tear         the most a stiff edge grew beyond its template length, in mean template edge
  *                lengths (largestEdgeGrowth): a limb caught by another limb's data as it passes
  *                is stretched between them in a strip that covers almost nothing, which neither

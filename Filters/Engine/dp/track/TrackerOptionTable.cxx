@@ -112,6 +112,11 @@ std::vector<Row> distanceRows()
           "distance.robustScale", "", P::None, 0, Unbounded, "world units",
           "Geman-McClure scale of the distance term; 0: plain least squares",
           [](auto& o) -> auto& { return o.distance.robustScale; }),
+      flag(
+          "distance.reciprocal", "", P::None,
+          "a vertex's distance term drops where another part of the mesh is nearer to its "
+          "nearest point by more than two voxels (data seen from one side, holes)",
+          [](auto& o) -> auto& { return o.distance.reciprocal; }),
   };
 }
 

@@ -42,6 +42,10 @@ struct DistanceTermOptions
   double normalTestDegrees = 90.0; // >= 180: no normal test
   double outlierDistance = 0.0;    // world units; 0: no cut-off
   double robustScale = 0.0;        // Geman-McClure scale (world units); 0: plain least squares
+  // A vertex is pulled to its nearest point only where no other part of the mesh is nearer to
+  // that point by more than two voxels: data seen from one side (a single sensor, a hole) do
+  // not pull the unseen side onto them.
+  bool reciprocal = true;
 };
 
 /** The points -> mesh term (CoverageTerm). */
