@@ -72,9 +72,17 @@ function readCanvas() {
     const before = await tab.evaluate(() => dpViewer.frame());
     // Playing moves on: the first frame shown after `before` (a fixed wait could land on the
     // same frame again, a whole number of loops of a short take later).
+    // On a loaded machine the first click may come while the page still handles the plot's:
+    // a second click after 10 s (play, pause, play) starts it then.
     await tab.click('#play');
-    await tab.waitForFunction((b) => dpViewer.frame() !== b, before, { timeout: 20000 })
-      .catch(() => {});
+    const moved = await tab.waitForFunction((b) => dpViewer.frame() !== b, before, { timeout: 10000 })
+      .then(() => true).catch(() => false);
+    if (!moved) {
+      await tab.click('#play');
+      await tab.click('#play');
+      await tab.waitForFunction((b) => dpViewer.frame() !== b, before, { timeout: 10000 })
+        .catch(() => {});
+    }
     report.played = { from: before, to: await tab.evaluate(() => dpViewer.frame()) };
     await tab.click('#play');
   } finally {
