@@ -152,4 +152,62 @@ TEST(DeformationGraph, BlendsAlongTheSurfaceNotAcrossGaps)
   }
 }
 
+// Appends a flat strip of rows x columns vertices (spacing 0.025) whose first vertex is at
+// (x, y, 0).
+void appendStrip(double x, double y, int rows, int columns, std::vector<double>& positions,
+                 std::vector<std::int64_t>& triangles)
+{
+  const auto first = static_cast<std::int64_t>(positions.size() / 3);
+  for (int i = 0; i < rows; ++i)
+    for (int j = 0; j < columns; ++j)
+      positions.insert(positions.end(), {x + 0.025 * j, y + 0.025 * i, 0.0});
+  for (int i = 0; i + 1 < rows; ++i)
+    for (int j = 0; j + 1 < columns; ++j)
+    {
+      const std::int64_t a = first + i * columns + j, b = a + 1, c = a + columns, d = c + 1;
+      triangles.insert(triangles.end(), {a, c, b, b, c, d});
+    }
+}
+
+TEST(DeformationGraph, LinksASmallPieceToTheNearestPartButKeepsLargePartsApart)
+{
+  // Two large strips far apart (two bodies) and a small one beside the first (a hand a depth
+  // mesh broke off): the small piece's nodes are joined to the first strip by one edge, to its
+  // nearest node; the large strips stay two parts.
+  std::vector<double> positions;
+  std::vector<std::int64_t> triangles;
+  appendStrip(0, 0, 40, 4, positions, triangles);    // first body
+  appendStrip(5, 0, 40, 4, positions, triangles);    // second body, 5 m away
+  appendStrip(0.2, 0.5, 4, 4, positions, triangles); // the small piece, 0.1 m off the first
+  const std::size_t firstEnd = 160, secondEnd = 320;
+  const dp::TriangleMesh mesh(triangles, positions.size() / 3);
+  const dp::DeformationGraph graph(mesh, positions.data(), 60, 4);
+  const auto pieceOf = [&](std::size_t node)
+  {
+    const auto v = static_cast<std::size_t>(graph.nodeVertex(node));
+    return v < firstEnd ? 0 : v < secondEnd ? 1 : 2;
+  };
+  std::vector<std::array<std::int64_t, 2>> across;
+  for (const auto& e : graph.edges())
+    if (pieceOf(static_cast<std::size_t>(e[0])) != pieceOf(static_cast<std::size_t>(e[1])))
+      across.push_back(e);
+  ASSERT_EQ(across.size(), 1u) << "one link, from the small piece to the first body";
+  const std::size_t a = static_cast<std::size_t>(across[0][0]),
+                    b = static_cast<std::size_t>(across[0][1]);
+  EXPECT_EQ(pieceOf(a) + pieceOf(b), 2) << "the small piece (2) linked to the first body (0)";
+  // The link is the nearest pair of nodes between the two pieces.
+  const auto distance = [&](std::size_t j, std::size_t k)
+  {
+    const double* p = graph.nodePosition(j);
+    const double* q = graph.nodePosition(k);
+    return std::hypot(p[0] - q[0], p[1] - q[1], p[2] - q[2]);
+  };
+  double nearest = HUGE_VAL;
+  for (std::size_t j = 0; j < graph.numberOfNodes(); ++j)
+    for (std::size_t k = 0; k < graph.numberOfNodes(); ++k)
+      if (pieceOf(j) == 0 && pieceOf(k) == 2)
+        nearest = std::min(nearest, distance(j, k));
+  EXPECT_DOUBLE_EQ(distance(a, b), nearest);
+}
+
 } // namespace

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <queue>
 #include <stdexcept>
 #include <utility>
@@ -16,6 +17,10 @@ namespace dp
 {
 namespace
 {
+// A part of the graph (nodes linked by edges) with fewer nodes than this share of the largest
+// part's is linked to the rest (DeformationGraph::linkSmallParts).
+constexpr double SmallPartShare = 0.25;
+
 using Queue = std::priority_queue<std::pair<double, std::int64_t>,
                                   std::vector<std::pair<double, std::int64_t>>,
                                   std::greater<std::pair<double, std::int64_t>>>;
@@ -107,6 +112,53 @@ void appendVertexInfluences(NodeDistances& nodes, std::size_t influences, double
       pairs.push_back({std::min(out[i].node, out[k].node), std::max(out[i].node, out[k].node)});
   }
 }
+// Each node's part (the lowest node index of the nodes it is linked to by `edges`).
+std::vector<std::size_t> connectedParts(std::size_t nodes,
+                                        const std::vector<std::array<std::int64_t, 2>>& edges)
+{
+  std::vector<std::size_t> parent(nodes);
+  std::iota(parent.begin(), parent.end(), std::size_t{0});
+  const auto root = [&parent](std::size_t j)
+  {
+    while (parent[j] != j)
+      j = parent[j] = parent[parent[j]];
+    return j;
+  };
+  for (const auto& e : edges)
+  {
+    const std::size_t a = root(static_cast<std::size_t>(e[0]));
+    const std::size_t b = root(static_cast<std::size_t>(e[1]));
+    parent[std::max(a, b)] = std::min(a, b);
+  }
+  for (std::size_t j = 0; j < nodes; ++j)
+    parent[j] = root(j);
+  return parent;
+}
+
+// The nearest pair (a joined node, a node not joined) at rest; ties to the lower indices.
+std::array<std::size_t, 2> nearestJoinedPair(const DeformationGraph& graph,
+                                             const std::vector<char>& joined)
+{
+  double best = std::numeric_limits<double>::infinity();
+  std::array<std::size_t, 2> pair{0, 0};
+  for (std::size_t a = 0; a < joined.size(); ++a)
+    for (std::size_t b = 0; b < joined.size() && joined[a]; ++b)
+    {
+      if (joined[b])
+        continue;
+      const double* p = graph.nodePosition(a);
+      const double* q = graph.nodePosition(b);
+      const double d2 = (p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) +
+                        (p[2] - q[2]) * (p[2] - q[2]);
+      if (d2 < best)
+      {
+        best = d2;
+        pair = {a, b};
+      }
+    }
+  return pair;
+}
+
 } // namespace
 
 DeformationGraph::DeformationGraph(const TriangleMesh& mesh, const double* rest,
@@ -117,6 +169,7 @@ DeformationGraph::DeformationGraph(const TriangleMesh& mesh, const double* rest,
     throw std::invalid_argument("deformation graph: at least one node and one influence needed");
   sampleNodes(std::min(nodeCount, mesh.numberOfVertices()));
   blend(influences);
+  linkSmallParts();
 }
 
 void DeformationGraph::sampleNodes(std::size_t nodeCount)
@@ -174,6 +227,30 @@ void DeformationGraph::blend(std::size_t influences)
   std::sort(pairs.begin(), pairs.end());
   pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
   Edges = std::move(pairs);
+}
+
+void DeformationGraph::linkSmallParts()
+{
+  const std::size_t n = NodeVertex.size();
+  const std::vector<std::size_t> part = connectedParts(n, Edges);
+  std::vector<std::size_t> size(n, 0);
+  for (std::size_t j = 0; j < n; ++j)
+    ++size[part[j]];
+  const std::size_t largest = *std::max_element(size.begin(), size.end());
+  // Prim's growth from the large parts: each time the nearest pair of a joined node and a node
+  // of a part not joined yet becomes an edge, and that whole part joins.
+  std::vector<char> joined(n);
+  for (std::size_t j = 0; j < n; ++j)
+    joined[j] = SmallPartShare * static_cast<double>(largest) <= static_cast<double>(size[part[j]]);
+  while (std::count(joined.begin(), joined.end(), 0) > 0)
+  {
+    const std::array<std::size_t, 2> link = nearestJoinedPair(*this, joined);
+    Edges.push_back({static_cast<std::int64_t>(std::min(link[0], link[1])),
+                     static_cast<std::int64_t>(std::max(link[0], link[1]))});
+    for (std::size_t j = 0; j < n; ++j)
+      joined[j] = joined[j] || part[j] == part[link[1]];
+  }
+  std::sort(Edges.begin(), Edges.end());
 }
 
 DeformationGraph::State DeformationGraph::identity() const

@@ -16,7 +16,12 @@
  * distance along the mesh's edges; each vertex blends its `influences` geodesically nearest
  * nodes with weights (1 - d / d_max)^2 (d_max: the distance of the next nearest node), so a hand
  * resting on a thigh is never bound to the thigh's nodes. Two nodes are neighbours when they
- * blend a common vertex. Everything is deterministic (ties go to the lower index).
+ * blend a common vertex. A template in pieces (a depth mesh broken at its depth jumps) makes a
+ * graph in parts; each part with fewer than a quarter of the largest part's nodes is linked to
+ * the rest by an edge between its node and the nearest node outside it (Prim's growth from the
+ * large parts), so a piece the data stop seeing moves with the body beside it instead of coasting
+ * away on its last motion, while large parts (two people) stay apart. Everything is
+ * deterministic (ties go to the lower index).
  *
  * Limits: geodesics follow the mesh's edges (a little longer than true geodesics); parts of the
  * mesh joined in the template (fused by a reconstruction) stay joined.
@@ -82,6 +87,7 @@ public:
 private:
   void sampleNodes(std::size_t nodeCount);
   void blend(std::size_t influences);
+  void linkSmallParts();
 
   const TriangleMesh& Mesh;
   const double* Rest;

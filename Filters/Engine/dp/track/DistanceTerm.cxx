@@ -179,7 +179,11 @@ std::size_t DistanceTerm::decide(const double* x)
   Mesh.vertexNormals(x, normals.data());
   const RobustKernel kernel{RobustKernel::Kind::GemanMcClure, Options.robustScale};
   const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);
-  const SurfaceLocator surface = Options.reciprocal ? SurfaceLocator(Mesh, x) : SurfaceLocator();
+  if (Options.reciprocal && !SurfaceBuilt)
+    Surface = SurfaceLocator(Mesh, x);
+  else if (Options.reciprocal)
+    Surface.refit(x);
+  SurfaceBuilt = SurfaceBuilt || Options.reciprocal;
   const double tolerance = ReciprocalTolerance * Voxel;
   std::vector<std::uint8_t> changed(nv, 0);
   forEachIndex(
@@ -197,7 +201,7 @@ std::size_t DistanceTerm::decide(const double* x)
         // A stray point (a flying pixel, a stray return) is no surface to pull to.
         keep = keep && !Frame.isStray(static_cast<std::size_t>(s.nearest));
         if (keep && Options.reciprocal)
-          keep = answersForItsPoint(surface, &x[3 * v],
+          keep = answersForItsPoint(Surface, &x[3 * v],
                                     Frame.point(static_cast<std::size_t>(s.nearest)), tolerance);
         double weight = keep ? 1.0 : 0.0;
         if (keep && kernel.active())

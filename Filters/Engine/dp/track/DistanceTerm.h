@@ -27,6 +27,7 @@
  */
 #pragma once
 
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/FrameData.h"
 
@@ -86,6 +87,10 @@ private:
   mutable std::vector<VoxelCell> Cells;
   mutable std::vector<PlaneQuadric> Quadric; // the last model, per vertex
   mutable std::vector<double> Stiffness;     // ... and its weight c_v
+  // The mesh's surface for the reciprocal test: built at the first decision, refitted after
+  // (the term lives for one frame, whose steps move the mesh little).
+  SurfaceLocator Surface;
+  bool SurfaceBuilt = false;
 };
 
 } // namespace dp

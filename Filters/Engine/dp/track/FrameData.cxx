@@ -205,7 +205,6 @@ void FrameData::judgeSpread()
   Judged = measureNoiseAt(Field.points(), Spread,
                           [this](const double* x, std::size_t k, std::uint32_t* ids, double* d2)
                           { return Field.nearestPoints(x, k, ids, d2); });
-  Noise = Judged.noise;
   SpreadOnSurface.clear();
   for (std::size_t i = 0; i < Spread.size(); ++i)
     if (!Judged.stray[i])

@@ -114,7 +114,7 @@ public:
   /** Indices of the well-spread subsample, in increasing order. */
   const std::vector<std::uint32_t>& spread() const { return Spread; }
   /** The data's noise, measured around the subsample (SurfaceNoise.h); zero without one. */
-  const SurfaceNoise& noise() const { return Noise; }
+  const SurfaceNoise& noise() const { return Judged.noise; }
   /** Per subsample point: stray (isolated, or off the layer: a flying pixel, a stray return),
    *  which no mesh is to explain; empty without a subsample. */
   const std::vector<char>& strayInSpread() const { return Judged.stray; }
@@ -154,7 +154,6 @@ private:
   OrientationTree Tree;             // the estimated normals' orientation spread along it
   std::size_t PartCount = 0;
   std::vector<std::uint32_t> Spread;
-  SurfaceNoise Noise;
   NoiseAtSamples Judged;                      // the subsample's noise and strays
   std::vector<std::uint32_t> SpreadOnSurface; // the subsample without its strays
   mutable std::unique_ptr<std::atomic<std::uint8_t>[]> StrayKnown; // 0 unknown, 1 on, 2 stray

@@ -89,18 +89,16 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
                });
   // A vertex departed counts where its neighbours departed too (a part that left its data), not
   // alone (a vertex over a hole's rim, a fold the template cannot hold).
-  std::vector<std::uint32_t> around(nv, 0), leftAround(nv, 0);
-  for (const auto& e : mesh.edges())
-  {
-    ++around[e[0]];
-    ++around[e[1]];
-    leftAround[e[0]] += left[e[1]] > 0;
-    leftAround[e[1]] += left[e[0]] > 0;
-  }
   for (std::size_t v = 0; v < nv; ++v)
   {
     q.unsupported += lonely[v];
-    if (2 * leftAround[v] >= around[v])
+    if (!(left[v] > 0))
+      continue;
+    const std::vector<std::int64_t>& around = mesh.neighbours(v);
+    std::size_t leftAround = 0;
+    for (std::int64_t w : around)
+      leftAround += left[static_cast<std::size_t>(w)] > 0;
+    if (2 * leftAround >= around.size())
       q.departed += left[v];
   }
   return q;
