@@ -12,7 +12,11 @@
 // tracked vertices to the true surface, the share of the true surface farther than 3 cm from the
 // tracked surface (lost parts: mean and worst frame), jitter (RMS acceleration of the tracked
 // vertices over the true vertices'), ms per frame and per stage, and the coarse and fine steps a
-// frame (deterministic, unlike the times). Also: the paper's Table 2 ablation, the
+// frame (deterministic, unlike the times); the mesh's shape in its worst frame (edges folded over
+// 120 degrees, stretched beyond 2 and torn beyond 3 times their template length); frames flagged
+// against frames that lost a part. With --rig, the same where the data see: the vertices whose
+// truth lies within 15 mm of a data point (their RMS error: what one view can tell) and the parts
+// lost of the true surface the data see. Also: the paper's Table 2 ablation, the
 // scaling with the vertex count (the paper's Fig. 4), oracle starts for diagnosis.
 #include "BenchmarkSequences.h"
 #include "BenchmarkUtilities.h"
@@ -94,8 +98,9 @@ struct Settings
   std::size_t rigPoints = 0; // the fused cloud thinned to about this many (0: all)
   bool depthMesh = false;
   double azimuth = 0;
-  // A frame whose true surface is left uncovered more than this (farther than the uncovered
-  // limit from the tracked one) has lost a part: a flag there is right, a flag elsewhere false.
+  // A frame whose true surface is left uncovered more than this beyond the first frame's share
+  // (farther than the uncovered limit from the tracked one) has lost a part: a flag there is
+  // right, a flag elsewhere false.
   double lostShare = 0.01;
 };
 Settings S;
@@ -222,7 +227,8 @@ void printFrame(std::size_t f, const dp::FrameResult& r, const std::vector<doubl
       "  frame %3zu: rigid-free %5.1f vertex RMS %6.1f mm (start %6.1f coarse %6.1f), largest "
       "%6.1f mm, surface RMS %5.1f mm, "
       "uncovered %5.2f%%, %3d+%d iterations, %6.1f ms, unexplained %.3f unsupported %.3f, "
-      "retries %d (kept: %s)%s\n",
+      "retries %d (kept: %s)%s; seen RMS %.1f mm, uncovered seen %.2f%%, folded %.2f%% torn "
+      "%.2f%%\n",
       f, rigidFreeRms(positions, truth), 1e3 * std::sqrt(figures.vertexSquaredSum / nv),
       rmsAgainst(r.startPositions, truth), rmsAgainst(r.coarsePositions, truth),
       1e3 * figures.largestVertexError, 1e3 * std::sqrt(figures.surfaceSquaredSum / nv),
@@ -231,7 +237,11 @@ void printFrame(std::size_t f, const dp::FrameResult& r, const std::vector<doubl
       r.kept == 0   ? "predicted"
       : r.kept == 1 ? "another start"
                     : "stiff",
-      r.failed ? " FAILED" : "");
+      r.failed ? " FAILED" : "",
+      figures.seenVertices
+          ? 1e3 * std::sqrt(figures.seenSquaredSum / static_cast<double>(figures.seenVertices))
+          : 0.0,
+      100 * figures.uncoveredSeen, 100 * figures.folded, 100 * figures.torn);
 }
 
 // --colour: the colour each vertex carries (FrameResult::colours) against the true colour of its
@@ -376,9 +386,14 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const dp::Tracker&
     const std::vector<double> truth = groundTruth(t, truthMesh, mesh.triangles());
     const dp::PointCloud truthCloud =
         dp::sampleSurface(truthMesh, mesh.triangles(), truthSampling, f);
-    const FrameFigures figures =
+    FrameFigures figures =
         compareFrame(x, t.triangles, truth, groundTruthNormals(t, truthMesh, mesh.triangles()),
                      truthMesh, mesh.triangles(), truthCloud.points, S.uncoveredLimit);
+    addMeshShape(x, t.positions, t.triangles, figures);
+    if (S.rig > 0)
+      addSeenFigures(x, t.triangles, truth, truthCloud.points,
+                     frameData(mesh, samplingFor(condition, S.points), f).points,
+                     S.uncoveredLimit / 2, S.uncoveredLimit, figures);
     sums.add(f, r, x, figures, truth, take.cycleSeconds[i], S.lostShare);
     swim.add(r, truth, f);
     if (report && S.verbose)
@@ -431,8 +446,9 @@ const char* Usage =
     "             frame its true mesh)] [--rig N (each frame seen by N simulated depth\n"
     "             cameras, fused)] [--sensor NAME] [--depth-mesh (camera 0's open mesh)]\n"
     "             [--rig-points N (the fused cloud thinned to about N)]\n"
-    "             [--azimuth DEG (camera 0's side)] [--lost-share S (a frame leaving more of\n"
-    "             its true surface uncovered has lost a part; default 0.01)]\n"
+    "             [--azimuth DEG (camera 0's side)] [--lost-share S (a frame leaving this\n"
+    "             much more of its true surface uncovered than the first frame has lost a\n"
+    "             part; default 0.01)]\n"
     "  templates: [--template decimated,reconstructed] [--vertices N[,N...] (0: full)]\n"
     "             [--reconstruction-voxel MM (0: 1.5 point spacings)] [--hole-reach SHARE]\n"
     "  tracker:   [--set NAME=VALUE (repeatable; every option of dp::TrackerOptionTable,\n"
@@ -630,9 +646,22 @@ void printRun(const Run& r, TemplateKind kind, std::size_t vertices, const Condi
               "%.1f (kept attempts; retries on %zu frames), %zu frames flagged\n",
               "", perFrame * r.time.data, perFrame * r.time.prediction, perFrame * r.time.coarse,
               perFrame * r.time.fine, perFrame * r.time.quality, r.retried, r.flagged);
-  std::printf("%14s flags against the truth: %zu frames lost a part (over %.1f %% of the true "
-              "surface uncovered), %zu false flags, %zu missed failures\n",
+  if (S.rig > 0)
+    std::printf("%14s seen by the data (truth within %.0f mm of a point): %.1f %% of the vertices, "
+                "vertex RMS %.1f mm\n",
+                "", 1e3 * S.uncoveredLimit / 2, 100 * r.seenShare, 1e3 * r.seenRms);
+  std::printf("%14s shape, worst frames: %.2f %% of edges folded (over 120 degrees), %.2f %% "
+              "stretched and %.2f %% torn (over 2 and 3 times their template length and its "
+              "mean edge); %zu frames with a torn edge\n",
+              "", 100 * r.foldedWorst, 100 * r.stretchedWorst, 100 * r.tornWorst, r.tornFrames);
+  std::printf("%14s flags against the truth: %zu frames lost a part (over %.1f %% more of the "
+              "true surface uncovered than at the first frame), %zu false flags, %zu missed "
+              "failures\n",
               "", r.lost, 100 * S.lostShare, r.falseFlags, r.missed);
+  if (S.rig > 0)
+    std::printf("%14s flags against the true surface the data see: %zu frames lost a part, %zu "
+                "false flags, %zu missed failures\n",
+                "", r.lostSeen, r.falseSeen, r.missedSeen);
   std::printf("%14s steps/frame: coarse %.2f, fine %.2f (kept attempts)\n", "",
               static_cast<double>(r.coarseSteps) / static_cast<double>(r.frames),
               static_cast<double>(r.fineSteps) / static_cast<double>(r.frames));

@@ -26,6 +26,9 @@ struct Run
   // Against the truth: frames that lost a part (their true surface left uncovered beyond a
   // share), flags on frames that did not (false), frames that did without a flag (missed).
   std::size_t lost = 0, falseFlags = 0, missed = 0;
+  // The same where a part counts as lost only on the true surface the data see (rigs): what
+  // the data could tell.
+  std::size_t lostSeen = 0, falseSeen = 0, missedSeen = 0;
   // The kept attempts' dependent steps, summed: deterministic, unlike the times.
   std::size_t coarseSteps = 0, fineSteps = 0;
   double vertexRms = 0, normalRms = 0, largestVertexError = 0, surfaceRms = 0;
@@ -35,6 +38,11 @@ struct Run
   double colourSwim = -1, truthColourSwim = -1, storedColourSwim = -1;
   double uncoveredMean = 0, uncoveredWorst = 0, jitter = 0, msPerFrame = 0;
   std::size_t worstFrame = 0, frames = 0;
+  // Over the vertices the data see (FrameFigures::seenVertices): their RMS error and share.
+  double seenRms = 0, seenShare = 0;
+  // The worst frame's shares of folded, stretched and torn edges; frames with a torn edge.
+  double foldedWorst = 0, stretchedWorst = 0, tornWorst = 0;
+  std::size_t tornFrames = 0;
 };
 
 // A run's sums over its frames, turned into its figures once the last frame is in.
@@ -45,10 +53,21 @@ public:
            const FrameFigures& figures, const std::vector<double>& truth, double cycleSeconds,
            double lostShare = 0.01)
   {
-    const bool lost = figures.uncovered > lostShare;
+    // Lost: uncovered beyond the first frame's share (what the template itself lacks, as an open
+    // template from one view, is not the tracking's loss).
+    if (R.frames == 0)
+    {
+      FirstUncovered = figures.uncovered;
+      FirstUncoveredSeen = figures.uncoveredSeen;
+    }
+    const bool lost = figures.uncovered - FirstUncovered > lostShare;
     R.lost += lost;
     R.falseFlags += r.failed && !lost;
     R.missed += lost && !r.failed;
+    const bool lostSeen = figures.uncoveredSeen - FirstUncoveredSeen > lostShare;
+    R.lostSeen += lostSeen;
+    R.falseSeen += r.failed && !lostSeen;
+    R.missedSeen += lostSeen && !r.failed;
     Seconds += cycleSeconds;
     R.time.data += r.timings.data;
     R.time.prediction += r.timings.prediction;
@@ -64,6 +83,12 @@ public:
     NormalSum += figures.normalSquaredSum;
     SurfaceSum += figures.surfaceSquaredSum;
     UncoveredSum += figures.uncovered;
+    SeenSum += figures.seenSquaredSum;
+    SeenCount += static_cast<double>(figures.seenVertices);
+    R.foldedWorst = std::max(R.foldedWorst, figures.folded);
+    R.stretchedWorst = std::max(R.stretchedWorst, figures.stretched);
+    R.tornWorst = std::max(R.tornWorst, figures.torn);
+    R.tornFrames += figures.torn > 0;
     R.largestVertexError = std::max(R.largestVertexError, figures.largestVertexError);
     if (figures.uncovered > R.uncoveredWorst || R.frames == 0)
     {
@@ -82,6 +107,8 @@ public:
     run.normalRms = std::sqrt(NormalSum / samples);
     run.surfaceRms = std::sqrt(SurfaceSum / samples);
     run.uncoveredMean = UncoveredSum / tracked;
+    run.seenRms = SeenCount > 0 ? std::sqrt(SeenSum / SeenCount) : 0.0;
+    run.seenShare = SeenCount / samples;
     run.jitter = JitterSums.ratio();
     run.msPerFrame = 1e3 * Seconds / tracked;
     return run;
@@ -91,6 +118,8 @@ private:
   Run R;
   Jitter JitterSums;
   double VertexSum = 0, NormalSum = 0, SurfaceSum = 0, UncoveredSum = 0, Seconds = 0;
+  double SeenSum = 0, SeenCount = 0;
+  double FirstUncovered = 0, FirstUncoveredSeen = 0;
 };
 
 // The RMS distance (mm) of positions y to the true ones; -1 for none (an attempt not made).

@@ -21,9 +21,12 @@
 #include "vtkQuadricDecimation.h"
 #include "vtkSmartPointer.h"
 #include "vtkStaticCellLocator.h"
+#include "vtkStaticPointLocator.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -334,7 +337,113 @@ struct FrameFigures
   double largestVertexError = 0;
   double surfaceSquaredSum = 0; // sum over tracked vertices of their squared distance to the truth
   double uncovered = 0;         // share of the true surface farther than the limit from the mesh
+  // Vertices whose truth the frame's data see (a data point within the seen limit): their
+  // count and summed squared error. With a partial view, the error where data can tell it.
+  std::size_t seenVertices = 0;
+  double seenSquaredSum = 0;
+  double uncoveredSeen = 0; // the uncovered share of the true surface the data see
+  double folded = 0;        // share of interior edges whose triangles turn more than 120 degrees
+  // Shares of edges longer than twice (stretched) and three times (torn) their template length
+  // and than the template's mean edge (addMeshShape).
+  double stretched = 0, torn = 0;
 };
+
+/** Fills `f`'s seen figures: the vertices whose truth lies within `seenLimit` of a data point
+ *  (x y z triples) and their error; the share of the seen `truthSamples` farther than
+ *  `uncoveredLimit` from the tracked surface (`tracked`, `trackedTriangles`). */
+inline void addSeenFigures(const std::vector<double>& tracked,
+                           const std::vector<std::int64_t>& trackedTriangles,
+                           const std::vector<double>& truth,
+                           const std::vector<double>& truthSamples, const std::vector<double>& data,
+                           double seenLimit, double uncoveredLimit, FrameFigures& f)
+{
+  if (data.empty())
+    return;
+  vtkNew<vtkPoints> points;
+  points->SetDataTypeToDouble();
+  points->SetNumberOfPoints(static_cast<vtkIdType>(data.size() / 3));
+  for (std::size_t i = 0; i < data.size(); i += 3)
+    points->SetPoint(static_cast<vtkIdType>(i / 3), &data[i]);
+  vtkNew<vtkPolyData> cloud;
+  cloud->SetPoints(points);
+  vtkNew<vtkStaticPointLocator> locator;
+  locator->SetDataSet(cloud);
+  locator->BuildLocator();
+  const auto seen = [&](const double* x)
+  {
+    double d2 = 0;
+    return locator->FindClosestPointWithinRadius(seenLimit, x, d2) >= 0;
+  };
+  for (std::size_t i = 0; i < truth.size(); i += 3)
+  {
+    if (!seen(&truth[i]))
+      continue;
+    ++f.seenVertices;
+    for (int k = 0; k < 3; ++k)
+      f.seenSquaredSum += (tracked[i + k] - truth[i + k]) * (tracked[i + k] - truth[i + k]);
+  }
+  SurfaceDistance mesh(tracked, trackedTriangles);
+  std::size_t seenSamples = 0, far = 0;
+  for (std::size_t i = 0; i < truthSamples.size(); i += 3)
+    if (seen(&truthSamples[i]))
+    {
+      ++seenSamples;
+      far += mesh.squared(&truthSamples[i]) > uncoveredLimit * uncoveredLimit;
+    }
+  f.uncoveredSeen = seenSamples ? static_cast<double>(far) / static_cast<double>(seenSamples) : 0;
+}
+
+/** Fills `f`'s shape figures: folded interior edges (their two triangles' normals more than 120
+ *  degrees apart), stretched and torn edges (longer than two and three times their length in the
+ *  template, `rest`, and than its mean edge: a sliver's short edge doubling is no tear; no skin
+ *  stretches threefold), as shares. */
+inline void addMeshShape(const std::vector<double>& x, const std::vector<double>& rest,
+                         const std::vector<std::int64_t>& triangles, FrameFigures& f)
+{
+  const auto normal = [&](std::size_t t)
+  {
+    const std::int64_t* v = &triangles[t];
+    double u[3], w[3], n[3];
+    for (int k = 0; k < 3; ++k)
+    {
+      u[k] = x[3 * v[1] + k] - x[3 * v[0] + k];
+      w[k] = x[3 * v[2] + k] - x[3 * v[0] + k];
+    }
+    vtkMath::Cross(u, w, n);
+    vtkMath::Normalize(n);
+    return std::array<double, 3>{n[0], n[1], n[2]};
+  };
+  std::map<std::pair<std::int64_t, std::int64_t>, std::vector<std::size_t>> edges;
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+    for (int c = 0; c < 3; ++c)
+    {
+      const std::int64_t a = triangles[t + c], b = triangles[t + (c + 1) % 3];
+      edges[{std::min(a, b), std::max(a, b)}].push_back(t);
+    }
+  const auto length = [](const std::vector<double>& p, std::int64_t a, std::int64_t b)
+  { return std::sqrt(vtkMath::Distance2BetweenPoints(&p[3 * a], &p[3 * b])); };
+  double meanLength = 0;
+  for (const auto& entry : edges)
+    meanLength += length(rest, entry.first.first, entry.first.second);
+  meanLength /= static_cast<double>(std::max<std::size_t>(1, edges.size()));
+  std::size_t interior = 0, folded = 0, stretched = 0, torn = 0;
+  for (const auto& [edge, faces] : edges)
+  {
+    const double now = length(x, edge.first, edge.second);
+    const double ratio = now / std::max(length(rest, edge.first, edge.second), 1e-300);
+    stretched += ratio > 2 && now > meanLength;
+    torn += ratio > 3 && now > meanLength;
+    if (faces.size() != 2)
+      continue;
+    ++interior;
+    const std::array<double, 3> n = normal(faces[0]), m = normal(faces[1]);
+    folded += n[0] * m[0] + n[1] * m[1] + n[2] * m[2] < -0.5;
+  }
+  f.folded = interior ? static_cast<double>(folded) / static_cast<double>(interior) : 0.0;
+  const double all = static_cast<double>(std::max<std::size_t>(1, edges.size()));
+  f.stretched = static_cast<double>(stretched) / all;
+  f.torn = static_cast<double>(torn) / all;
+}
 
 /**
  * Compares a tracked frame with the truth: vertex errors (and their part along the true
