@@ -90,6 +90,35 @@ private:
   double Rate;
 };
 
+// Two legs: one standing, the other swinging slowly about its base in the x-z plane, until at
+// frame `jumpFrame` it is suddenly `jump` radians further on (a forearm raised within one
+// frame's time), then swinging slowly again.
+class JerkedLeg : public TwoLegs
+{
+public:
+  JerkedLeg(double jump, std::size_t jumpFrame, std::size_t frames)
+      : TwoLegs(Gap, 0.0, frames), Jump(jump), JumpFrame(jumpFrame)
+  {
+  }
+  std::vector<double> positions(std::size_t frame) const override
+  {
+    const double angle = 0.03 * static_cast<double>(frame) + (frame >= JumpFrame ? Jump : 0.0);
+    std::vector<double> x = Rest;
+    for (std::size_t i = x.size() / 2; i < x.size(); i += 3)
+    {
+      const double u = Rest[i] - Gap, w = Rest[i + 2];
+      x[i] = Gap + std::cos(angle) * u + std::sin(angle) * w;
+      x[i + 2] = -std::sin(angle) * u + std::cos(angle) * w;
+    }
+    return x;
+  }
+
+private:
+  static constexpr double Gap = 0.22;
+  double Jump;
+  std::size_t JumpFrame;
+};
+
 // Two legs (tubes of radius 0.08) hanging from hips 0.5 apart, 2 cm apart sideways; the hind
 // one stands, the front one swings back past it, its foot moving about `step` a frame: as a
 // galloping horse's hoof passes another.
@@ -321,6 +350,41 @@ TEST(Tracker, KeepsTheUnseenSideOfABodySeenFromOneSide)
   EXPECT_GT(unseenRms[0], 0.03) << "without the test the unseen side was expected to collapse";
   EXPECT_LT(unseenRms[1], 0.5 * unseenRms[0]);
   EXPECT_LT(unseenRms[1], 0.016) << "the unseen side left the body";
+}
+
+TEST(Tracker, ALegJerkedFarInOneFrameIsFollowedOrFlaggedWhileLost)
+{
+  // A leg (radius 0.08, length 1) turned suddenly about its base within one frame: by 1.2 rad
+  // (its foot moves 0.9 m, eleven leg widths) the tracker follows it at once; by 1.6 rad (1.4 m)
+  // it loses it, and then every frame that leaves the leg's surface uncovered is flagged: a lost
+  // limb is never reported as fine.
+  for (double jump : {0.4, 1.2, 1.6})
+  {
+    const JerkedLeg legs(jump, 4, 8);
+    const dp::TriangleMesh mesh(legs.triangles(), legs.numberOfVertices());
+    dp::SamplerOptions sampling;
+    sampling.pointsPerFrame = 8000;
+    dp::Tracker tracker(mesh, legs.positions(0), dp::TrackerOptions{});
+    std::size_t lostFrames = 0;
+    for (std::size_t f = 0; f < legs.numberOfFrames(); ++f)
+    {
+      const dp::PointCloud c = dp::sampleSurface(legs.positions(f), legs.triangles(), sampling, f);
+      const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), nullptr);
+      const double uncovered = uncoveredShare(legs, f, mesh, r.positions, 3 * tracker.voxelSize());
+      const bool lost = uncovered > 0.01;
+      lostFrames += lost;
+      if (jump < 1.5)
+      {
+        EXPECT_FALSE(lost) << "jump " << jump << ", frame " << f << ": " << uncovered;
+      }
+      EXPECT_EQ(r.failed, lost) << "jump " << jump << ", frame " << f << ": " << uncovered
+                                << " of the surface uncovered";
+    }
+    if (jump > 1.5)
+    {
+      EXPECT_GE(lostFrames, 1u) << "the 1.6 rad jerk was expected to be lost (today's reach)";
+    }
+  }
 }
 
 } // namespace
