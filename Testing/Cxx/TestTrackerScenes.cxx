@@ -352,37 +352,35 @@ TEST(Tracker, KeepsTheUnseenSideOfABodySeenFromOneSide)
   EXPECT_LT(unseenRms[1], 0.016) << "the unseen side left the body";
 }
 
-TEST(Tracker, ALegJerkedFarInOneFrameIsFollowedOrFlaggedWhileLost)
+TEST(Tracker, ALegJerkedFarInOneFrameIsFoundAgainAndFlaggedWhileLost)
 {
-  // A leg (radius 0.08, length 1) turned suddenly about its base within one frame: by 1.2 rad
-  // (its foot moves 0.9 m, eleven leg widths) the tracker follows it at once; by 1.6 rad (1.4 m)
-  // it loses it, and then every frame that leaves the leg's surface uncovered is flagged: a lost
-  // limb is never reported as fine.
-  for (double jump : {0.4, 1.2, 1.6})
+  // A leg (radius 0.08, length 1) turned suddenly about its base within one frame. By 1.2 rad
+  // (its foot 0.9 m away, eleven leg widths) it is followed at once. By 1.6 and 2.0 rad it is
+  // beyond the coarse level's reach: the retry that moves the lost part onto the points it left
+  // (PartRegrowth) finds it within that frame or the next. By 2.5 rad (the foot beside the base)
+  // it stays lost. Whatever happens, every frame that leaves the leg's surface uncovered is
+  // flagged: a lost limb is never reported as fine.
+  const std::size_t jerkFrame = 4;
+  for (double jump : {0.4, 1.2, 1.6, 2.0, 2.5})
   {
-    const JerkedLeg legs(jump, 4, 8);
+    const JerkedLeg legs(jump, jerkFrame, 8);
     const dp::TriangleMesh mesh(legs.triangles(), legs.numberOfVertices());
     dp::SamplerOptions sampling;
     sampling.pointsPerFrame = 8000;
     dp::Tracker tracker(mesh, legs.positions(0), dp::TrackerOptions{});
-    std::size_t lostFrames = 0;
     for (std::size_t f = 0; f < legs.numberOfFrames(); ++f)
     {
       const dp::PointCloud c = dp::sampleSurface(legs.positions(f), legs.triangles(), sampling, f);
       const dp::FrameResult r = tracker.track(c.points.data(), c.numberOfPoints(), nullptr);
       const double uncovered = uncoveredShare(legs, f, mesh, r.positions, 3 * tracker.voxelSize());
       const bool lost = uncovered > 0.01;
-      lostFrames += lost;
-      if (jump < 1.5)
+      EXPECT_EQ(r.failed, lost) << "jump " << jump << ", frame " << f << ": " << uncovered
+                                << " of the surface uncovered";
+      const bool foundBy = jump < 1.5 || f > jerkFrame;
+      if (jump < 2.2 && foundBy)
       {
         EXPECT_FALSE(lost) << "jump " << jump << ", frame " << f << ": " << uncovered;
       }
-      EXPECT_EQ(r.failed, lost) << "jump " << jump << ", frame " << f << ": " << uncovered
-                                << " of the surface uncovered";
-    }
-    if (jump > 1.5)
-    {
-      EXPECT_GE(lostFrames, 1u) << "the 1.6 rad jerk was expected to be lost (today's reach)";
     }
   }
 }

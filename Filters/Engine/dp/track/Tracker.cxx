@@ -19,6 +19,7 @@
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
 #include "dp/track/MotionPredictor.h"
+#include "dp/track/PartRegrowth.h"
 #include "dp/track/RecoveryPolicy.h"
 #include "dp/track/RigidAlignment.h"
 #include "dp/track/Solvers.h"
@@ -95,6 +96,8 @@ struct Tracker::Parts
   std::vector<double> LastGood;
   DeformationGraph::State LastGoodState;
   bool LastFailed = false;
+  DeformationGraph::State RegrownState; // Start::Regrown's, set before its try
+
   // Each vertex's colour in the first frame with colour (where the template lies on its
   // material), read at the colour term's fine and coarse kernels; empty until then.
   std::vector<float> ColourFine, ColourCoarse;
@@ -234,6 +237,8 @@ void Tracker::startState(Start start, Attempt& a) const
     state = *predictor.lastState();
   else if (start == Start::LastGood)
     state = P->LastGoodState;
+  else if (start == Start::Regrown)
+    state = P->RegrownState;
   else
   {
     // The template, moved rigidly onto the last shape: every node takes the same motion.
@@ -459,11 +464,13 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
     // Held stiffer only where a limb tore: elsewhere (a collapse, a body whose skin stretches)
     // a stiffer coarse level fits the data worse.
     const bool torn = policy.torn(best.quality);
-    for (Start retry : {Start::Stiff, Start::Still, Start::LastGood, Start::Template})
+    for (Start retry :
+         {Start::Stiff, Start::Regrown, Start::Still, Start::LastGood, Start::Template})
     {
-      if ((!P->Graph && (retry == Start::Template || retry == Start::Stiff)) ||
+      if ((!P->Graph && retry != Start::Still && retry != Start::LastGood) ||
           (retry == Start::Stiff && !torn) ||
-          (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())))
+          (retry == Start::LastGood && (!P->LastFailed || P->LastGood.empty())) ||
+          (retry == Start::Regrown && !regrowable(frame, best)))
         continue;
       Attempt other = attempt(frame, retry);
       ++result.retries;
@@ -480,6 +487,17 @@ Tracker::Attempt Tracker::solveWithRetries(const FrameData& frame, FrameResult& 
   result.kept = kept;
   P->Recovery.frameKept(best.quality);
   return best;
+}
+
+bool Tracker::regrowable(const FrameData& frame, const Attempt& best)
+{
+  if (!Options.recovery.regrow)
+    return false;
+  const std::vector<double> moved = regrowLostPart(frame, Mesh, best.positions, best.quality.reach);
+  if (moved.empty())
+    return false;
+  P->RegrownState = P->Graph->fit(moved.data());
+  return true;
 }
 
 void Tracker::keep(Attempt&& best, FrameResult& result)

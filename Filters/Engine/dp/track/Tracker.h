@@ -203,7 +203,8 @@ private:
     Stiff,     // the same, with the coarse level's limbs held stiffer (a limb caught by another)
     Still,     // the last frame, no extrapolation
     LastGood,  // the last frame that did not fail (while the frames since fail)
-    Template   // the template, moved rigidly onto the last frame
+    Template,  // the template, moved rigidly onto the last frame
+    Regrown    // the best try with its lost part moved onto the points it left (PartRegrowth)
   };
   /** One try at a frame from `start`: the start, the coarse level, the fine solve, the
    *  frame's quality. The first try (Start::Predicted) takes the few fine steps of
@@ -239,6 +240,9 @@ private:
   bool capsFineLevel() const;
   /** The predicted attempt, then the retries while it fails; counts them in `result`. */
   Attempt solveWithRetries(const class FrameData& frame, FrameResult& result);
+  /** Whether `best` lost a part that regrowLostPart can place on the points it left; if so,
+   *  Start::Regrown's state is set to that placement. */
+  bool regrowable(const class FrameData& frame, const Attempt& best);
   /** Moves the kept attempt's outcome into `result`. */
   static void keep(Attempt&& best, FrameResult& result);
   /** What the next frames need of this one: motion history, the graph's reference, the last

@@ -284,6 +284,11 @@ std::vector<Row> recoveryRows()
           "recovery.stiffRetry", "", P::None,
           "a frame with a torn limb is tried again with the coarse level's limbs stiffer",
           [](auto& o) -> auto& { return o.recovery.stiffRetry; }),
+      flag(
+          "recovery.regrow", "", P::None,
+          "a frame that lost a part is tried again with that part moved onto the points it left "
+          "(a limb moved beyond the coarse level's reach)",
+          [](auto& o) -> auto& { return o.recovery.regrow; }),
       real(
           "recovery.tearGrowth", "", P::None, 0, Unbounded, "mean edge lengths",
           "a stiff edge grown beyond its template length by more than this: a torn limb",

@@ -118,6 +118,9 @@ struct RecoveryOptions
   // coarse level's limbs held stiffer, and keeps an attempt without the tear that explains the
   // data about as well. Off: tears are neither failures nor retried stiffer.
   bool stiffRetry = true;
+  // A frame that lost a part is also tried from its best attempt with the lost part moved
+  // rigidly onto the points it left (PartRegrowth: a limb moved beyond the coarse level's reach).
+  bool regrow = true;
   double tearGrowth = 2.0; // mean edge lengths a stiff edge may grow before its limb counts torn
   // The stiff retry's coarse level: its rigidity times `stiffening`, its stretch weight times
   // the square.
