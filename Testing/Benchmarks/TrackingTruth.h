@@ -359,13 +359,7 @@ inline void addSeenFigures(const std::vector<double>& tracked,
 {
   if (data.empty())
     return;
-  vtkNew<vtkPoints> points;
-  points->SetDataTypeToDouble();
-  points->SetNumberOfPoints(static_cast<vtkIdType>(data.size() / 3));
-  for (std::size_t i = 0; i < data.size(); i += 3)
-    points->SetPoint(static_cast<vtkIdType>(i / 3), &data[i]);
-  vtkNew<vtkPolyData> cloud;
-  cloud->SetPoints(points);
+  const vtkSmartPointer<vtkPolyData> cloud = toPolyData(data, {});
   vtkNew<vtkStaticPointLocator> locator;
   locator->SetDataSet(cloud);
   locator->BuildLocator();

@@ -61,6 +61,20 @@ public:
   const std::vector<std::int64_t>& triangles() const override { return Triangles; }
 
 protected:
+  // The rest pose with the second leg turned by `angle` about its base (x = `base`, z = 0) in
+  // the x-z plane, away from the first.
+  std::vector<double> secondTurned(double base, double angle) const
+  {
+    std::vector<double> x = Rest;
+    for (std::size_t i = x.size() / 2; i < x.size(); i += 3)
+    {
+      const double u = Rest[i] - base, w = Rest[i + 2];
+      x[i] = base + std::cos(angle) * u + std::sin(angle) * w;
+      x[i + 2] = -std::sin(angle) * u + std::cos(angle) * w;
+    }
+    return x;
+  }
+
   std::size_t Frames;
   std::vector<double> Rest;
   std::vector<std::int64_t> Triangles;
@@ -74,15 +88,7 @@ public:
   SwingingLeg(double rate, std::size_t frames) : TwoLegs(Gap, 0.0, frames), Rate(rate) {}
   std::vector<double> positions(std::size_t frame) const override
   {
-    const double angle = Rate * static_cast<double>(frame * frame);
-    std::vector<double> x = Rest;
-    for (std::size_t i = x.size() / 2; i < x.size(); i += 3)
-    {
-      const double u = Rest[i] - Gap, w = Rest[i + 2];
-      x[i] = Gap + std::cos(angle) * u + std::sin(angle) * w;
-      x[i + 2] = -std::sin(angle) * u + std::cos(angle) * w;
-    }
-    return x;
+    return secondTurned(Gap, Rate * static_cast<double>(frame * frame));
   }
 
 private:
@@ -102,15 +108,7 @@ public:
   }
   std::vector<double> positions(std::size_t frame) const override
   {
-    const double angle = 0.03 * static_cast<double>(frame) + (frame >= JumpFrame ? Jump : 0.0);
-    std::vector<double> x = Rest;
-    for (std::size_t i = x.size() / 2; i < x.size(); i += 3)
-    {
-      const double u = Rest[i] - Gap, w = Rest[i + 2];
-      x[i] = Gap + std::cos(angle) * u + std::sin(angle) * w;
-      x[i + 2] = -std::sin(angle) * u + std::cos(angle) * w;
-    }
-    return x;
+    return secondTurned(Gap, 0.03 * static_cast<double>(frame) + (frame >= JumpFrame ? Jump : 0.0));
   }
 
 private:
