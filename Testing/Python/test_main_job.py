@@ -572,13 +572,16 @@ class TestBadInput(TempDirTestCase):
         # (30 frames: 5-6 frames fail without the ball, with plain or accelerated coarse steps).
         result = self.run_main(self.path("seq"))
         self.assertEqual(result.returncode, 0, result.stderr)
-        self.assertRegex(result.stderr, "frame 3 failed after [23] retries")
+        # Retried from every start that applies: the stiff one where a limb tore, the lost part
+        # regrown onto the points nothing explains (tried, not kept: the ball is no lost part),
+        # the last frame, the template.
+        self.assertRegex(result.stderr, "frame 3 failed after [234] retries")
         self.assertIn("frame(s) 3 failed after retries", result.stderr)
         with open(self.path("out", "report.json")) as f:
             report = json.load(f)
         self.assertEqual(report["framesFailed"], [3])
         self.assertGreater(report["perFrame"][3]["unexplained"], 0.1)
-        self.assertIn(report["perFrame"][3]["retries"], (2, 3))
+        self.assertIn(report["perFrame"][3]["retries"], (2, 3, 4))
 
     def test_missing_folder(self):
         result = self.run_main(self.path("no-such-folder"))
