@@ -390,19 +390,21 @@ Run evaluate(const dp::AnimatedMesh& mesh, const Template& t, const dp::Tracker&
         compareFrame(x, t.triangles, truth, groundTruthNormals(t, truthMesh, mesh.triangles()),
                      truthMesh, mesh.triangles(), truthCloud.points, S.uncoveredLimit);
     addMeshShape(x, t.positions, t.triangles, figures);
+    // The frame's data again (a rig renders it), once, where the seen figures or a dump need it.
+    const bool dump = report && !S.dumpFolder.empty();
+    const dp::PointCloud data =
+        S.rig > 0 || dump ? frameData(mesh, samplingFor(condition, S.points), f) : dp::PointCloud{};
     if (S.rig > 0)
-      addSeenFigures(x, t.triangles, truth, truthCloud.points,
-                     frameData(mesh, samplingFor(condition, S.points), f).points,
-                     S.uncoveredLimit / 2, S.uncoveredLimit, figures);
+      addSeenFigures(x, t.triangles, truth, truthCloud.points, data.points, S.uncoveredLimit / 2,
+                     S.uncoveredLimit, figures);
     sums.add(f, r, x, figures, truth, take.cycleSeconds[i], S.lostShare);
     swim.add(r, truth, f);
     if (report && S.verbose)
       printFrame(f, r, x, figures, truth);
     if (report && csv)
       writeCsvRow(*csv, label, f, r, figures, static_cast<double>(t.vertices()));
-    if (report && !S.dumpFolder.empty())
-      dumpFrame(S.dumpFolder + "/" + label, f, x, truth, t.triangles,
-                frameData(mesh, samplingFor(condition, S.points), f));
+    if (dump)
+      dumpFrame(S.dumpFolder + "/" + label, f, x, truth, t.triangles, data);
   }
   Run run = sums.finish(t.vertices());
   run.colourSwim = swim.tracked();
