@@ -317,6 +317,14 @@ TEST(DracoFormat, CountsBeyondTheFileOrTheMemoryBudgetAreRefusedBeforeDecoding)
                               std::string(18, '\x01');
   dp::test::writeText(path, finding);
   expectFileError([&] { dp::readPointCloud(path); }, path, "more than any coding holds");
+  // A kd-tree point cloud of bitstream 2.2 declaring 10 points in its header and 503 971 840 in
+  // its attribute data, which Draco sizes the attribute by (a fuzzer's finding: 6 GB asked for).
+  const std::string oldKdTree =
+      std::string("DRACO") + '\x02' + '\x02' + '\x00' + '\x01' + std::string(2, '\0') +
+      std::string("\x0a\x00\x00\x00", 4) + '\x01' + '\x01' + std::string("\x00\x09\x03\x00", 4) +
+      '\x00' + '\x00' + '\x00' + std::string("\x00\x00\x0a\x1e", 4) + std::string(16, '\x01');
+  dp::test::writeText(path, oldKdTree);
+  expectFileError([&] { dp::readPointCloud(path); }, path, "declares 503971840 points");
   // An honest file over the budget: refused by its counts, before the library decodes it.
   dp::writePointCloud(path, colouredTube(3));
   ::setenv("DP_MEMORY_BUDGET", "64K", 1);

@@ -57,77 +57,121 @@ struct DracoCounts
   throw FileError(path, "not a readable Draco file: " + why);
 }
 
+// A Draco stream being read for its counts: the buffer past the header and its version.
+struct CountReader
+{
+  const std::string& path;
+  draco::DecoderBuffer buffer;
+  int version = 0; // major * 256 + minor
+
+  [[noreturn]] void cutShort() const { refuse(path, "it ends inside its counts (truncated)"); }
+  // A count as the version codes it: 32 raw bits before 2.0, a varint since.
+  std::uint32_t count()
+  {
+    std::uint32_t value = 0;
+    if (!(version < 2 * 256 ? buffer.Decode(&value) : draco::DecodeVarint(&value, &buffer)))
+      cutShort();
+    return value;
+  }
+  template <typename T>
+  T raw()
+  {
+    T value{};
+    if (!buffer.Decode(&value))
+      cutShort();
+    return value;
+  }
+};
+
+// A kd-tree point cloud before bitstream 2.3 declares its points a second time, inside its
+// attribute data, and Draco sizes the attributes by that count: it is read here, past the
+// attribute descriptors. Draco's kd-tree encoder writes one attribute decoder; a stream with more
+// would have the later ones' counts behind the first's data, so it is refused.
+double oldKdTreePoints(CountReader& in)
+{
+  const auto decoders = in.raw<std::uint8_t>();
+  if (decoders == 0)
+    return 0;
+  if (decoders > 1)
+    refuse(in.path, "an old kd-tree point cloud with " + std::to_string(decoders) +
+                        " attribute decoders (Draco's encoder writes one)");
+  const std::uint32_t attributes = in.count();
+  for (std::uint32_t a = 0; a < attributes; ++a)
+  {
+    in.raw<std::uint32_t>(); // type, data type, components, normalised: a byte each
+    if (in.version < 1 * 256 + 3)
+      in.raw<std::uint16_t>();
+    else
+      in.count();
+  }
+  in.raw<std::uint8_t>(); // method
+  in.raw<std::uint8_t>(); // compression level
+  return in.raw<std::uint32_t>();
+}
+
+DracoCounts pointCloudCounts(CountReader& in, std::uint8_t method)
+{
+  const auto declared = in.raw<std::int32_t>();
+  DracoCounts counts;
+  counts.points = declared < 0 ? 0 : declared;
+  if (method == draco::POINT_CLOUD_KD_TREE_ENCODING && in.version < 2 * 256 + 3)
+    counts.points = std::max(counts.points, oldKdTreePoints(in));
+  return counts;
+}
+
+DracoCounts meshCounts(CountReader& in, std::uint8_t method)
+{
+  DracoCounts counts;
+  counts.mesh = true;
+  if (method == draco::MESH_SEQUENTIAL_ENCODING)
+  {
+    // Counts of 32 raw bits before 2.2, varints since.
+    const bool raw = in.version < 2 * 256 + 2;
+    counts.faces = raw ? in.raw<std::uint32_t>() : in.count();
+    counts.points = raw ? in.raw<std::uint32_t>() : in.count();
+  }
+  else if (method == draco::MESH_EDGEBREAKER_ENCODING)
+  {
+    in.raw<std::uint8_t>(); // traversal
+    if (in.version < 2 * 256 + 2)
+      in.count(); // new vertices
+    counts.points = in.count();
+    counts.faces = in.count();
+  }
+  else
+    refuse(in.path, "mesh method " + std::to_string(method) + " is not Draco's");
+  return counts;
+}
+
 // The counts a Draco stream declares before its data: the header, the metadata, then the
 // method's own counts (Draco's bitstreams up to 2.2 for meshes, 2.3 for point clouds).
 DracoCounts readDeclaredCounts(const std::string& path, std::string_view bytes)
 {
-  draco::DecoderBuffer buffer;
-  buffer.Init(bytes.data(), bytes.size());
+  CountReader in{path, {}, 0};
+  in.buffer.Init(bytes.data(), bytes.size());
   draco::DracoHeader header;
-  if (!draco::PointCloudDecoder::DecodeHeader(&buffer, &header).ok())
+  if (!draco::PointCloudDecoder::DecodeHeader(&in.buffer, &header).ok())
     refuse(path, "no Draco header (the file does not start with 'DRACO', or ends inside it)");
-  const int version = header.version_major * 256 + header.version_minor;
+  in.version = header.version_major * 256 + header.version_minor;
   const bool pointCloud = header.encoder_type == draco::POINT_CLOUD;
-  if (header.version_major < 1 || version > 2 * 256 + (pointCloud ? 3 : 2))
+  if (header.version_major < 1 || in.version > 2 * 256 + (pointCloud ? 3 : 2))
     refuse(path, "bitstream version " + std::to_string(header.version_major) + "." +
                      std::to_string(header.version_minor) + " (this build reads 1.0 to " +
                      (pointCloud ? "2.3" : "2.2") + ")");
-  buffer.set_bitstream_version(DRACO_BITSTREAM_VERSION(header.version_major, header.version_minor));
-  if (version >= 1 * 256 + 3 && (header.flags & METADATA_FLAG_MASK))
+  in.buffer.set_bitstream_version(
+      DRACO_BITSTREAM_VERSION(header.version_major, header.version_minor));
+  if (in.version >= 1 * 256 + 3 && (header.flags & METADATA_FLAG_MASK))
   {
     draco::GeometryMetadata metadata;
-    if (!draco::MetadataDecoder().DecodeGeometryMetadata(&buffer, &metadata))
+    if (!draco::MetadataDecoder().DecodeGeometryMetadata(&in.buffer, &metadata))
       refuse(path, "its metadata are corrupt or cut short");
   }
-  DracoCounts counts;
-  const auto cutShort = [&] { refuse(path, "it ends inside its counts (truncated)"); };
   if (pointCloud)
-  {
-    std::int32_t declared = 0;
-    if (!buffer.Decode(&declared))
-      cutShort();
-    counts.points = declared < 0 ? 0 : declared;
-    return counts;
-  }
+    return pointCloudCounts(in, header.encoder_method);
   if (header.encoder_type != draco::TRIANGULAR_MESH)
     refuse(path, "geometry type " + std::to_string(header.encoder_type) +
                      " is neither a point cloud nor a mesh");
-  counts.mesh = true;
-  const bool old = version < 2 * 256;
-  const auto count = [&](std::uint32_t& value)
-  {
-    if (!(old ? buffer.Decode(&value) : draco::DecodeVarint(&value, &buffer)))
-      cutShort();
-  };
-  std::uint32_t faces = 0, points = 0;
-  if (header.encoder_method == draco::MESH_SEQUENTIAL_ENCODING)
-  {
-    if (version < 2 * 256 + 2)
-    {
-      if (!buffer.Decode(&faces) || !buffer.Decode(&points))
-        cutShort();
-    }
-    else if (!draco::DecodeVarint(&faces, &buffer) || !draco::DecodeVarint(&points, &buffer))
-      cutShort();
-  }
-  else if (header.encoder_method == draco::MESH_EDGEBREAKER_ENCODING)
-  {
-    std::uint8_t traversal = 0;
-    if (!buffer.Decode(&traversal))
-      cutShort();
-    if (version < 2 * 256 + 2)
-    {
-      std::uint32_t newVertices = 0;
-      count(newVertices);
-    }
-    count(points);
-    count(faces);
-  }
-  else
-    refuse(path, "mesh method " + std::to_string(header.encoder_method) + " is not Draco's");
-  counts.points = points;
-  counts.faces = faces;
-  return counts;
+  return meshCounts(in, header.encoder_method);
 }
 
 // A colour channel as 0..255: floats and normalised integers come as 0..1 (Draco's conversion),
