@@ -91,8 +91,6 @@ public:
   void setStiffnessScales(std::vector<double> edgeStretch, std::vector<double> hingeBend);
   /** The per-edge factors on k_st (empty: 1 everywhere). */
   const std::vector<double>& stretchScales() const { return StretchScale; }
-  /** The per-hinge factors on k_ben (empty: 1 everywhere). */
-  const std::vector<double>& bendScales() const { return BendScale; }
 
   const std::vector<double>& vertexMass() const { return Mass; }
   double lengthScale() const { return L; }

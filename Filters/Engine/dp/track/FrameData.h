@@ -130,7 +130,6 @@ public:
   }
   /** A copy of the subsample with its normals as they are now. */
   FrameSamples copySamples() const;
-  bool hasColour() const { return !Colours.empty(); }
   /** The colour field of the points (null without colour). */
   const ColourField* colourField() const { return Colour.get(); }
   /** r g b in [0, 1] per point (empty without colour). */

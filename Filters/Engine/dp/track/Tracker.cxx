@@ -164,11 +164,6 @@ Tracker::Tracker(TriangleMesh mesh, std::vector<double> templatePositions,
 
 Tracker::~Tracker() = default;
 
-std::size_t Tracker::graphNodes() const
-{
-  return P->Graph ? P->Graph->numberOfNodes() : 0;
-}
-
 void Tracker::readColourReference(const FrameData& frame, const std::vector<double>& positions)
 {
   if (!P->ColourFine.empty() || !frame.colourField() || Options.colourWeight <= 0)

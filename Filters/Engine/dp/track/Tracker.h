@@ -192,8 +192,6 @@ public:
   const TrackerOptions& options() const { return Options; }
   const ClothEnergy& clothEnergy() const { return Cloth; }
   double voxelSize() const { return Voxel; }
-  /** Nodes of the coarse level's deformation graph (0 when it is off). */
-  std::size_t graphNodes() const;
 
 private:
   struct Attempt;
