@@ -52,36 +52,78 @@ public:
    *  in the SHAPES layout, which glTF needs. */
   void SetCompressionOption(const char* name, double value);
   double GetCompressionOption(const char* name);
-  void SetLayout(int value) { this->SetCompressionOption("Layout", value); }
-  int GetLayout() { return static_cast<int>(this->GetCompressionOption("Layout")); }
+  ///@}
+
+  // The named accessors of the table's options that ParaView's panel shows, written by
+  // build/bin/dp-option-code from the table (dp/io/OptionCode.h): edit the table, not here.
+  // BEGIN generated options: compression except Quantize
+  // clang-format off
+  ///@{
+  /** What the error target measures: Karni and Gotsman's error, 100 |A - A'| / |A - E(A)| in
+   *  percent, the largest vertex error as a fraction of the bounding-box diagonal, or (for
+   *  Deformable Track's output, which carries each frame's points) the percent by which the
+   *  decompressed mesh's RMS distance to the points may grow: a target of the data's, not the
+   *  motion's (10 suits noisy captures; the main job's default). (compression.measure; range
+   *  kg|max-vertex|data) */
   void SetErrorMeasure(int value) { this->SetCompressionOption("ErrorMeasure", value); }
   int GetErrorMeasure() { return static_cast<int>(this->GetCompressionOption("ErrorMeasure")); }
+  ///@}
+  ///@{
+  /** Error Measure KG: the largest Karni-Gotsman error, 100 |A - A'| / |A - E(A)| in percent
+   *  (e.g. 0.5, 0.2, 0.1). The compressor meets it on the actual reconstruction.
+   *  (compression.kgTarget; range [0.0001, 50], percent) */
   void SetKGTarget(double value) { this->SetCompressionOption("KGTarget", value); }
   double GetKGTarget() { return this->GetCompressionOption("KGTarget"); }
+  ///@}
+  ///@{
+  /** Error Measure max vertex: the largest distance of a vertex from its place, as a fraction of
+   *  the sequence's bounding-box diagonal (e.g. 0.002). (compression.maxVertexTarget; range
+   *  [1e-07, 0.5], of the diagonal) */
   void SetMaxVertexTarget(double value) { this->SetCompressionOption("MaxVertexTarget", value); }
   double GetMaxVertexTarget() { return this->GetCompressionOption("MaxVertexTarget"); }
+  ///@}
+  ///@{
+  /** Error Measure distance to the data: the percent by which the decompressed mesh's RMS
+   *  distance to the tracked points may grow over the tracked mesh's (10 suits noisy captures;
+   *  the main job's default). (compression.fitGrowth; range [0.01, 1000], percent) */
   void SetFitGrowth(double value) { this->SetCompressionOption("FitGrowth", value); }
   double GetFitGrowth() { return this->GetCompressionOption("FitGrowth"); }
-  void SetSlideAlongSurface(vtkTypeBool value)
-  {
-    this->SetCompressionOption("SlideAlongSurface", value);
-  }
-  vtkTypeBool GetSlideAlongSurface()
-  {
-    return static_cast<vtkTypeBool>(this->GetCompressionOption("SlideAlongSurface"));
-  }
-  vtkBooleanMacro(SlideAlongSurface, vtkTypeBool);
-  void SetNumberOfComponents(int value) { this->SetCompressionOption("NumberOfComponents", value); }
-  int GetNumberOfComponents()
-  {
-    return static_cast<int>(this->GetCompressionOption("NumberOfComponents"));
-  }
-  void SetColourTolerance(int value) { this->SetCompressionOption("ColourTolerance", value); }
-  int GetColourTolerance()
-  {
-    return static_cast<int>(this->GetCompressionOption("ColourTolerance"));
-  }
   ///@}
+  ///@{
+  /** Error Measure distance to the data: also code the take with each vertex slid along its
+   *  surface toward a model of fewer components (the tracker's sliding, which the data do not
+   *  see, costs bits), and keep the fewer bits that keep the fit. (compression.slide; range
+   *  true|false) */
+  void SetSlideAlongSurface(vtkTypeBool value) { this->SetCompressionOption("SlideAlongSurface", value); }
+  vtkTypeBool GetSlideAlongSurface() { return static_cast<vtkTypeBool>(this->GetCompressionOption("SlideAlongSurface")); }
+  vtkBooleanMacro(SlideAlongSurface, vtkTypeBool);
+  ///@}
+  ///@{
+  /** Trajectories: each component is a motion over time and each vertex has a weight per
+   *  component (the paper). Shapes: each component is a shape and each frame has a weight per
+   *  component (Alexa and Mueller; what glTF morph targets hold). Automatic: both are coded and
+   *  the one of fewer bits kept (field data Layout: 0 trajectories, 1 shapes).
+   *  (compression.layout; range trajectories|shapes|automatic) */
+  void SetLayout(int value) { this->SetCompressionOption("Layout", value); }
+  int GetLayout() { return static_cast<int>(this->GetCompressionOption("Layout")); }
+  ///@}
+  ///@{
+  /** 0: as few bytes as meet the error target. Otherwise this many components, the target then
+   *  only setting the quantisation. (compression.components; range [0, 1000000]) */
+  void SetNumberOfComponents(int value) { this->SetCompressionOption("NumberOfComponents", value); }
+  int GetNumberOfComponents() { return static_cast<int>(this->GetCompressionOption("NumberOfComponents")); }
+  ///@}
+  ///@{
+  /** Where the input carries Colors: the levels (of 255) a stored colour may differ from the
+   *  input's. 0 stores them losslessly. More (default 4) holds each vertex's colour while it
+   *  stays within that many levels: the colour stops flickering and its stream shrinks (to about
+   *  half at 4 on a tracked person), and any larger change still passes.
+   *  (compression.colourTolerance; range [0, 64]) */
+  void SetColourTolerance(int value) { this->SetCompressionOption("ColourTolerance", value); }
+  int GetColourTolerance() { return static_cast<int>(this->GetCompressionOption("ColourTolerance")); }
+  ///@}
+  // clang-format on
+  // END generated options
 
   ///@{
   /** .glb only: store the buffers compressed by meshoptimizer (EXT_meshopt_compression, then

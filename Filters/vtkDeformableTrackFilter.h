@@ -90,240 +90,239 @@ public:
     STEEPEST_DESCENT = 2
   };
 
-  ///@{
-  /** The minimiser: Gauss-Newton (default), L-BFGS, or the paper's steepest descent. */
-  void SetSolver(int value) { this->SetTrackerOption("Solver", value); }
-  int GetSolver() { return static_cast<int>(this->GetTrackerOption("Solver")); }
-  ///@}
-
   enum DistanceMeasureType
   {
     DISTANCE_TO_PLANES = 0, // tangent planes of the nearest points (default)
     DISTANCE_TO_POINTS = 1  // the nearest points themselves (the paper)
   };
 
+  // The named accessors of the table's options that ParaView's panel shows, written by
+  // build/bin/dp-option-code from the table (dp/io/OptionCode.h): edit the table, not here.
+  // BEGIN generated options: tracker
+  // clang-format off
+  ///@{
+  /** Resistance to changes of edge length (dimensionless, constant per edge). (cloth.stretch;
+   *  range [0, inf]) */
+  void SetStretchStiffness(double value) { this->SetTrackerOption("StretchStiffness", value); }
+  double GetStretchStiffness() { return this->GetTrackerOption("StretchStiffness"); }
+  ///@}
+  ///@{
+  /** Resistance to changes of the corner angles of triangles. Off by default: edge lengths alone
+   *  hold the in-plane shape of a well-shaped mesh, and track more accurately. Set it (e.g. 0.05)
+   *  for a template with slivers (nearly flat triangles); the filter warns when it sees them.
+   *  (cloth.shear; range [0, inf]) */
+  void SetShearStiffness(double value) { this->SetTrackerOption("ShearStiffness", value); }
+  double GetShearStiffness() { return this->GetTrackerOption("ShearStiffness"); }
+  ///@}
+  ///@{
+  /** Resistance to bending (changes of the angle between neighbouring triangles), weighted by
+   *  area so that it does not depend on the mesh resolution. (cloth.bend; range [0, inf]) */
+  void SetBendStiffness(double value) { this->SetTrackerOption("BendStiffness", value); }
+  double GetBendStiffness() { return this->GetTrackerOption("BendStiffness"); }
+  ///@}
+  ///@{
+  /** Factor on the stretch stiffness where the template is thick (a trunk, as measured by its
+   *  inner medial balls; limbs keep the full stiffness). The default 0.3 lets a body's skin
+   *  stretch and slide over the torso as it bends (a captured human: 30.9 to 26.6 mm vertex error
+   *  with a reconstructed template). 1 is one stiffness everywhere: better for slow motion far
+   *  from isometric, such as a collapse or cloth. (softening.stretch; range [0, 1]) */
+  void SetThickPartStretch(double value) { this->SetTrackerOption("ThickPartStretch", value); }
+  double GetThickPartStretch() { return this->GetTrackerOption("ThickPartStretch"); }
+  ///@}
+  ///@{
+  /** Factor on the stretch stiffness in the template's creases: where the space in front of the
+   *  surface is narrow (armpits, crotch, an arm that touches the body in the template and was
+   *  reconstructed joined to it). Soft, those bridges stretch as the parts move apart instead of
+   *  dragging the torso's skin along with the arm (reconstructed human: 34 to 29 mm vertex
+   *  error). 1 is one stiffness everywhere. (creases.stretch; range [0, 1]) */
+  void SetCreaseStretch(double value) { this->SetTrackerOption("CreaseStretch", value); }
+  double GetCreaseStretch() { return this->GetTrackerOption("CreaseStretch"); }
+  ///@}
+  ///@{
+  /** Share of the previous frame in the rest shape of the deformation energy: 0 keeps the
+   *  template (the paper); larger values let the mesh follow shapes far from the template.
+   *  (restUpdate; range [0, 1]) */
+  void SetRestUpdate(double value) { this->SetTrackerOption("RestUpdate", value); }
+  double GetRestUpdate() { return this->GetTrackerOption("RestUpdate"); }
+  ///@}
+  ///@{
+  /** Weight of the distance-to-data term (dimensionless). (distance.weight; range [0, inf]) */
+  void SetDistanceWeight(double value) { this->SetTrackerOption("DistanceWeight", value); }
+  double GetDistanceWeight() { return this->GetTrackerOption("DistanceWeight"); }
+  ///@}
   ///@{
   /** What the distance term measures: the distance to the tangent planes of the nearest data
-   *  points (default; vertices can slide along the data) or to the points (the paper). */
+   *  points (the mesh can slide along the data), or to the points themselves as in the paper.
+   *  (distance.measure; range planes|points) */
   void SetDistanceMeasure(int value) { this->SetTrackerOption("DistanceMeasure", value); }
   int GetDistanceMeasure() { return static_cast<int>(this->GetTrackerOption("DistanceMeasure")); }
   ///@}
-
   ///@{
-  /** Penalise the squared distance D^2 / (2 voxel) (default on) or the distance D (the
-   *  paper). */
+  /** Penalise the squared distance (smooth at the data; default) instead of the distance itself
+   *  (the paper). (distance.squared; range true|false) */
   void SetSquaredDistance(vtkTypeBool value) { this->SetTrackerOption("SquaredDistance", value); }
-  vtkTypeBool GetSquaredDistance()
-  {
-    return static_cast<vtkTypeBool>(this->GetTrackerOption("SquaredDistance"));
-  }
-  void SquaredDistanceOn() { this->SetSquaredDistance(1); }
-  void SquaredDistanceOff() { this->SetSquaredDistance(0); }
+  vtkTypeBool GetSquaredDistance() { return static_cast<vtkTypeBool>(this->GetTrackerOption("SquaredDistance")); }
+  vtkBooleanMacro(SquaredDistance, vtkTypeBool);
   ///@}
-
   ///@{
-  /** Frames that are meshes are read as this many points spread over their area, with their
-   *  faces' normals (default 20000, or one a vertex if more; 0: their vertices alone). */
+  /** A vertex ignores the data when its normal and the normal of its nearest point differ by more
+   *  than this angle in degrees (keeps surfaces from snapping to the wrong side, e.g. between
+   *  legs). 180 switches the test off. (distance.normalTestDegrees; range [0, 180], degrees) */
+  void SetNormalTestAngle(double value) { this->SetTrackerOption("NormalTestAngle", value); }
+  double GetNormalTestAngle() { return this->GetTrackerOption("NormalTestAngle"); }
+  ///@}
+  ///@{
+  /** Vertices farther than this from the data (world units) ignore it. 0: no cut-off. By default
+   *  a vertex whose nearest point another part of the mesh is nearer to (a hole's rim, a body's
+   *  seen side) already ignores it (the tracker option distance.reciprocal), so a hole no longer
+   *  pulls its vertices onto its rim; a cut-off of about 3 voxels (the voxel is the template's
+   *  diagonal / 200 unless Voxel Size says otherwise) does the same for every far vertex.
+   *  (distance.outlierDistance; range [0, inf], world units) */
+  void SetOutlierDistance(double value) { this->SetTrackerOption("OutlierDistance", value); }
+  double GetOutlierDistance() { return this->GetTrackerOption("OutlierDistance"); }
+  ///@}
+  ///@{
+  /** Weight of the points-to-mesh term: a well-spread sample of the points pulls the closest
+   *  point of the mesh (only where normals agree, so another limb does not pull). Without it (0,
+   *  the paper's energy) a limb the mesh lets go of costs nothing and is lost. (coverage.weight;
+   *  range [0, inf]) */
+  void SetCoverageWeight(double value) { this->SetTrackerOption("CoverageWeight", value); }
+  double GetCoverageWeight() { return this->GetTrackerOption("CoverageWeight"); }
+  ///@}
+  ///@{
+  /** Pulls vertices toward their constant-velocity course: smoother motion on shaky data, at the
+   *  price of lag behind sudden motion. 0: off (default). About 1 suits slow, non-rigid motion
+   *  (cloth, a collapse: half the shake); it pulls fast motion such as a jumping human off its
+   *  changes of direction. (temporalWeight; range [0, inf]) */
+  void SetTemporalWeight(double value) { this->SetTrackerOption("TemporalWeight", value); }
+  double GetTemporalWeight() { return this->GetTrackerOption("TemporalWeight"); }
+  ///@}
+  ///@{
+  /** Where the points carry colour (RGB, RGBA or Colors bytes): each vertex is pulled, along the
+   *  surface, to where the frame shows the colour its material point had in the first frame.
+   *  Geometry says where the surface is, not where on it a vertex lies; colour keeps each vertex
+   *  on its material point (textures do not swim). The output then carries Colors, the frame's
+   *  colour at each vertex. 0: off. (colourWeight; range [0, inf]) */
+  void SetColourWeight(double value) { this->SetTrackerOption("ColourWeight", value); }
+  double GetColourWeight() { return this->GetTrackerOption("ColourWeight"); }
+  ///@}
+  ///@{
+  /** Resolution of each frame's distance field (world units). 0: the template's diagonal / 200.
+   *  (voxelSize; range [0, inf], world units) */
+  void SetVoxelSize(double value) { this->SetTrackerOption("VoxelSize", value); }
+  double GetVoxelSize() { return this->GetTrackerOption("VoxelSize"); }
+  ///@}
+  ///@{
+  /** Band of the distance field around the points (world units). 0: 4 voxels. (bandWidth; range
+   *  [0, inf], world units) */
+  void SetBandWidth(double value) { this->SetTrackerOption("BandWidth", value); }
+  double GetBandWidth() { return this->GetTrackerOption("BandWidth"); }
+  ///@}
+  ///@{
+  /** Where the frames are meshes (a capture's per-frame meshes), each is read as its surface:
+   *  this many points spread evenly over its area, with normals from its faces and colours from
+   *  its vertices, or one a vertex when the mesh has more vertices. Sparse and dense parts of a
+   *  capture mesh then weigh alike, and the surface between vertices is data. 0: the frame's
+   *  vertices alone, as points. (meshFrameSamples; range [0, 1000000000]) */
   void SetMeshFrameSamples(int value) { this->SetTrackerOption("MeshFrameSamples", value); }
   int GetMeshFrameSamples() { return static_cast<int>(this->GetTrackerOption("MeshFrameSamples")); }
   ///@}
-
   ///@{
-  /** Share of the previous frame in the rest state of the deformation energy (default 0.3;
-   *  0 = the template, as in the paper; 1 = the previous frame). */
-  void SetRestUpdate(double value) { this->SetTrackerOption("RestUpdate", value); }
-  double GetRestUpdate() { return static_cast<double>(this->GetTrackerOption("RestUpdate")); }
+  /** The minimiser of the same energy: damped Gauss-Newton (default, fastest to converge),
+   *  L-BFGS, or the paper's steepest descent with step 1.9 / k_max. (solver; range
+   *  gauss-newton|lbfgs|steepest-descent) */
+  void SetSolver(int value) { this->SetTrackerOption("Solver", value); }
+  int GetSolver() { return static_cast<int>(this->GetTrackerOption("Solver")); }
   ///@}
-
   ///@{
-  /** Weights of the energy terms (all dimensionless; defaults 50, 1, 0, 0.5). */
-  void SetDistanceWeight(double value) { this->SetTrackerOption("DistanceWeight", value); }
-  double GetDistanceWeight()
-  {
-    return static_cast<double>(this->GetTrackerOption("DistanceWeight"));
-  }
-  void SetStretchStiffness(double value) { this->SetTrackerOption("StretchStiffness", value); }
-  double GetStretchStiffness()
-  {
-    return static_cast<double>(this->GetTrackerOption("StretchStiffness"));
-  }
-  void SetShearStiffness(double value) { this->SetTrackerOption("ShearStiffness", value); }
-  double GetShearStiffness()
-  {
-    return static_cast<double>(this->GetTrackerOption("ShearStiffness"));
-  }
-  void SetBendStiffness(double value) { this->SetTrackerOption("BendStiffness", value); }
-  double GetBendStiffness() { return static_cast<double>(this->GetTrackerOption("BendStiffness")); }
-  ///@}
-
-  ///@{
-  /** Factor on the stretch stiffness of the template's thick parts (a trunk, away from its
-   *  limbs; dp::ThicknessSoftening): default 0.3, so that a body's skin stretches and slides
-   *  over the torso as it bends; 1 is one stiffness everywhere, better for slow non-rigid
-   *  motion far from isometric (a collapse; Documentation/Tracking.md). */
-  void SetThickPartStretch(double value) { this->SetTrackerOption("ThickPartStretch", value); }
-  double GetThickPartStretch()
-  {
-    return static_cast<double>(this->GetTrackerOption("ThickPartStretch"));
-  }
-  ///@}
-
-  ///@{
-  /** Factor on the stretch stiffness in the template's creases (armpits, crotch, an arm that
-   *  touches the body in the template; dp::CreaseSoftening): default 0.1, so that those bridges
-   *  stretch as the parts move apart instead of dragging the torso's skin; 1 switches it off. */
-  void SetCreaseStretch(double value) { this->SetTrackerOption("CreaseStretch", value); }
-  double GetCreaseStretch() { return static_cast<double>(this->GetTrackerOption("CreaseStretch")); }
-  ///@}
-
-  ///@{
-  /** Normal test: drop a vertex's distance term when its normal and its nearest point's normal
-   *  differ by more than this angle in degrees (default 90; 180 switches the test off). */
-  void SetNormalTestAngle(double value) { this->SetTrackerOption("NormalTestAngle", value); }
-  double GetNormalTestAngle()
-  {
-    return static_cast<double>(this->GetTrackerOption("NormalTestAngle"));
-  }
-  ///@}
-
-  ///@{
-  /** Drop the distance term of vertices farther than this from the data (world units;
-   *  default 0 = never). */
-  void SetOutlierDistance(double value) { this->SetTrackerOption("OutlierDistance", value); }
-  double GetOutlierDistance()
-  {
-    return static_cast<double>(this->GetTrackerOption("OutlierDistance"));
-  }
-  ///@}
-
-  ///@{
-  /** Distance field resolution and band in world units (0 = automatic: the template's
-   *  diagonal / 200, and 4 voxels). */
-  void SetVoxelSize(double value) { this->SetTrackerOption("VoxelSize", value); }
-  double GetVoxelSize() { return static_cast<double>(this->GetTrackerOption("VoxelSize")); }
-  void SetBandWidth(double value) { this->SetTrackerOption("BandWidth", value); }
-  double GetBandWidth() { return static_cast<double>(this->GetTrackerOption("BandWidth")); }
-  ///@}
-
-  ///@{
-  /** The paper's speed-ups: motion prediction (MP) and provisional determination (PD). */
+  /** Start each frame at the minimum of the energy along the linear and quadratic extrapolations
+   *  of the trajectories (the paper's MP). (motionPrediction; range true|false) */
   void SetMotionPrediction(vtkTypeBool value) { this->SetTrackerOption("MotionPrediction", value); }
-  vtkTypeBool GetMotionPrediction()
-  {
-    return static_cast<vtkTypeBool>(this->GetTrackerOption("MotionPrediction"));
-  }
-  void MotionPredictionOn() { this->SetMotionPrediction(1); }
-  void MotionPredictionOff() { this->SetMotionPrediction(0); }
-  void SetProvisionalDetermination(vtkTypeBool value)
-  {
-    this->SetTrackerOption("ProvisionalDetermination", value);
-  }
-  vtkTypeBool GetProvisionalDetermination()
-  {
-    return static_cast<vtkTypeBool>(this->GetTrackerOption("ProvisionalDetermination"));
-  }
-  void ProvisionalDeterminationOn() { this->SetProvisionalDetermination(1); }
-  void ProvisionalDeterminationOff() { this->SetProvisionalDetermination(0); }
+  vtkTypeBool GetMotionPrediction() { return static_cast<vtkTypeBool>(this->GetTrackerOption("MotionPrediction")); }
+  vtkBooleanMacro(MotionPrediction, vtkTypeBool);
   ///@}
-
   ///@{
-  /** Move the predicted mesh rigidly onto each frame's points before deforming it (default on):
-   *  keeps a turning shape from slipping along its surface. Used only without the coarse level
-   *  (CoarseLevel off), whose registration includes the rigid motion. */
+  /** Without the coarse level: before deforming, move the predicted mesh rigidly onto the frame's
+   *  points (point-to-plane alignment weighted by vertex area). Keeps a turning shape from
+   *  slipping along its surface a little more each frame. (rigidAlignment; range true|false) */
   void SetRigidAlignment(vtkTypeBool value) { this->SetTrackerOption("RigidAlignment", value); }
-  vtkTypeBool GetRigidAlignment()
-  {
-    return static_cast<vtkTypeBool>(this->GetTrackerOption("RigidAlignment"));
-  }
-  void RigidAlignmentOn() { this->SetRigidAlignment(1); }
-  void RigidAlignmentOff() { this->SetRigidAlignment(0); }
+  vtkTypeBool GetRigidAlignment() { return static_cast<vtkTypeBool>(this->GetTrackerOption("RigidAlignment")); }
+  vtkBooleanMacro(RigidAlignment, vtkTypeBool);
   ///@}
-
+  ///@{
+  /** Steepest descent only: freeze vertices that barely move until a neighbour moves (the paper's
+   *  PD). (provisionalDetermination; range true|false) */
+  void SetProvisionalDetermination(vtkTypeBool value) { this->SetTrackerOption("ProvisionalDetermination", value); }
+  vtkTypeBool GetProvisionalDetermination() { return static_cast<vtkTypeBool>(this->GetTrackerOption("ProvisionalDetermination")); }
+  vtkBooleanMacro(ProvisionalDetermination, vtkTypeBool);
+  ///@}
   ///@{
   /** Iteration limit of a frame's cloth solve (with the coarse level on, Gauss-Newton takes at
-   *  most FineIterations) and relative tolerance of the stopping rule. */
+   *  most FineIterations). (maxIterations; range [1, 1000000]) */
   void SetMaximumIterations(int value) { this->SetTrackerOption("MaximumIterations", value); }
-  int GetMaximumIterations()
-  {
-    return static_cast<int>(this->GetTrackerOption("MaximumIterations"));
-  }
+  int GetMaximumIterations() { return static_cast<int>(this->GetTrackerOption("MaximumIterations")); }
+  ///@}
+  ///@{
+  /** Relative energy decrease under which a frame's minimisation stops. (tolerance; range [1e-15,
+   *  1]) */
   void SetTolerance(double value) { this->SetTrackerOption("Tolerance", value); }
-  double GetTolerance() { return static_cast<double>(this->GetTrackerOption("Tolerance")); }
+  double GetTolerance() { return this->GetTrackerOption("Tolerance"); }
   ///@}
-
   ///@{
-  /** Weight of the points -> mesh term (default 50; 0 = the paper's energy alone): the data
-   *  pulls the closest point of the mesh, so a part of the mesh cannot let go of its data (a
-   *  limb) at no cost. */
-  void SetCoverageWeight(double value) { this->SetTrackerOption("CoverageWeight", value); }
-  double GetCoverageWeight()
-  {
-    return static_cast<double>(this->GetTrackerOption("CoverageWeight"));
-  }
-  ///@}
-
-  ///@{
-  /** The coarse level (default on): an embedded deformation graph on the template is registered
-   *  to each frame first, from stiff and far-reaching to supple, so that large and fast motions
-   *  are caught as whole limbs; then the cloth solve refines. GraphNodes: its node count (0 =
-   *  automatic, one per 5 vertices within 30..600). GraphRigidity multiplies its rigidity
-   *  (default 1). Plasticity (0..1, default 0.3): where the shape stays bent far from the
-   *  template (a collapse, clothes), the graph's reference gives way by this share per frame.
-   *  FineIterations (default 3): the Gauss-Newton steps the cloth solve takes after the graph
-   *  (at most); more let vertices slide along the data and end farther from the true ones. */
+  /** Register an embedded deformation graph (nodes spread over the template, a rotation and a
+   *  translation each) to every frame before the cloth solve, from stiff and far-reaching to
+   *  supple and local: large and fast motions are caught as whole limbs. Off: the paper's start
+   *  (motion prediction, then rigid alignment). (graph.enabled; range true|false) */
   void SetCoarseLevel(vtkTypeBool value) { this->SetTrackerOption("CoarseLevel", value); }
-  vtkTypeBool GetCoarseLevel()
-  {
-    return static_cast<vtkTypeBool>(this->GetTrackerOption("CoarseLevel"));
-  }
-  void CoarseLevelOn() { this->SetCoarseLevel(1); }
-  void CoarseLevelOff() { this->SetCoarseLevel(0); }
+  vtkTypeBool GetCoarseLevel() { return static_cast<vtkTypeBool>(this->GetTrackerOption("CoarseLevel")); }
+  vtkBooleanMacro(CoarseLevel, vtkTypeBool);
+  ///@}
+  ///@{
+  /** Nodes of the coarse level's graph. 0: one per 5 template vertices, 30 to 600. (graph.nodes;
+   *  range [0, 10000000]) */
   void SetGraphNodes(int value) { this->SetTrackerOption("GraphNodes", value); }
   int GetGraphNodes() { return static_cast<int>(this->GetTrackerOption("GraphNodes")); }
+  ///@}
+  ///@{
+  /** Multiplies the coarse level's rigidity: larger keeps parts stiffer (robust to noise and
+   *  holes), smaller lets the graph bend more freely. (graph.rigidity; range [0, inf]) */
   void SetGraphRigidity(double value) { this->SetTrackerOption("GraphRigidity", value); }
-  double GetGraphRigidity() { return static_cast<double>(this->GetTrackerOption("GraphRigidity")); }
+  double GetGraphRigidity() { return this->GetTrackerOption("GraphRigidity"); }
+  ///@}
+  ///@{
+  /** Where the shape stays bent far from the template (a collapse, cloth), the coarse level's
+   *  reference gives way by this share per frame, so lasting deformation is not pulled back. 0:
+   *  always measured against the template. (graph.yieldRate; range [0, 1]) */
   void SetPlasticity(double value) { this->SetTrackerOption("Plasticity", value); }
-  double GetPlasticity() { return static_cast<double>(this->GetTrackerOption("Plasticity")); }
+  double GetPlasticity() { return this->GetTrackerOption("Plasticity"); }
+  ///@}
+  ///@{
+  /** Gauss-Newton steps of the cloth solve after the coarse level (at most). The graph has placed
+   *  the surface and a few steps fit its detail; more let vertices slide along the data and end
+   *  farther from where they belong (and take longer). (graph.fineIterations; range [1, 1000000]) */
   void SetFineIterations(int value) { this->SetTrackerOption("FineIterations", value); }
   int GetFineIterations() { return static_cast<int>(this->GetTrackerOption("FineIterations")); }
   ///@}
-
   ///@{
-  /** Weight of the temporal term pulling vertices toward their constant-velocity course
-   *  (default 0 = off; about 1 halves the shake of slow, non-rigid motion, but lags fast
-   *  motion such as a jumping human). */
-  void SetTemporalWeight(double value) { this->SetTrackerOption("TemporalWeight", value); }
-  double GetTemporalWeight()
-  {
-    return static_cast<double>(this->GetTrackerOption("TemporalWeight"));
-  }
-  ///@}
-
-  ///@{
-  /** Weight of the colour term where the points carry colour ("RGB", "RGBA" or "Colors" bytes,
-   *  or active scalars of 3 or 4 bytes): each vertex is pulled, along the surface, to where the
-   *  frame shows the colour its material point had in the first frame (default 50; 0 = off).
-   *  Geometry says where the surface is, not where on it a vertex lies: colour keeps each vertex
-   *  on its material point. The tracked mesh then carries "Colors" (the frame's colour at each
-   *  vertex; where the frame has no points near a vertex, its last colour). */
-  void SetColourWeight(double value) { this->SetTrackerOption("ColourWeight", value); }
-  double GetColourWeight() { return static_cast<double>(this->GetTrackerOption("ColourWeight")); }
-  ///@}
-
-  ///@{
-  /** Failure detection and recovery (default on): a frame whose share of data unexplained by
-   *  the mesh (beyond 3 voxels) exceeds the take's usual share by more than FailureMargin
-   *  (default 0.003), or whose mesh tore, is tried again from the last frame and from the
-   *  template re-registered; the best attempt is kept, and flagged in "Failed" if it still
-   *  fails. Mesh the solve took off its data fails too; mesh without data over a hole in the
-   *  data fails nothing. */
+  /** Detect frames that failed (more points far from the mesh than usual in the take, or a limb
+   *  torn: caught by another limb's data, its edges stretched by more than two edge lengths,
+   *  LargestStretch) and try them again: held stiffer, from the last frame and from the template;
+   *  the best attempt is kept and flagged in Failed if it still fails. Mesh far from the points
+   *  (Unsupported: holes in the data) is no failure by itself. (recovery.enabled; range
+   *  true|false) */
   void SetRecovery(vtkTypeBool value) { this->SetTrackerOption("Recovery", value); }
   vtkTypeBool GetRecovery() { return static_cast<vtkTypeBool>(this->GetTrackerOption("Recovery")); }
-  void RecoveryOn() { this->SetRecovery(1); }
-  void RecoveryOff() { this->SetRecovery(0); }
-  void SetFailureMargin(double value) { this->SetTrackerOption("FailureMargin", value); }
-  double GetFailureMargin() { return static_cast<double>(this->GetTrackerOption("FailureMargin")); }
+  vtkBooleanMacro(Recovery, vtkTypeBool);
   ///@}
+  ///@{
+  /** A frame fails when its share of unexplained points (or of mesh the solve took off its
+   *  points) exceeds the median of the last frames by more than this share (0.003 = 0.3 %). Mesh
+   *  over a hole in the points is no failure. (recovery.margin; range [0, 1]) */
+  void SetFailureMargin(double value) { this->SetTrackerOption("FailureMargin", value); }
+  double GetFailureMargin() { return this->GetTrackerOption("FailureMargin"); }
+  ///@}
+  // clang-format on
+  // END generated options
 
   enum TemplateSourceType
   {

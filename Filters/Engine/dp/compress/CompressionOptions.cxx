@@ -21,30 +21,55 @@ std::vector<Row> targetRows()
           "what the error target measures: the Karni-Gotsman error of the motion, the largest "
           "vertex error, or the distance to the data the mesh was tracked to (the input must "
           "carry it: the track filter's output)",
-          [](auto& o) -> auto& { return o.measure; }),
+          [](auto& o) -> auto& { return o.measure; })
+          .withChoiceLabels({"KG error (%)", "Max vertex error (fraction of diagonal)",
+                             "Distance to the data (growth %)"})
+          .withHelp("What the error target measures: Karni and Gotsman's error, 100 |A - A'| / |A -"
+                    " E(A)| in percent, the largest vertex error as a fraction of the bounding-box "
+                    "diagonal, or (for Deformable Track's output, which carries each frame's "
+                    "points) the percent by which the decompressed mesh's RMS distance to the "
+                    "points may grow: a target of the data's, not the motion's (10 suits noisy "
+                    "captures; the main job's default)."),
       Rows::real(
           "compression.kgTarget", "KGTarget", P::Shown, MinimumKarniGotsmanTarget,
           MaximumKarniGotsmanTarget, "percent",
           "measure kg: the largest Karni-Gotsman error, the norm of the positions' error over "
           "that of their motion about each frame's centroid",
-          [](auto& o) -> auto& { return o.kgTarget; }),
+          [](auto& o) -> auto& { return o.kgTarget; })
+          .withLabel("KG Target")
+          .withHelp("Error Measure KG: the largest Karni-Gotsman error, 100 |A - A'| / |A - E(A)| "
+                    "in percent (e.g. 0.5, 0.2, 0.1). The compressor meets it on the actual "
+                    "reconstruction.")
+          .shownWith("ErrorMeasure=0"),
       Rows::real(
           "compression.maxVertexTarget", "MaxVertexTarget", P::Shown, 1e-7, 0.5, "of the diagonal",
           "measure max-vertex: the largest distance of a vertex from its place, over the "
           "sequence's bounding-box diagonal",
-          [](auto& o) -> auto& { return o.maxVertexTarget; }),
+          [](auto& o) -> auto& { return o.maxVertexTarget; })
+          .withHelp("Error Measure max vertex: the largest distance of a vertex from its place, as "
+                    "a fraction of the sequence's bounding-box diagonal (e.g. 0.002).")
+          .shownWith("ErrorMeasure=1"),
       Rows::real(
           "compression.fitGrowth", "FitGrowth", P::Shown, MinimumFitGrowth, MaximumFitGrowth,
           "percent",
           "measure data: how much the decompressed mesh's RMS distance to the data may grow over "
           "the tracked mesh's (10 suits noisy captures)",
-          [](auto& o) -> auto& { return o.fitGrowth; }),
+          [](auto& o) -> auto& { return o.fitGrowth; })
+          .withHelp("Error Measure distance to the data: the percent by which the decompressed "
+                    "mesh's RMS distance to the tracked points may grow over the tracked mesh's (10"
+                    " suits noisy captures; the main job's default).")
+          .shownWith("ErrorMeasure=2"),
       Rows::flag(
           "compression.slide", "SlideAlongSurface", P::Advanced,
           "measure data: also code the take with each vertex slid along its surface toward a "
           "model of fewer components (the tracker's sliding, which the data do not see, costs "
           "bits), and keep the fewer bits that keep the fit",
-          [](auto& o) -> auto& { return o.slide; }),
+          [](auto& o) -> auto& { return o.slide; })
+          .withHelp("Error Measure distance to the data: also code the take with each vertex slid "
+                    "along its surface toward a model of fewer components (the tracker's sliding, "
+                    "which the data do not see, costs bits), and keep the fewer bits that keep the "
+                    "fit.")
+          .shownWith("ErrorMeasure=2"),
   };
 }
 
@@ -55,23 +80,39 @@ std::vector<Row> codingRows()
           "compression.layout", "Layout", P::Shown, {"trajectories", "shapes", "automatic"},
           "the components: vertex trajectories with per-vertex weights (the paper), shapes with "
           "per-frame weights (morph targets), or both coded and the one of fewer bits kept",
-          [](auto& o) -> auto& { return o.layout; }),
+          [](auto& o) -> auto& { return o.layout; })
+          .withChoiceLabels(
+              {"Trajectories (the paper)", "Shapes (morph targets)", "Automatic (fewer bits)"})
+          .withHelp("Trajectories: each component is a motion over time and each vertex has a "
+                    "weight per component (the paper). Shapes: each component is a shape and each "
+                    "frame has a weight per component (Alexa and Mueller; what glTF morph targets "
+                    "hold). Automatic: both are coded and the one of fewer bits kept (field data "
+                    "Layout: 0 trajectories, 1 shapes)."),
       Rows::integer(
           "compression.components", "NumberOfComponents", P::Advanced, 0, 1e6,
           "principal components kept, the target then setting only the quantisation; 0: the "
           "fewest bytes that meet the target",
-          [](auto& o) -> auto& { return o.components; }),
+          [](auto& o) -> auto& { return o.components; })
+          .withHelp("0: as few bytes as meet the error target. Otherwise this many components, the "
+                    "target then only setting the quantisation."),
       Rows::flag(
           "compression.quantise", "Quantize", P::Advanced,
           "quantise, predict and range-code the components; off: the paper's float PCA, to "
           "study it (the writers always quantise)",
-          [](auto& o) -> auto& { return o.quantise; }),
+          [](auto& o) -> auto& { return o.quantise; })
+          .withHelp("Quantise, predict and entropy-code the components (default). Off: the paper's "
+                    "float PCA, to study it (the writers always quantise)."),
       Rows::integer(
           "compression.colourTolerance", "ColourTolerance", P::Advanced, 0, MaximumColourTolerance,
           "where the input carries colour: the levels (of 255) a stored colour may differ from "
           "the given one; more holds each vertex's colour while it stays within them (no "
           "flicker, a smaller colour stream); 0: lossless",
-          [](auto& o) -> auto& { return o.colourTolerance; }),
+          [](auto& o) -> auto& { return o.colourTolerance; })
+          .withHelp("Where the input carries Colors: the levels (of 255) a stored colour may differ"
+                    " from the input's. 0 stores them losslessly. More (default 4) holds each "
+                    "vertex's colour while it stays within that many levels: the colour stops "
+                    "flickering and its stream shrinks (to about half at 4 on a tracked person), "
+                    "and any larger change still passes."),
   };
 }
 

@@ -61,6 +61,11 @@ struct OptionSpec
   std::string doc;          // one line
   OptionPanel panel = OptionPanel::None;
   std::vector<std::string> choices; // Choice: the names, by the value the filter uses
+  // How the panel and the VTK class present it (OptionCode.h writes both from these):
+  std::string label;                     // the panel's label; empty: ParaView's own
+  std::string help;                      // their longer documentation; empty: `doc`
+  std::vector<std::string> choiceLabels; // the panel's entries; empty: `choices`
+  std::string shownWith;                 // "CoarseLevel=1": shown only while that holds
 
   bool accepts(double value) const;
   std::string range() const; // "[0, 1]", "0 or [100, 1e+09]", "planes|points"
@@ -95,6 +100,28 @@ struct OptionDescription : OptionSpec
 {
   std::function<double(const Options&)> get;
   std::function<void(Options&, double)> set;
+
+  /** The row with its presentation (OptionSpec's last fields), written after its maker. */
+  OptionDescription withHelp(const char* text) const { return with(&OptionSpec::help, text); }
+  OptionDescription withLabel(const char* text) const { return with(&OptionSpec::label, text); }
+  OptionDescription shownWith(const char* condition) const
+  {
+    return with(&OptionSpec::shownWith, condition);
+  }
+  OptionDescription withChoiceLabels(std::vector<std::string> labels) const
+  {
+    OptionDescription row = *this;
+    row.choiceLabels = std::move(labels);
+    return row;
+  }
+
+private:
+  OptionDescription with(std::string OptionSpec::*field, const char* text) const
+  {
+    OptionDescription row = *this;
+    row.*field = text;
+    return row;
+  }
 };
 
 /** The rows' makers: each binds a double, integer or bool member reached by `field` (a callable
@@ -180,6 +207,16 @@ struct OptionRows
   }
 };
 
+/** A table as forms that other files restate read it (OptionCode.h): its rows and their
+ *  defaults, and the name of the VTK classes' generic accessor ("TrackerOption": SetTrackerOption,
+ *  GetTrackerOption). */
+struct OptionCodeTable
+{
+  std::vector<const OptionSpec*> specs;
+  std::vector<double> defaults;
+  std::string accessorFamily;
+};
+
 template <typename Options>
 class OptionTable
 {
@@ -252,6 +289,13 @@ public:
   std::string describeMarkdown() const
   {
     return option_forms::describeMarkdown(specs(), values(Options{}));
+  }
+
+  /** The rows and their defaults as OptionCode.h's forms read them; `accessorFamily` names the
+   *  VTK classes' generic accessor ("TrackerOption"). */
+  OptionCodeTable codeTable(std::string accessorFamily) const
+  {
+    return {specs(), values(Options{}), std::move(accessorFamily)};
   }
 
 private:

@@ -20,18 +20,26 @@ constexpr auto automatic = [](Row row) { return Rows::automatic(std::move(row));
 Row solverRow()
 {
   return Rows::choice(
-      "solver", "Solver", OptionPanel::Shown, {"gauss-newton", "lbfgs", "steepest-descent"},
-      "the fine level's minimiser: Gauss-Newton, L-BFGS or the paper's steepest descent",
-      [](auto& o) -> auto& { return o.solver; });
+             "solver", "Solver", OptionPanel::Shown, {"gauss-newton", "lbfgs", "steepest-descent"},
+             "the fine level's minimiser: Gauss-Newton, L-BFGS or the paper's steepest descent",
+             [](auto& o) -> auto& { return o.solver; })
+      .withChoiceLabels({"Gauss-Newton", "L-BFGS", "Steepest descent (paper)"})
+      .withHelp("The minimiser of the same energy: damped Gauss-Newton (default, fastest to "
+                "converge), L-BFGS, or the paper's steepest descent with step 1.9 / k_max.");
 }
 
 Row measureRow()
 {
-  Row row = Rows::choice(
-      "distance.measure", "DistanceMeasure", OptionPanel::Advanced, {"planes", "points"},
-      "what the distance term measures: the distance to the tangent planes of the nearest points "
-      "(vertices may slide along the data) or to the points (the paper)",
-      [](auto& o) -> auto& { return o.distance.measure; });
+  Row row =
+      Rows::choice(
+          "distance.measure", "DistanceMeasure", OptionPanel::Advanced, {"planes", "points"},
+          "what the distance term measures: the distance to the tangent planes of the nearest "
+          "points (vertices may slide along the data) or to the points (the paper)",
+          [](auto& o) -> auto& { return o.distance.measure; })
+          .withChoiceLabels({"Tangent planes", "Points (paper)"})
+          .withHelp("What the distance term measures: the distance to the tangent planes of the "
+                    "nearest data points (the mesh can slide along the data), or to the points "
+                    "themselves as in the paper.");
   // The property's values are planes 0, points 1 (the enum's are the other way round).
   row.get = [](const TrackerOptions& o)
   { return o.distance.measure == DistanceMeasure::Points ? 1.0 : 0.0; };
@@ -47,18 +55,31 @@ std::vector<Row> clothRows()
       real(
           "cloth.stretch", "StretchStiffness", P::Shown, 0, Unbounded, "",
           "k_st: the cloth's stiffness against stretch",
-          [](auto& o) -> auto& { return o.cloth.stretch; }),
+          [](auto& o) -> auto& { return o.cloth.stretch; })
+          .withHelp("Resistance to changes of edge length (dimensionless, constant per edge)."),
       real(
           "cloth.shear", "ShearStiffness", P::Shown, 0, Unbounded, "",
           "k_sh: against the change of the triangles' corner angles (0: edges alone)",
-          [](auto& o) -> auto& { return o.cloth.shear; }),
+          [](auto& o) -> auto& { return o.cloth.shear; })
+          .withHelp("Resistance to changes of the corner angles of triangles. Off by default: edge "
+                    "lengths alone hold the in-plane shape of a well-shaped mesh, and track more "
+                    "accurately. Set it (e.g. 0.05) for a template with slivers (nearly flat "
+                    "triangles); the filter warns when it sees them."),
       real(
           "cloth.bend", "BendStiffness", P::Shown, 0, Unbounded, "",
-          "k_ben: against bending across edges", [](auto& o) -> auto& { return o.cloth.bend; }),
+          "k_ben: against bending across edges", [](auto& o) -> auto& { return o.cloth.bend; })
+          .withHelp("Resistance to bending (changes of the angle between neighbouring triangles), "
+                    "weighted by area so that it does not depend on the mesh resolution."),
       real(
           "softening.stretch", "ThickPartStretch", P::Advanced, 0, 1, "",
           "factor on the stretch stiffness of thick parts (a trunk: its skin slides); 1: off",
-          [](auto& o) -> auto& { return o.softening.stretch; }),
+          [](auto& o) -> auto& { return o.softening.stretch; })
+          .withHelp("Factor on the stretch stiffness where the template is thick (a trunk, as "
+                    "measured by its inner medial balls; limbs keep the full stiffness). The "
+                    "default 0.3 lets a body's skin stretch and slide over the torso as it bends (a"
+                    " captured human: 30.9 to 26.6 mm vertex error with a reconstructed template). "
+                    "1 is one stiffness everywhere: better for slow motion far from isometric, such"
+                    " as a collapse or cloth."),
       real(
           "softening.bend", "", P::None, 0, 1, "",
           "factor on the bending stiffness of thick parts; 1: off",
@@ -74,7 +95,13 @@ std::vector<Row> clothRows()
       real(
           "creases.stretch", "CreaseStretch", P::Advanced, 0, 1, "",
           "factor on the stretch stiffness in the template's creases (armpits, crotch); 1: off",
-          [](auto& o) -> auto& { return o.creases.stretch; }),
+          [](auto& o) -> auto& { return o.creases.stretch; })
+          .withHelp("Factor on the stretch stiffness in the template's creases: where the space in "
+                    "front of the surface is narrow (armpits, crotch, an arm that touches the body "
+                    "in the template and was reconstructed joined to it). Soft, those bridges "
+                    "stretch as the parts move apart instead of dragging the torso's skin along "
+                    "with the arm (reconstructed human: 34 to 29 mm vertex error). 1 is one "
+                    "stiffness everywhere."),
       real(
           "creases.width", "", P::None, 0, Unbounded, "",
           "outer medial radius, over the template's thickness, below which a vertex is in a crease",
@@ -82,7 +109,10 @@ std::vector<Row> clothRows()
       real(
           "restUpdate", "RestUpdate", P::Advanced, 0, 1, "",
           "share of the last frame in the cloth's rest state (0: the template, the paper)",
-          [](auto& o) -> auto& { return o.restUpdate; }),
+          [](auto& o) -> auto& { return o.restUpdate; })
+          .withHelp("Share of the previous frame in the rest shape of the deformation energy: 0 "
+                    "keeps the template (the paper); larger values let the mesh follow shapes far "
+                    "from the template."),
   };
 }
 
@@ -93,21 +123,33 @@ std::vector<Row> distanceRows()
       real(
           "distance.weight", "DistanceWeight", P::Shown, 0, Unbounded, "",
           "k_dis: the weight of the mesh -> points term",
-          [](auto& o) -> auto& { return o.distance.weight; }),
+          [](auto& o) -> auto& { return o.distance.weight; })
+          .withHelp("Weight of the distance-to-data term (dimensionless)."),
       measureRow(),
       flag(
           "distance.squared", "SquaredDistance", P::Advanced,
           "penalise D^2 / (2 voxel), smooth at the data; off: the paper's D",
-          [](auto& o) -> auto& { return o.distance.squared; }),
+          [](auto& o) -> auto& { return o.distance.squared; })
+          .withHelp("Penalise the squared distance (smooth at the data; default) instead of the "
+                    "distance itself (the paper)."),
       real(
           "distance.normalTestDegrees", "NormalTestAngle", P::Advanced, 0, 180, "degrees",
           "a vertex's distance term drops where its normal and its data's differ by more; 180: "
           "no test",
-          [](auto& o) -> auto& { return o.distance.normalTestDegrees; }),
+          [](auto& o) -> auto& { return o.distance.normalTestDegrees; })
+          .withHelp("A vertex ignores the data when its normal and the normal of its nearest point "
+                    "differ by more than this angle in degrees (keeps surfaces from snapping to the"
+                    " wrong side, e.g. between legs). 180 switches the test off."),
       real(
           "distance.outlierDistance", "OutlierDistance", P::Advanced, 0, Unbounded, "world units",
           "a vertex farther than this from the data has no distance term; 0: none",
-          [](auto& o) -> auto& { return o.distance.outlierDistance; }),
+          [](auto& o) -> auto& { return o.distance.outlierDistance; })
+          .withHelp("Vertices farther than this from the data (world units) ignore it. 0: no "
+                    "cut-off. By default a vertex whose nearest point another part of the mesh is "
+                    "nearer to (a hole's rim, a body's seen side) already ignores it (the tracker "
+                    "option distance.reciprocal), so a hole no longer pulls its vertices onto its "
+                    "rim; a cut-off of about 3 voxels (the voxel is the template's diagonal / 200 "
+                    "unless Voxel Size says otherwise) does the same for every far vertex."),
       real(
           "distance.robustScale", "", P::None, 0, Unbounded, "world units",
           "Geman-McClure scale of the distance term; 0: plain least squares",
@@ -127,7 +169,11 @@ std::vector<Row> coverageRows()
       real(
           "coverage.weight", "CoverageWeight", P::Shown, 0, Unbounded, "",
           "k_cov: the weight of the points -> mesh term (0: the paper's energy alone)",
-          [](auto& o) -> auto& { return o.coverage.weight; }),
+          [](auto& o) -> auto& { return o.coverage.weight; })
+          .withHelp("Weight of the points-to-mesh term: a well-spread sample of the points pulls "
+                    "the closest point of the mesh (only where normals agree, so another limb does "
+                    "not pull). Without it (0, the paper's energy) a limb the mesh lets go of costs"
+                    " nothing and is lost."),
       real(
           "coverage.pointToPoint", "", P::None, 0, 1, "",
           "share of the point-to-point distance in the points -> mesh term",
@@ -155,12 +201,22 @@ std::vector<Row> coverageRows()
       real(
           "temporalWeight", "TemporalWeight", P::Advanced, 0, Unbounded, "",
           "k_acc: pull toward the constant-velocity course (smoother, lags fast motion); 0: off",
-          [](auto& o) -> auto& { return o.temporalWeight; }),
+          [](auto& o) -> auto& { return o.temporalWeight; })
+          .withHelp("Pulls vertices toward their constant-velocity course: smoother motion on shaky"
+                    " data, at the price of lag behind sudden motion. 0: off (default). About 1 "
+                    "suits slow, non-rigid motion (cloth, a collapse: half the shake); it pulls "
+                    "fast motion such as a jumping human off its changes of direction."),
       real(
           "colourWeight", "ColourWeight", P::Shown, 0, Unbounded, "",
           "k_col: where points carry colour, pull each vertex along the surface to its material "
           "point's colour; 0: off",
-          [](auto& o) -> auto& { return o.colourWeight; }),
+          [](auto& o) -> auto& { return o.colourWeight; })
+          .withHelp("Where the points carry colour (RGB, RGBA or Colors bytes): each vertex is "
+                    "pulled, along the surface, to where the frame shows the colour its material "
+                    "point had in the first frame. Geometry says where the surface is, not where on"
+                    " it a vertex lies; colour keeps each vertex on its material point (textures do"
+                    " not swim). The output then carries Colors, the frame's colour at each vertex."
+                    " 0: off."),
       real(
           "colourCoarseKernel", "", P::None, 1, 100, "",
           "the colour term's kernel on the coarse level, in times the fine level's",
@@ -175,11 +231,14 @@ std::vector<Row> startRows()
       real(
           "voxelSize", "VoxelSize", P::Advanced, 0, Unbounded, "world units",
           "the distance field's voxel; 0: the template's diagonal / 200",
-          [](auto& o) -> auto& { return o.voxelSize; }),
+          [](auto& o) -> auto& { return o.voxelSize; })
+          .withHelp("Resolution of each frame's distance field (world units). 0: the template's "
+                    "diagonal / 200."),
       real(
           "bandWidth", "BandWidth", P::Advanced, 0, Unbounded, "world units",
           "the distance field's narrow band; 0: 4 voxels",
-          [](auto& o) -> auto& { return o.bandWidth; }),
+          [](auto& o) -> auto& { return o.bandWidth; })
+          .withHelp("Band of the distance field around the points (world units). 0: 4 voxels."),
       automatic(integer(
           "maxFramePoints", "", P::None, 100, 1e12,
           "a frame of more points is thinned evenly to this many; 0: no limit",
@@ -188,28 +247,47 @@ std::vector<Row> startRows()
           "meshFrameSamples", "MeshFrameSamples", P::Advanced, 0, 1e9,
           "a frame that is a mesh is read as this many points spread evenly over its area, with "
           "its faces' normals (or one a vertex, if it has more vertices); 0: its vertices alone",
-          [](auto& o) -> auto& { return o.meshFrameSamples; }),
+          [](auto& o) -> auto& { return o.meshFrameSamples; })
+          .withHelp("Where the frames are meshes (a capture's per-frame meshes), each is read as "
+                    "its surface: this many points spread evenly over its area, with normals from "
+                    "its faces and colours from its vertices, or one a vertex when the mesh has "
+                    "more vertices. Sparse and dense parts of a capture mesh then weigh alike, and "
+                    "the surface between vertices is data. 0: the frame's vertices alone, as "
+                    "points."),
       solverRow(),
       flag(
           "motionPrediction", "MotionPrediction", P::Advanced,
           "start each frame from the last frames' motion continued (the paper's MP)",
-          [](auto& o) -> auto& { return o.motionPrediction; }),
+          [](auto& o) -> auto& { return o.motionPrediction; })
+          .withHelp("Start each frame at the minimum of the energy along the linear and quadratic "
+                    "extrapolations of the trajectories (the paper's MP)."),
       flag(
           "rigidAlignment", "RigidAlignment", P::Advanced,
           "without the coarse level: align the start rigidly to the data first",
-          [](auto& o) -> auto& { return o.rigidAlignment; }),
+          [](auto& o) -> auto& { return o.rigidAlignment; })
+          .withHelp("Without the coarse level: before deforming, move the predicted mesh rigidly "
+                    "onto the frame's points (point-to-plane alignment weighted by vertex area). "
+                    "Keeps a turning shape from slipping along its surface a little more each "
+                    "frame.")
+          .shownWith("CoarseLevel=0"),
       flag(
           "provisionalDetermination", "ProvisionalDetermination", P::Advanced,
           "steepest descent only: fix vertices that have settled (the paper's PD)",
-          [](auto& o) -> auto& { return o.provisionalDetermination; }),
+          [](auto& o) -> auto& { return o.provisionalDetermination; })
+          .withHelp("Steepest descent only: freeze vertices that barely move until a neighbour "
+                    "moves (the paper's PD).")
+          .shownWith("Solver=2"),
       integer(
           "maxIterations", "MaximumIterations", P::Advanced, 1, 1e6,
           "iteration limit of the fine level's solve (without the coarse level)",
-          [](auto& o) -> auto& { return o.maxIterations; }),
+          [](auto& o) -> auto& { return o.maxIterations; })
+          .withHelp("Iteration limit of a frame's cloth solve (with the coarse level on, "
+                    "Gauss-Newton takes at most FineIterations)."),
       real(
           "tolerance", "Tolerance", P::Advanced, 1e-15, 1, "",
           "relative energy decrease that ends a solve",
-          [](auto& o) -> auto& { return o.tolerance; }),
+          [](auto& o) -> auto& { return o.tolerance; })
+          .withHelp("Relative energy decrease under which a frame's minimisation stops."),
   };
 }
 
@@ -220,18 +298,28 @@ std::vector<Row> graphRows()
       flag(
           "graph.enabled", "CoarseLevel", P::Shown,
           "register an embedded deformation graph first: fast motion caught as whole limbs",
-          [](auto& o) -> auto& { return o.graph.enabled; }),
+          [](auto& o) -> auto& { return o.graph.enabled; })
+          .withHelp("Register an embedded deformation graph (nodes spread over the template, a "
+                    "rotation and a translation each) to every frame before the cloth solve, from "
+                    "stiff and far-reaching to supple and local: large and fast motions are caught "
+                    "as whole limbs. Off: the paper's start (motion prediction, then rigid "
+                    "alignment)."),
       integer(
           "graph.nodes", "GraphNodes", P::Advanced, 0, 1e7,
           "the graph's node count; 0: one per 5 vertices, 30 to 600",
-          [](auto& o) -> auto& { return o.graph.nodes; }),
+          [](auto& o) -> auto& { return o.graph.nodes; })
+          .withHelp("Nodes of the coarse level's graph. 0: one per 5 template vertices, 30 to 600.")
+          .shownWith("CoarseLevel=1"),
       integer(
           "graph.influences", "", P::None, 1, 16, "nodes blended per vertex",
           [](auto& o) -> auto& { return o.graph.influences; }),
       real(
           "graph.rigidity", "GraphRigidity", P::Advanced, 0, Unbounded, "",
           "factor on the graph's regularisation weights",
-          [](auto& o) -> auto& { return o.graph.rigidity; }),
+          [](auto& o) -> auto& { return o.graph.rigidity; })
+          .withHelp("Multiplies the coarse level's rigidity: larger keeps parts stiffer (robust to "
+                    "noise and holes), smaller lets the graph bend more freely.")
+          .shownWith("CoarseLevel=1"),
       real(
           "graph.robustScale", "", P::None, 0, Unbounded, "voxels",
           "Huber scale of the graph's regulariser: edges bending more cost in proportion",
@@ -239,7 +327,11 @@ std::vector<Row> graphRows()
       real(
           "graph.yieldRate", "Plasticity", P::Advanced, 0, 1, "",
           "share of a lasting bend the graph's reference yields each frame; 0: off",
-          [](auto& o) -> auto& { return o.graph.yieldRate; }),
+          [](auto& o) -> auto& { return o.graph.yieldRate; })
+          .withHelp("Where the shape stays bent far from the template (a collapse, cloth), the "
+                    "coarse level's reference gives way by this share per frame, so lasting "
+                    "deformation is not pulled back. 0: always measured against the template.")
+          .shownWith("CoarseLevel=1"),
       real(
           "graph.yieldLimit", "", P::None, 0, Unbounded, "voxels",
           "bend of a graph edge below which its reference does not yield",
@@ -255,7 +347,12 @@ std::vector<Row> graphRows()
       integer(
           "graph.fineIterations", "FineIterations", P::Advanced, 1, 1e6,
           "Gauss-Newton steps of the fine level after the coarse level (at most)",
-          [](auto& o) -> auto& { return o.graph.fineIterations; }),
+          [](auto& o) -> auto& { return o.graph.fineIterations; })
+          .withHelp("Gauss-Newton steps of the cloth solve after the coarse level (at most). The "
+                    "graph has placed the surface and a few steps fit its detail; more let vertices"
+                    " slide along the data and end farther from where they belong (and take "
+                    "longer).")
+          .shownWith("CoarseLevel=1"),
       integer(
           "graph.acceleration", "", P::None, 0, 20,
           "earlier steps Anderson acceleration combines; 0: plain steps",
@@ -270,7 +367,13 @@ std::vector<Row> recoveryRows()
       flag(
           "recovery.enabled", "Recovery", P::Shown,
           "try a frame that failed again from other starts, keep the best, flag it if it fails",
-          [](auto& o) -> auto& { return o.recovery.enabled; }),
+          [](auto& o) -> auto& { return o.recovery.enabled; })
+          .withHelp("Detect frames that failed (more points far from the mesh than usual in the "
+                    "take, or a limb torn: caught by another limb's data, its edges stretched by "
+                    "more than two edge lengths, LargestStretch) and try them again: held stiffer, "
+                    "from the last frame and from the template; the best attempt is kept and "
+                    "flagged in Failed if it still fails. Mesh far from the points (Unsupported: "
+                    "holes in the data) is no failure by itself."),
       real(
           "recovery.reach", "", P::None, 1e-3, 1e3, "voxels",
           "data farther than this from the mesh is unexplained (and mesh from the data, "
@@ -279,7 +382,11 @@ std::vector<Row> recoveryRows()
       real(
           "recovery.margin", "FailureMargin", P::Advanced, 0, 1, "",
           "share of unexplained data beyond the take's usual that fails a frame",
-          [](auto& o) -> auto& { return o.recovery.margin; }),
+          [](auto& o) -> auto& { return o.recovery.margin; })
+          .withHelp("A frame fails when its share of unexplained points (or of mesh the solve took "
+                    "off its points) exceeds the median of the last frames by more than this share "
+                    "(0.003 = 0.3 %). Mesh over a hole in the points is no failure.")
+          .shownWith("Recovery=1"),
       flag(
           "recovery.stiffRetry", "", P::None,
           "a frame with a torn limb is tried again with the coarse level's limbs stiffer",

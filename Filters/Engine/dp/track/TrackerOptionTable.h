@@ -6,15 +6,16 @@
  *        is shown (the ParaView property that drives it and whether the panel shows it by
  *        default). Its default is the value in a default-constructed TrackerOptions.
  *
- * Everything else is derived from this table or checked against it: the tracker's validation
- * (checkTrackerOptions), the filter's accessors (vtkDeformableTrackFilter::SetTrackerOption and
- * the named setters over it), the command line (`--set NAME=VALUE`, `--options FILE.json`,
+ * Everything else is derived from this table: the tracker's validation (checkTrackerOptions), the
+ * filter's accessors (vtkDeformableTrackFilter::SetTrackerOption and the named ones over it), the
+ * ParaView panel's properties, the command line (`--set NAME=VALUE`, `--options FILE.json`,
  * `--print-options`), report.json's record of the options a run used, the benchmark's flags, and
- * the documentation table (Documentation/TrackerOptions.md). A test compares the ParaView XML
- * with it.
+ * the documentation's table (Documentation/TrackerOptions.md).
  *
- * Adding an option: a field in TrackerOptions.h and a row in TrackerOptionTable.cxx; where the
- * ParaView panel should show it, a property in the XML and two accessors in the filter.
+ * Adding an option: a field in TrackerOptions.h and a row in TrackerOptionTable.cxx (with a
+ * property name where the panel shows it, and the panel's text: withHelp, shownWith); then
+ * `build/bin/dp-option-code write .` writes the named accessors, the panel's property and the
+ * documentation's row (OptionCode.h; a test fails until it has).
  */
 #pragma once
 
