@@ -74,7 +74,7 @@ Options:
                       (a capture's per-frame mesh: repaired and remeshed to --vertices),
                       else a surface reconstructed from its points; mesh; points
   --vertices N        vertex count of a template made from the first frame (default: 1000)
-  --detail-levels N   the detail layer: the tracked mesh subdivided N times (0 to 6; each
+  --detail-levels N   the detail layer: the tracked mesh subdivided N times (0 to {MaximumDetailLevels}; each
                       level has 4x the triangles) and displaced onto each frame's data,
                       coded through the take in tracked.dpz; 0: the tracked mesh alone;
                       auto (default): measured on the first frame, the level that
@@ -84,12 +84,12 @@ Options:
                       with their times in OUTPUT/first-frames.series)
   --fit-growth P      compression judged against the data (the default): the decompressed
                       mesh's RMS distance to the points may grow by at most P percent
-                      over the tracked mesh's (default: 10); --set compression.fitGrowth=P
+                      over the tracked mesh's (default: {compression.fitGrowth}); --set compression.fitGrowth=P
   --error-target KG   compression judged against the motion instead: Karni-Gotsman error
                       in percent (e.g. 0.2); --set compression.measure=kg
                       --set compression.kgTarget=KG
   --colour-tolerance L where the points carry colour: the levels (of 255) a stored
-                      colour may differ from the tracked one (default: 4; 0: lossless);
+                      colour may differ from the tracked one (default: {compression.colourTolerance}; 0: lossless);
                       --set compression.colourTolerance=L
   --no-view           write no view.html and no paraview-state.py
   --meshopt           store tracked.glb's buffers compressed by meshoptimizer
@@ -377,6 +377,22 @@ std::string described(const Settings& s)
          dp::compressionOptions().describeMarkdown();
 }
 
+// The help's text with each {NAME} of a compression option replaced by its default (the table's)
+// and {MaximumDetailLevels} by the engine's: no default is typed twice.
+std::string withDefaults(std::string text)
+{
+  const dp::CompressionOptions defaults;
+  const auto fill = [&](const std::string& key, const std::string& value)
+  {
+    for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at))
+      text.replace(at, key.size(), value);
+  };
+  for (const auto& row : dp::compressionOptions())
+    fill("{" + row.name + "}", row.said(row.get(defaults)));
+  fill("{MaximumDetailLevels}", std::to_string(dp::MaximumDetailLevels));
+  return text;
+}
+
 int run(int argc, char** argv, dp::cli::Ranks& ranks)
 {
   bool help = false;
@@ -384,7 +400,7 @@ int run(int argc, char** argv, dp::cli::Ranks& ranks)
   if (help)
   {
     if (ranks.rank() == 0)
-      std::cout << Usage << dp::cli::OptionHelp << UsageEnd << CompressionHelpHead
+      std::cout << withDefaults(Usage) << dp::cli::OptionHelp << UsageEnd << CompressionHelpHead
                 << dp::cli::compressionOptionHelp(Settings{}.compression);
     return 0;
   }
