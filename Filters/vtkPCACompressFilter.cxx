@@ -5,7 +5,7 @@
 #include "dp/compress/CompressionOptions.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
-#include "dp/finemesh/DetailCompression.h"
+#include "dp/detail/DetailCompression.h"
 #include "dp/geometry/SubdivisionMap.h"
 #include "dp/track/DataFit.h"
 #include "vtkDPOptions.h"

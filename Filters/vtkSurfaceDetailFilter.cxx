@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkSurfaceDetailFilter.h"
 
-#include "dp/finemesh/DetailLevels.h"
-#include "dp/finemesh/DisplacementFit.h"
+#include "dp/detail/DetailLevels.h"
+#include "dp/detail/DisplacementFit.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "vtkDPPointSetAccess.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Benchmark: the coarse level's linear solve. The node system of a deformation graph (6 unknowns
 // a node, the graph's edges as its pattern) factorised and solved by the block Cholesky the
-// tracker uses (detail::BlockCholeskyOf<6>) and by Eigen's scalar SimplicialLDLT, in the same
+// tracker uses (support::BlockCholeskyOf<6>) and by Eigen's scalar SimplicialLDLT, in the same
 // run, interleaved, on the same matrices: medians of --repeats, their ratio, and both solutions'
 // residuals. The graph is sampled on frame 0 of a mesh sequence (--data/--sequence; the built-in
 // tube by default) with --nodes nodes (a 1000-vertex template gets 200); the matrix's values are
@@ -11,7 +11,7 @@
 #include "BenchmarkUtilities.h"
 #include "CommandLine.h"
 
-#include "dp/detail/BlockCholesky.h"
+#include "dp/support/BlockCholesky.h"
 #include "dp/track/DeformationGraph.h"
 
 #include <Eigen/SparseCholesky>
@@ -29,7 +29,7 @@ const char* Usage = "Usage: BenchmarkSolvers [--data DIR] [--sequence NAME|tube]
                     "[--nodes N[,N...]] [--repeats R]\n";
 
 // Sums of w u u^T over the pattern's pairs (u spanning both nodes) plus a small diagonal.
-void fillSpd(dp::detail::BlockSparseMatrixOf<6>& m,
+void fillSpd(dp::support::BlockSparseMatrixOf<6>& m,
              const std::vector<std::array<std::int64_t, 2>>& pairs, std::mt19937_64& rng)
 {
   std::normal_distribution<double> value;
@@ -49,7 +49,7 @@ void fillSpd(dp::detail::BlockSparseMatrixOf<6>& m,
   m.addToDiagonal(Eigen::VectorXd::Constant(m.matrix().rows(), 0.1));
 }
 
-double residual(const dp::detail::BlockSparseMatrixOf<6>& m, const Eigen::VectorXd& x,
+double residual(const dp::support::BlockSparseMatrixOf<6>& m, const Eigen::VectorXd& x,
                 const Eigen::VectorXd& b)
 {
   return (m.matrix().selfadjointView<Eigen::Lower>() * x - b).norm() / b.norm();
@@ -60,13 +60,13 @@ void compare(const dp::AnimatedMesh& mesh, std::size_t nodes, std::size_t repeat
   const std::vector<double> rest = mesh.positions(0);
   const dp::TriangleMesh triangles(mesh.triangles(), mesh.numberOfVertices());
   const dp::DeformationGraph graph(triangles, rest.data(), nodes, 4);
-  dp::detail::BlockSparseMatrixOf<6> m(graph.numberOfNodes(), graph.edges());
+  dp::support::BlockSparseMatrixOf<6> m(graph.numberOfNodes(), graph.edges());
   std::mt19937_64 rng(1);
   fillSpd(m, graph.edges(), rng);
   const Eigen::VectorXd b = Eigen::VectorXd::Random(m.matrix().rows());
 
-  dp::detail::BlockCholeskyOf<6> blocks;
-  Eigen::SimplicialLDLT<dp::detail::BlockSparseMatrixOf<6>::Matrix, Eigen::Lower> scalar;
+  dp::support::BlockCholeskyOf<6> blocks;
+  Eigen::SimplicialLDLT<dp::support::BlockSparseMatrixOf<6>::Matrix, Eigen::Lower> scalar;
   blocks.analyse(m);
   scalar.analyzePattern(m.matrix());
   std::vector<double> blockMs, scalarMs;

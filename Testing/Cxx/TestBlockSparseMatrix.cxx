@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The fixed-pattern block matrix of the Gauss-Newton solver against a dense assembly of the
 // same blocks, its trace matrix, and the block Cholesky factorisation against a dense one.
-#include "dp/detail/BlockCholesky.h"
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockCholesky.h"
+#include "dp/support/BlockSparseMatrix.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@ namespace
 // Adds 200 random symmetric outer products on `pairs` to both the sparse and the dense matrix:
 // (a, b) gets w u v^T, (b, a) its transpose, a diagonal block w u u^T.
 void addRandomOuters(const std::vector<std::array<std::int64_t, 2>>& pairs, std::mt19937_64& rng,
-                     dp::detail::BlockSparseMatrix& sparse, Eigen::MatrixXd& dense)
+                     dp::support::BlockSparseMatrix& sparse, Eigen::MatrixXd& dense)
 {
   std::normal_distribution<double> value;
   for (int k = 0; k < 200; ++k)
@@ -48,7 +48,7 @@ TEST(BlockSparseMatrix, AssemblesLikeADenseMatrix)
   std::vector<std::array<std::int64_t, 2>> pairs;
   for (int k = 0; k < 30; ++k)
     pairs.push_back({pick(rng), pick(rng)}); // repeats, both orders and self pairs included
-  dp::detail::BlockSparseMatrix sparse(blocks, pairs);
+  dp::support::BlockSparseMatrix sparse(blocks, pairs);
   Eigen::MatrixXd dense = Eigen::MatrixXd::Zero(3 * blocks, 3 * blocks);
   for (int round = 0; round < 2; ++round) // the second round starts from setZero()
   {
@@ -92,7 +92,7 @@ TEST(BlockSparseMatrix, CornersAddWhatTheirFullBlocksAdd)
   // block (with its mirrored corner), against addBlock() of the same blocks written out in full.
   using Block = Eigen::Matrix<double, 6, 6, Eigen::RowMajor>;
   const std::vector<std::array<std::int64_t, 2>> pairs = {{0, 2}, {1, 2}};
-  dp::detail::BlockSparseMatrixOf<6> corners(3, pairs), full(3, pairs);
+  dp::support::BlockSparseMatrixOf<6> corners(3, pairs), full(3, pairs);
   std::mt19937_64 rng(4);
   std::normal_distribution<double> value;
   auto random = [&]
@@ -134,10 +134,10 @@ TEST(BlockSparseMatrix, CornersAddWhatTheirFullBlocksAdd)
 
 TEST(BlockSparseMatrix, RefusesBlocksOutsideThePattern)
 {
-  dp::detail::BlockSparseMatrix m(4, {{{0, 1}}, {{2, 3}}});
+  dp::support::BlockSparseMatrix m(4, {{{0, 1}}, {{2, 3}}});
   const double u[3] = {1, 2, 3};
   EXPECT_THROW(m.addOuter(0, 2, u, u, 1.0), std::out_of_range);
-  EXPECT_THROW(dp::detail::BlockSparseMatrix(2, {{{0, 5}}}), std::out_of_range);
+  EXPECT_THROW(dp::support::BlockSparseMatrix(2, {{{0, 5}}}), std::out_of_range);
   EXPECT_NO_THROW(m.addOuter(3, 2, u, u, 1.0));
 }
 
@@ -147,7 +147,7 @@ namespace
 // elimination fills in), assembled both sparse and dense.
 template <int Size>
 void randomSpd(std::size_t blocks, std::mt19937_64& rng,
-               dp::detail::BlockSparseMatrixOf<Size>& sparse, Eigen::MatrixXd& dense)
+               dp::support::BlockSparseMatrixOf<Size>& sparse, Eigen::MatrixXd& dense)
 {
   std::uniform_int_distribution<int> pick(0, static_cast<int>(blocks) - 1);
   std::normal_distribution<double> value;
@@ -156,7 +156,7 @@ void randomSpd(std::size_t blocks, std::mt19937_64& rng,
     pairs.push_back({static_cast<std::int64_t>(b), static_cast<std::int64_t>((b + 1) % blocks)});
   for (std::size_t k = 0; k < 2 * blocks; ++k)
     pairs.push_back({pick(rng), pick(rng)});
-  sparse = dp::detail::BlockSparseMatrixOf<Size>(blocks, pairs);
+  sparse = dp::support::BlockSparseMatrixOf<Size>(blocks, pairs);
   dense = Eigen::MatrixXd::Zero(Size * blocks, Size * blocks);
   // Sums of w u u^T over pairs (u spanning both blocks): positive semidefinite, plus a diagonal.
   for (const auto& p : pairs)
@@ -191,13 +191,13 @@ void randomSpd(std::size_t blocks, std::mt19937_64& rng,
 TEST(BlockCholesky, SolvesLikeADenseFactorisation)
 {
   std::mt19937_64 rng(11);
-  dp::detail::BlockSparseMatrixOf<6> sparse;
+  dp::support::BlockSparseMatrixOf<6> sparse;
   Eigen::MatrixXd dense;
   randomSpd<6>(40, rng, sparse, dense);
   const Eigen::MatrixXd stored = Eigen::MatrixXd(sparse.matrix());
   ASSERT_LT((Eigen::MatrixXd(stored.selfadjointView<Eigen::Lower>()) - dense).cwiseAbs().maxCoeff(),
             1e-9);
-  dp::detail::BlockCholeskyOf<6> cholesky;
+  dp::support::BlockCholeskyOf<6> cholesky;
   cholesky.analyse(sparse);
   EXPECT_GT(cholesky.offDiagonalBlocks(), 40u); // the ring and the pairs, with fill
   const Eigen::VectorXd b = Eigen::VectorXd::Random(6 * 40);

@@ -210,7 +210,7 @@ TEST(ColourTerm, GradientAndModelMatchFiniteDifferences)
   }
   // The model at the linearisation: its value and gradient are the term's.
   p.term->linearise(x.data());
-  dp::detail::BlockSparseMatrix H(p.mesh.numberOfVertices(), {});
+  dp::support::BlockSparseMatrix H(p.mesh.numberOfVertices(), {});
   std::vector<double> modelGradient(x.size(), 0.0), gradient(x.size(), 0.0);
   const double modelValue = p.term->addModel(x.data(), H, modelGradient.data());
   const double value = p.term->evaluate(x.data(), gradient.data());
@@ -225,7 +225,7 @@ TEST(ColourTerm, MovesVerticesAlongTheSurfaceOnly)
   TermProblem p(0.05);
   const std::vector<double>& x = p.shape.positions;
   p.term->linearise(x.data());
-  dp::detail::BlockSparseMatrix H(p.mesh.numberOfVertices(), {});
+  dp::support::BlockSparseMatrix H(p.mesh.numberOfVertices(), {});
   std::vector<double> gradient(x.size(), 0.0);
   p.term->addModel(x.data(), H, gradient.data());
   std::vector<double> normals(x.size());

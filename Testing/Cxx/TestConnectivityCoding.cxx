@@ -115,13 +115,13 @@ std::vector<std::int64_t> remeshedTriangles()
   const dp::BendingTube fine(o);
   const std::vector<double> x = fine.positions(0);
   const std::vector<std::int64_t>& t = fine.triangles();
-  dp::detail::IndexedMesh m;
+  dp::support::IndexedMesh m;
   for (std::size_t v = 0; v < x.size(); v += 3)
     m.positions.push_back({x[v], x[v + 1], x[v + 2]});
   for (std::size_t i = 0; i < t.size(); i += 3)
     m.triangles.push_back(
         {static_cast<int>(t[i]), static_cast<int>(t[i + 1]), static_cast<int>(t[i + 2])});
-  return dp::detail::remeshIsotropic(m, 1000).triangles;
+  return dp::support::remeshIsotropic(m, 1000).triangles;
 }
 
 double bitsPerTriangle(std::size_t bytes, const std::vector<std::int64_t>& triangles)

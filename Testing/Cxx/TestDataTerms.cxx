@@ -83,7 +83,7 @@ std::unique_ptr<dp::EnergyTerm> termOf(int kind, const Frame& f, const dp::Cloth
 
 // The model's matrix as a dense symmetric matrix (it stores its lower triangle, diagonal blocks
 // whole: that triangle, mirrored).
-Eigen::MatrixXd denseModel(const dp::detail::BlockSparseMatrix& H)
+Eigen::MatrixXd denseModel(const dp::support::BlockSparseMatrix& H)
 {
   const Eigen::MatrixXd lower = Eigen::MatrixXd(H.matrix()).triangularView<Eigen::Lower>();
   Eigen::MatrixXd dense = lower + lower.transpose();
@@ -105,7 +105,7 @@ TEST_P(Terms, GradientAndModelMatchFiniteDifferences)
                         GetParam() == 0 ? 1e-5 : 2e-4, GetParam() == 0 ? 1e-6 : 1e-8);
   std::vector<std::array<std::int64_t, 2>> pairs;
   term->couplings(pairs);
-  dp::detail::BlockSparseMatrix H(f.mesh.numberOfVertices(), pairs);
+  dp::support::BlockSparseMatrix H(f.mesh.numberOfVertices(), pairs);
   std::vector<double> modelGradient(x.size(), 0.0), gradient(x.size(), 0.0);
   const double modelValue = term->addModel(x.data(), H, modelGradient.data());
   const double value = term->evaluate(x.data(), gradient.data());

@@ -8,8 +8,8 @@
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
-#include "dp/finemesh/DetailCompression.h"
-#include "dp/finemesh/DisplacementFit.h"
+#include "dp/detail/DetailCompression.h"
+#include "dp/detail/DisplacementFit.h"
 
 #include <gtest/gtest.h>
 

@@ -3,7 +3,7 @@
 // and displaced onto a bumpy sphere given as a mesh or as points, with holes and stray data.
 #include "FineMeshShapes.h"
 
-#include "dp/finemesh/DisplacementFit.h"
+#include "dp/detail/DisplacementFit.h"
 #include "dp/geometry/MeshDistortion.h"
 
 #include <gtest/gtest.h>

@@ -206,7 +206,7 @@ TEST(GraphRegistration, LimbsBendButDoNotStretch)
   EXPECT_GT(growth(), 4.3);
 
   const dp::DeformationGraph::State state = stretched(1.3);
-  dp::detail::BlockSparseMatrixOf<6> hessian(graph.numberOfNodes(), graph.edges());
+  dp::support::BlockSparseMatrixOf<6> hessian(graph.numberOfNodes(), graph.edges());
   Eigen::VectorXd gradient =
       Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * graph.numberOfNodes()));
   registration.regularisation(state, rigidity, &hessian, &gradient);
@@ -251,12 +251,12 @@ TEST(GraphRegistration, NodeModelIsTheVertexModelCarriedThroughTheBlending)
   Eigen::VectorXd gradient;
   registration.model(state, terms, rigidity, gradient);
   const Eigen::SparseMatrix<double> nodeModel = registration.nodeModel().matrix();
-  dp::detail::BlockSparseMatrixOf<6> regulariser(nodes, graph.edges());
+  dp::support::BlockSparseMatrixOf<6> regulariser(nodes, graph.edges());
   Eigen::VectorXd unused = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * nodes));
   registration.regularisation(state, rigidity, &regulariser, &unused);
   const Eigen::SparseMatrix<double> dataPart =
       nodeModel - Eigen::SparseMatrix<double>(regulariser.matrix());
-  dp::detail::BlockSparseMatrix vertexModel(x.size() / 3, {});
+  dp::support::BlockSparseMatrix vertexModel(x.size() / 3, {});
   std::vector<double> vertexGradient(x.size(), 0.0);
   for (const dp::EnergyTerm* t : terms)
     t->addModel(x.data(), vertexModel, vertexGradient.data());
@@ -304,7 +304,7 @@ TEST(GraphRegistration, RegulariserModelIsItsHessianWhereNoEdgeBends)
   ASSERT_LT(registration.regularisation(rigid, rigidity), 1e-20);
   auto modelAt = [&](const dp::DeformationGraph::State& s, Eigen::VectorXd& gradient)
   {
-    dp::detail::BlockSparseMatrixOf<6> hessian(nodes, graph.edges());
+    dp::support::BlockSparseMatrixOf<6> hessian(nodes, graph.edges());
     gradient = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(6 * nodes));
     registration.regularisation(s, rigidity, &hessian, &gradient);
     return Eigen::SparseMatrix<double>(hessian.matrix());
@@ -373,7 +373,7 @@ struct StepRecorder : dp::EnergyTerm
     const_cast<StepRecorder*>(this)->lastTrial.assign(x, x + size);
     return 0;
   }
-  double addModel(const double*, dp::detail::BlockSparseMatrix&, double*) const override
+  double addModel(const double*, dp::support::BlockSparseMatrix&, double*) const override
   {
     return 0;
   }
@@ -414,7 +414,7 @@ struct SlowPull : dp::EnergyTerm
     }
     return e;
   }
-  double addModel(const double* x, dp::detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, dp::support::BlockSparseMatrix& hessian,
                   double* gradient) const override
   {
     const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};

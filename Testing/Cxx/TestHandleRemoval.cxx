@@ -12,9 +12,9 @@ namespace
 constexpr double Pi = 3.141592653589793;
 
 // A torus about the z axis, radii R and r, oriented outward.
-dp::detail::IndexedMesh torus(double R, double r, int nu = 48, int nv = 24)
+dp::support::IndexedMesh torus(double R, double r, int nu = 48, int nv = 24)
 {
-  dp::detail::IndexedMesh m;
+  dp::support::IndexedMesh m;
   for (int i = 0; i < nu; ++i)
     for (int j = 0; j < nv; ++j)
     {
@@ -35,14 +35,14 @@ dp::detail::IndexedMesh torus(double R, double r, int nu = 48, int nv = 24)
 // around the hole, 2 pi (R - r)): genus 0, still closed, nothing moved but the caps' centres.
 TEST(HandleRemoval, ATorusIsCutAcrossItsTubeIntoASphere)
 {
-  dp::detail::IndexedMesh m = torus(1.0, 0.25);
-  ASSERT_EQ(dp::detail::genusOf(m), 1);
+  dp::support::IndexedMesh m = torus(1.0, 0.25);
+  ASSERT_EQ(dp::support::genusOf(m), 1);
   const std::size_t vertices = m.positions.size();
-  dp::detail::IndexedMesh kept = m;
-  EXPECT_EQ(dp::detail::removeHandles(kept, 1.5), 0u) << "the tube's loop is 2 pi 0.25 long";
-  EXPECT_EQ(dp::detail::genusOf(kept), 1);
-  EXPECT_EQ(dp::detail::removeHandles(m, 2.0), 1u) << "around the hole, 2 pi 0.75";
-  EXPECT_EQ(dp::detail::genusOf(m), 0);
+  dp::support::IndexedMesh kept = m;
+  EXPECT_EQ(dp::support::removeHandles(kept, 1.5), 0u) << "the tube's loop is 2 pi 0.25 long";
+  EXPECT_EQ(dp::support::genusOf(kept), 1);
+  EXPECT_EQ(dp::support::removeHandles(m, 2.0), 1u) << "around the hole, 2 pi 0.75";
+  EXPECT_EQ(dp::support::genusOf(m), 0);
   // The loop cut runs around the tube (24 vertices; around the hole, 48): its copies and the two
   // caps' centres are the vertices added.
   EXPECT_GE(m.positions.size(), vertices + 24 + 2);
@@ -52,8 +52,8 @@ TEST(HandleRemoval, ATorusIsCutAcrossItsTubeIntoASphere)
 // A sphere has no handle to cut; an open mesh is left as it is.
 TEST(HandleRemoval, NoHandleNothingCutAndAnOpenMeshLeftAlone)
 {
-  dp::detail::IndexedMesh open = torus(1.0, 0.25);
+  dp::support::IndexedMesh open = torus(1.0, 0.25);
   open.triangles.resize(open.triangles.size() - 2);
-  EXPECT_EQ(dp::detail::genusOf(open), -1);
-  EXPECT_EQ(dp::detail::removeHandles(open, 10), 0u);
+  EXPECT_EQ(dp::support::genusOf(open), -1);
+  EXPECT_EQ(dp::support::removeHandles(open, 10), 0u);
 }

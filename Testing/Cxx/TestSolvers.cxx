@@ -79,7 +79,7 @@ public:
     }
     return e;
   }
-  double addModel(const double* x, dp::detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, dp::support::BlockSparseMatrix& hessian,
                   double* gradient) const override
   {
     const auto scaledIdentity = [](double w)

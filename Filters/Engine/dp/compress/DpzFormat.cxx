@@ -14,7 +14,7 @@
 #include "dp/compress/ModelCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/MemoryBudget.h"
 
 #include <zlib.h>
@@ -679,7 +679,7 @@ void writeCompressedSequence(const std::string& path, const CompressedSequence& 
 {
   const std::vector<std::uint8_t> bytes = encodeCompressedSequence(sequence);
   // Write beside and rename, so a failed write never leaves a half file under the name.
-  detail::writeBesideAndMove(path,
+  support::writeBesideAndMove(path,
                              [&](const std::string& partial)
                              {
                                std::ofstream out(partial, std::ios::binary | std::ios::trunc);

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/export/GltfExport.h"
 #include "dp/compress/DetailCoding.h"
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/geometry/SubdivisionMap.h"
 
 #include <meshoptimizer.h>
@@ -504,7 +504,7 @@ GlbSummary writeGlb(const std::string& path, const CompressedSequence& given,
     addAnimation(model, colourWeights(morph.weights, colourTargets));
 
   // Written beside and renamed, so a failed write never leaves a broken file under the name.
-  detail::writeBesideAndMove(path,
+  support::writeBesideAndMove(path,
                              [&](const std::string& partial)
                              {
                                if (options.meshopt)

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/DistanceField.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 #include "dp/field/PointBand.h"
 
 #include <openvdb/openvdb.h>
@@ -34,7 +34,7 @@ struct DistanceField::Impl
   double Voxel = 0;
   double Band = 0;
   IndexGrid::Ptr Grid; // eager mode: the band's voxels
-  std::unique_ptr<detail::KdTree> Tree;
+  std::unique_ptr<support::KdTree> Tree;
   std::size_t Active = 0;
   bool Lazy = false;
   // Lazy mode: each voxel's nearest point, filled on first use, in blocks of 8^3 voxels made
@@ -183,10 +183,10 @@ void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxe
   IndexTree& tree = Grid->tree();
 
   // Topology: the voxels holding a point, dilated (26-neighbourhood) by `reach`.
-  detail::seedPointVoxels(tree, Points.data(), count, Voxel, 0);
+  support::seedPointVoxels(tree, Points.data(), count, Voxel, 0);
   // Memory guard before dilating: nothing proportional to the band is allocated when the
   // settings are absurd.
-  const double bound = detail::bandVoxelBound(tree, reach);
+  const double bound = support::bandVoxelBound(tree, reach);
   if (bound > static_cast<double>(maxActiveVoxels))
     throw GridTooLarge("a distance field with VoxelSize " + std::to_string(Voxel) +
                        " and BandWidth " + std::to_string(Band) + " needs up to " +
@@ -195,8 +195,8 @@ void DistanceField::Impl::buildGrid(std::size_t count, std::size_t maxActiveVoxe
                        ": use a larger voxel size or a narrower band");
   // The kd-tree builds while the band is dilated.
   tbb::task_group kdBuild;
-  kdBuild.run([&] { Tree = std::make_unique<detail::KdTree>(Points.data(), count); });
-  detail::dilateBand(tree, reach);
+  kdBuild.run([&] { Tree = std::make_unique<support::KdTree>(Points.data(), count); });
+  support::dilateBand(tree, reach);
   kdBuild.wait();
   fillNearest();
 }
@@ -260,7 +260,7 @@ void DistanceField::build(const double* points, std::size_t count,
   next->Band = band;
   next->Lazy = options.lazy;
   if (options.lazy)
-    next->Tree = std::make_unique<detail::KdTree>(next->Points.data(), count);
+    next->Tree = std::make_unique<support::KdTree>(next->Points.data(), count);
   else
     next->buildGrid(count, options.maxActiveVoxels);
   // The kd-tree's adaptor points into next->Points' buffer, which moves along with the Impl.

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/DistanceImage.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -462,7 +462,7 @@ void forEachVoxel(const ImageGrid& grid, Visit&& visit)
 // a voxel's centre need not hold the point nearest to it, and a neighbour's often does; and a
 // point outside the image when nearer. Then the distance, and the gradient when asked for.
 void assignVoxels(const float* points, const ImageGrid& grid, const std::uint32_t* band,
-                  const std::uint32_t* known, const detail::KdTree* outsideTree,
+                  const std::uint32_t* known, const support::KdTree* outsideTree,
                   const std::vector<std::uint32_t>& outsideIndex, const DistanceImageView& out)
 {
   forEachVoxel(grid,
@@ -519,10 +519,10 @@ DistanceImageBand computeDistanceImage(const double* points, std::size_t count,
   bandPoints(placed, grid, result.bandWidth, out.nearest);
   const std::unique_ptr<std::uint32_t[]> known =
       nearestSeedPoints(placed.seeds, band, grid, out.distance);
-  std::unique_ptr<detail::KdTree> outsideTree;
+  std::unique_ptr<support::KdTree> outsideTree;
   if (!placed.outsideIndex.empty())
     outsideTree =
-        std::make_unique<detail::KdTree>(placed.outside.data(), placed.outsideIndex.size());
+        std::make_unique<support::KdTree>(placed.outside.data(), placed.outsideIndex.size());
   const std::vector<float> single(points, points + 3 * count);
   assignVoxels(single.data(), grid, band, known.get(), outsideTree.get(), placed.outsideIndex, out);
   result.bandVoxels = static_cast<std::size_t>(std::count(out.exact, out.exact + out.voxels, 1));

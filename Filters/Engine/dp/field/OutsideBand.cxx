@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <cstdlib>
 
-namespace dp::detail
+namespace dp::support
 {
 // ---------------------------------------------------------------------------------------------
 // The pieces of space outside the band.
@@ -316,4 +316,4 @@ void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord
     acc.setValue(holes[i], value[i]);
 }
 
-} // namespace dp::detail
+} // namespace dp::support

@@ -17,7 +17,7 @@
 #include <utility>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** The value of hole voxels until interpolateHoles gives them one. */
@@ -108,4 +108,4 @@ private:
 void interpolateHoles(openvdb::FloatGrid& grid, const std::vector<openvdb::Coord>& holes,
                       float background);
 
-} // namespace dp::detail
+} // namespace dp::support

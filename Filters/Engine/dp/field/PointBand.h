@@ -21,7 +21,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** The voxel whose centre is nearest to point `p`. */
@@ -81,4 +81,4 @@ void dilateBand(TreeT& tree, int reach)
                                        openvdb::tools::IGNORE_TILES);
 }
 
-} // namespace dp::detail
+} // namespace dp::support

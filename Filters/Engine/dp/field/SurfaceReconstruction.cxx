@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/SurfaceReconstruction.h"
 
-#include "dp/detail/KdTree.h"
-#include "dp/detail/Vec3.h"
+#include "dp/support/KdTree.h"
+#include "dp/support/Vec3.h"
 #include "dp/field/OutsideBand.h"
 #include "dp/field/PointBand.h"
 #include "dp/geometry/BoundingBox.h"
@@ -35,21 +35,21 @@ namespace dp
 {
 namespace
 {
-using detail::cross;
-using detail::norm;
-using detail::operator+;
-using detail::operator-;
-using detail::operator*;
-using Vec3 = detail::Vec3;
+using support::cross;
+using support::norm;
+using support::operator+;
+using support::operator-;
+using support::operator*;
+using Vec3 = support::Vec3;
 // The fine surface: the zero crossing of the field, the reference of the remeshing.
-using FineMesh = detail::IndexedMesh;
+using FineMesh = support::IndexedMesh;
 
 struct Input
 {
   const double* points;
   const float* normals;
   std::size_t count;
-  const detail::KdTree& tree;
+  const support::KdTree& tree;
   double spacing; // median distance from a point to its nearest neighbour
 };
 
@@ -78,12 +78,12 @@ constexpr double NarrowBand = 3.0;      // half-width of the band around the poi
 constexpr int CoarseRatio = 4;          // coarse voxel / fine voxel, for finding the holes
 constexpr double VoxelPerSpacing = 1.5; // the fine voxel, in median point spacings
 
-using detail::voxelOf;
+using support::voxelOf;
 
 // The signs outside the band and the values across holes: OutsideBand.h.
-using detail::interpolateHoles;
-using detail::OutsideBand;
-using detail::UnknownHoleValue;
+using support::interpolateHoles;
+using support::OutsideBand;
+using support::UnknownHoleValue;
 
 // The plane distance in voxels, clamped to the band, at every active voxel of `grid` but those
 // of holes.
@@ -123,10 +123,10 @@ openvdb::FloatGrid::Ptr pointBand(const Input& in, double h, const Reconstructio
 {
   const float background = static_cast<float>(NarrowBand);
   openvdb::FloatGrid::Ptr grid = openvdb::FloatGrid::create(background);
-  detail::seedPointVoxels(grid->tree(), in.points, in.count, h, background);
+  support::seedPointVoxels(grid->tree(), in.points, in.count, h, background);
   const int reach = static_cast<int>(NarrowBand);
-  checkGridSize(detail::bandVoxelBound(grid->tree(), reach), h, options);
-  detail::dilateBand(grid->tree(), reach);
+  checkGridSize(support::bandVoxelBound(grid->tree(), reach), h, options);
+  support::dilateBand(grid->tree(), reach);
   return grid;
 }
 
@@ -145,12 +145,12 @@ std::vector<openvdb::Coord> addHoleVoxels(openvdb::FloatGrid& grid, const Input&
   if (closing <= 0)
     return holes;
   openvdb::MaskGrid::Ptr cells = openvdb::MaskGrid::create();
-  detail::seedPointVoxels(cells->tree(), in.points, in.count, H, true);
+  support::seedPointVoxels(cells->tree(), in.points, in.count, H, true);
   // The closing's dilation is bounded before it is built: a tiny voxel makes `closing` huge.
   // (The fine voxels it adds are counted after, with the band's.)
-  checkGridSize(detail::bandVoxelBound(cells->tree(), closing), h, options);
+  checkGridSize(support::bandVoxelBound(cells->tree(), closing), h, options);
   openvdb::MaskGrid::Ptr closed = cells->deepCopy();
-  detail::dilateBand(closed->tree(), closing);
+  support::dilateBand(closed->tree(), closing);
   openvdb::tools::erodeActiveValues(closed->tree(), closing, openvdb::tools::NN_FACE_EDGE_VERTEX,
                                     openvdb::tools::IGNORE_TILES);
   closed->tree().topologyDifference(cells->tree());
@@ -424,7 +424,7 @@ void validateReconstruction(const double* points, const float* normals, std::siz
 }
 
 // The typical sample spacing: the median nearest-neighbour distance of a subsample.
-double typicalSpacing(const detail::KdTree& tree, const double* points, std::size_t count)
+double typicalSpacing(const support::KdTree& tree, const double* points, std::size_t count)
 {
   std::vector<double> gaps;
   const std::size_t stride = std::max<std::size_t>(1, count / 2000);
@@ -499,13 +499,13 @@ Smoothing smoothingFor(const double* points, const float* normals, std::size_t c
 // A closed surface's handles (bridges the noise or the closing made between parts close to each
 // other, tunnels in a layer) cut where they are thinnest (HandleRemoval.h), and the surface
 // remeshed again over the cut one, evenly shaped at the same count. Returns the cuts.
-std::size_t cutHandles(detail::RemeshedSurface& remeshed, const ReconstructionOptions& options)
+std::size_t cutHandles(support::RemeshedSurface& remeshed, const ReconstructionOptions& options)
 {
   if (!remeshed.closed)
     return 0;
-  const auto indexed = [](const detail::RemeshedSurface& r)
+  const auto indexed = [](const support::RemeshedSurface& r)
   {
-    detail::IndexedMesh m;
+    support::IndexedMesh m;
     for (std::size_t v = 0; v + 2 < r.positions.size(); v += 3)
       m.positions.push_back({r.positions[v], r.positions[v + 1], r.positions[v + 2]});
     for (std::size_t t = 0; t + 2 < r.triangles.size(); t += 3)
@@ -513,14 +513,14 @@ std::size_t cutHandles(detail::RemeshedSurface& remeshed, const ReconstructionOp
                              static_cast<int>(r.triangles[t + 2])});
     return m;
   };
-  detail::IndexedMesh coarse = indexed(remeshed);
+  support::IndexedMesh coarse = indexed(remeshed);
   const std::size_t cuts =
-      detail::removeHandles(coarse, options.handleLoop * boundingBoxDiagonal(remeshed.positions));
+      support::removeHandles(coarse, options.handleLoop * boundingBoxDiagonal(remeshed.positions));
   if (cuts == 0)
     return 0;
-  remeshed = detail::remeshIsotropic(coarse, options.targetVertices);
+  remeshed = support::remeshIsotropic(coarse, options.targetVertices);
   // The remeshing of the caps' fans may pinch off a sliver of a piece: the surface is one.
-  detail::IndexedMesh one = indexed(remeshed);
+  support::IndexedMesh one = indexed(remeshed);
   keepLargePieces(one, 1.0);
   remeshed.positions.clear();
   remeshed.triangles.clear();
@@ -611,7 +611,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
   if (!(diagonal > 0))
     throw std::invalid_argument("surface reconstruction: all points coincide");
 
-  const detail::KdTree tree(points, count);
+  const support::KdTree tree(points, count);
   const double spacing = typicalSpacing(tree, points, count);
   const Smoothing smoothing = smoothingFor(points, normals, count, spacing, noise, options);
   const Input in{points, smoothing.normals.empty() ? normals : smoothing.normals.data(), count,
@@ -646,7 +646,7 @@ ReconstructedMesh reconstructSurface(const double* points, const float* normals,
                              " points");
 
   // Isotropic remeshing to the wanted count, every vertex on the fine surface.
-  detail::RemeshedSurface remeshed = detail::remeshIsotropic(fine, options.targetVertices);
+  support::RemeshedSurface remeshed = support::remeshIsotropic(fine, options.targetVertices);
   const std::size_t handles = options.handleLoop > 0 ? cutHandles(remeshed, options) : 0;
   ReconstructedMesh mesh;
   mesh.handlesCut = handles;

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/TemplateMesh.h"
 
-#include "dp/detail/Vec3.h"
+#include "dp/support/Vec3.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/IsotropicRemesher.h"
 #include "dp/geometry/NormalEstimation.h"
@@ -19,7 +19,7 @@ namespace dp
 {
 namespace
 {
-using detail::Vec3;
+using support::Vec3;
 
 // Vertices closer than this share of the diagonal are one vertex (split vertices of per-face
 // attributes, seams of a capture's mesh).
@@ -40,8 +40,8 @@ Vec3 at(const std::vector<double>& x, std::int64_t v)
 
 double area(const std::vector<double>& x, const std::int64_t* t)
 {
-  using detail::operator-;
-  return 0.5 * detail::norm(detail::cross(at(x, t[1]) - at(x, t[0]), at(x, t[2]) - at(x, t[0])));
+  using support::operator-;
+  return 0.5 * support::norm(support::cross(at(x, t[1]) - at(x, t[0]), at(x, t[2]) - at(x, t[0])));
 }
 
 // Merges vertices that coincide (within SameVertex of the diagonal): the triangles' indices move
@@ -189,14 +189,14 @@ TemplateMesh fromMesh(const double* points, std::size_t count,
   if (options.remesh &&
       static_cast<double>(vertices) > Oversized * static_cast<double>(options.targetVertices))
   {
-    detail::IndexedMesh fine;
+    support::IndexedMesh fine;
     for (std::size_t v = 0; v < vertices; ++v)
       fine.positions.push_back(at(m.positions, static_cast<std::int64_t>(v)));
     for (std::size_t i = 0; i < m.triangles.size(); i += 3)
       fine.triangles.push_back({static_cast<int>(m.triangles[i]),
                                 static_cast<int>(m.triangles[i + 1]),
                                 static_cast<int>(m.triangles[i + 2])});
-    detail::RemeshedSurface coarse = detail::remeshIsotropic(fine, options.targetVertices);
+    support::RemeshedSurface coarse = support::remeshIsotropic(fine, options.targetVertices);
     m.positions = std::move(coarse.positions);
     m.triangles = std::move(coarse.triangles);
     r.remeshed = true;

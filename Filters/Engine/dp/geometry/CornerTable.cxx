@@ -6,7 +6,7 @@
 #include <unordered_map>
 #include <utility>
 
-namespace dp::detail
+namespace dp::support
 {
 
 CornerTable::CornerTable(const IndexedMesh& mesh)
@@ -385,4 +385,4 @@ void CornerTable::applyCollapse(int c, const CollapsePlan& plan, const std::vect
     if (v >= 0 && Of[v] < 0)
       --Live; // left without triangles (cannot happen with the link condition)
 }
-} // namespace dp::detail
+} // namespace dp::support

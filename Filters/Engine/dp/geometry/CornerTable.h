@@ -11,13 +11,13 @@
  */
 #pragma once
 
-#include "dp/detail/Vec3.h"
+#include "dp/support/Vec3.h"
 #include "dp/geometry/IsotropicRemesher.h"
 
 #include <cstddef>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /**
@@ -154,4 +154,4 @@ private:
   void applyCollapse(int c, const CollapsePlan& plan, const std::vector<int>& fanGone);
 };
 
-} // namespace dp::detail
+} // namespace dp::support

@@ -2,7 +2,7 @@
 // A rig of simulated depth cameras around an animated mesh (DepthRig.h).
 #include "dp/geometry/DepthRig.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/DeterministicRandom.h"
 #include "dp/geometry/SurfaceSampler.h"

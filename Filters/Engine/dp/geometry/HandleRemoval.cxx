@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 namespace
@@ -274,4 +274,4 @@ std::size_t removeHandles(IndexedMesh& mesh, double longestLoop, std::size_t max
   return cuts;
 }
 
-} // namespace dp::detail
+} // namespace dp::support

@@ -24,7 +24,7 @@
 
 #include <cstddef>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** The genus of a closed, connected mesh (2 - V + E - F) / 2; -1 when it has a boundary or an
@@ -36,4 +36,4 @@ int genusOf(const IndexedMesh& mesh);
  *  returns the number of cuts. Leaves a mesh that is not closed or not manifold unchanged. */
 std::size_t removeHandles(IndexedMesh& mesh, double longestLoop, std::size_t maximumCuts = 64);
 
-} // namespace dp::detail
+} // namespace dp::support

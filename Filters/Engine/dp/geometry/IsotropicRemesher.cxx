@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/IsotropicRemesher.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 #include "dp/geometry/CornerTable.h"
 
 #include <tbb/blocked_range.h>
@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 namespace
 {
@@ -426,4 +426,4 @@ RemeshedSurface remeshIsotropic(const IndexedMesh& fine, std::size_t targetVerti
   return out;
 }
 
-} // namespace dp::detail
+} // namespace dp::support

@@ -24,14 +24,14 @@
  */
 #pragma once
 
-#include "dp/detail/Vec3.h"
+#include "dp/support/Vec3.h"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** A triangle mesh as positions and vertex index triples. */
@@ -57,4 +57,4 @@ struct RemeshedSurface
  */
 RemeshedSurface remeshIsotropic(const IndexedMesh& fine, std::size_t targetVertices);
 
-} // namespace dp::detail
+} // namespace dp::support

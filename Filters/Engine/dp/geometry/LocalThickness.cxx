@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/LocalThickness.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 
 #include <cmath>
 #include <utility>
@@ -44,7 +44,7 @@ const double MinSeparationCosine = std::cos(40.0 * 3.14159265358979323846 / 180.
 // Shrinks the ball tangent at p (inward normal -n) from radius `largest` until its nearest
 // vertex is on its sphere: a vertex q inside the ball gives the smaller ball through p and q,
 // r = |p - q|^2 / (2 n.(p - q)).
-double shrinkBall(const detail::KdTree& tree, const double* x, std::size_t v, const double n[3],
+double shrinkBall(const support::KdTree& tree, const double* x, std::size_t v, const double n[3],
                   double largest)
 {
   const double* p = x + 3 * v;
@@ -80,7 +80,7 @@ std::vector<double> medialRadii(const TriangleMesh& mesh, const double* position
   // The ball's side: the normal points away from it (outward for an inner ball).
   const double outward = (signedVolume6(mesh, positions) < 0 ? -1.0 : 1.0) *
                          (side == MedialSide::Outside ? -1.0 : 1.0);
-  const detail::KdTree tree(positions, n);
+  const support::KdTree tree(positions, n);
   std::vector<double> radius(n, largest);
   for (std::size_t v = 0; v < n; ++v)
   {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/MeshSurfaceSamples.h"
 
-#include "dp/detail/Vec3.h"
+#include "dp/support/Vec3.h"
 
 #include <algorithm>
 #include <cmath>
@@ -14,14 +14,14 @@ namespace dp
 {
 namespace
 {
-using detail::Vec3;
-using detail::operator+;
-using detail::operator-;
-using detail::operator*;
+using support::Vec3;
+using support::operator+;
+using support::operator-;
+using support::operator*;
 
 Vec3 unit(const Vec3& a)
 {
-  const double length = detail::norm(a);
+  const double length = support::norm(a);
   return length > 0 ? (1 / length) * a : a;
 }
 
@@ -35,7 +35,7 @@ Vec3 corner(const MeshSurface& mesh, std::size_t t, int k)
 Vec3 areaVector(const MeshSurface& mesh, std::size_t t)
 {
   const Vec3 a = corner(mesh, t, 0);
-  return detail::cross(corner(mesh, t, 1) - a, corner(mesh, t, 2) - a);
+  return support::cross(corner(mesh, t, 1) - a, corner(mesh, t, 2) - a);
 }
 
 void checkIndices(const MeshSurface& mesh)
@@ -108,7 +108,7 @@ public:
         for (int c = 0; c < 3; ++c)
           rgb[c] += b[k] * Mesh.colours[static_cast<std::size_t>(Mesh.colourComponents) * v + c];
     }
-    if (!(detail::norm(n) > 1e-12))
+    if (!(support::norm(n) > 1e-12))
       n = areaVector(Mesh, t);
     n = unit(n);
     for (int c = 0; c < 3; ++c)
@@ -161,7 +161,7 @@ double meshSurfaceArea(const MeshSurface& mesh)
   checkIndices(mesh);
   double area = 0;
   for (std::size_t t = 0; t < mesh.triangleCount; ++t)
-    area += 0.5 * detail::norm(areaVector(mesh, t));
+    area += 0.5 * support::norm(areaVector(mesh, t));
   return area;
 }
 
@@ -182,7 +182,7 @@ PointCloud sampleMeshSurface(const MeshSurface& mesh, std::size_t count)
   std::size_t k = static_cast<std::size_t>((start >> 20) & 0xFFFFFF);
   for (std::size_t t = 0; t < mesh.triangleCount; ++t)
   {
-    carry += 0.5 * detail::norm(areaVector(mesh, t)) * perArea;
+    carry += 0.5 * support::norm(areaVector(mesh, t)) * perArea;
     for (; carry >= 1; carry -= 1, ++k)
     {
       double u, v;

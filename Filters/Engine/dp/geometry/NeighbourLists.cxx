@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/NeighbourLists.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -277,7 +277,7 @@ void searchGridForAll(const PointGrid& grid, std::size_t k, double radius, Neigh
 void searchTreeForUnresolved(const double* points, std::size_t count, std::size_t k,
                              const std::vector<char>& unresolved, NeighbourLists& lists)
 {
-  const detail::KdTree tree(points, count);
+  const support::KdTree tree(points, count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 256),
                     [&](const tbb::blocked_range<std::size_t>& range)
                     {

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/SubdivisionMap.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/TriangleMesh.h"
 
 #include <algorithm>

@@ -2,8 +2,8 @@
 // A cloud's noise measured in itself (SurfaceNoise.h).
 #include "dp/geometry/SurfaceNoise.h"
 
-#include "dp/detail/KdTree.h"
-#include "dp/detail/Parallel.h"
+#include "dp/support/KdTree.h"
+#include "dp/support/Parallel.h"
 
 #include <Eigen/Dense>
 
@@ -126,7 +126,7 @@ SurfaceNoise measureSurfaceNoise(const double* points, std::size_t count, std::s
   if (count < 8)
     throw std::invalid_argument("the noise of a surface needs at least 8 points, not " +
                                 std::to_string(count));
-  const detail::KdTree tree(points, count);
+  const support::KdTree tree(points, count);
   std::vector<std::uint32_t> samples;
   for (std::size_t i = 0; i < count; i += std::max<std::size_t>(1, count / SampleSize))
     samples.push_back(static_cast<std::uint32_t>(i));
@@ -148,7 +148,7 @@ std::vector<std::uint32_t> pointsOnTheSurface(const double* points, std::size_t 
     all[i] = static_cast<std::uint32_t>(i);
   if (count <= StrayNeighbours)
     return all;
-  const detail::KdTree tree(points, count);
+  const support::KdTree tree(points, count);
   const NoiseAtSamples n = measureNoiseAt(points, all,
                                           [&](const double* x, std::size_t k, std::uint32_t* ids,
                                               double* d2) { return tree.nearest(x, k, ids, d2); });

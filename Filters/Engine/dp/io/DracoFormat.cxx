@@ -12,7 +12,7 @@
 // Written: positions quantised to 14 bits of the bounding box (at most 2^-15 of its largest side
 // off), normals to 10 bits, colours losslessly; triangles (edgebreaker) where the cloud has faces
 // that are all triangles, else the points alone (kd-tree).
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
 
@@ -236,7 +236,7 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
 
 PointCloud readDRC(const std::string& path)
 {
-  const std::string bytes = detail::readWholeFile(path);
+  const std::string bytes = support::readWholeFile(path);
   const DracoCounts counts = readDeclaredCounts(path, bytes);
   const double most = MostCountsPerByte * static_cast<double>(bytes.size());
   if (counts.points > most || counts.faces > most)
@@ -357,9 +357,9 @@ void writeDRC(const std::string& path, const PointCloud& cloud)
            : encoder.EncodePointCloudToBuffer(*target, &out);
   if (!status.ok())
     throw FileError(path, "Draco cannot encode it: " + status.error_msg_string());
-  detail::writeBesideAndMove(path,
+  support::writeBesideAndMove(path,
                              [&](const std::string& partial) {
-                               detail::writeWholeFile(partial, std::string(out.data(), out.size()));
+                               support::writeWholeFile(partial, std::string(out.data(), out.size()));
                              });
 }
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/io/FrameSequence.h"
 
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/PointCloud.h"
 #include "dp/io/PointCloudIO.h"
 
@@ -305,7 +305,7 @@ private:
 
 FrameSequence FrameSequence::fromSeriesFile(const std::string& seriesPath)
 {
-  const std::string text = detail::readWholeFile(seriesPath);
+  const std::string text = support::readWholeFile(seriesPath);
   SeriesEvents events(seriesPath, fs::path(seriesPath).parent_path());
   nlohmann::json::sax_parse(text, &events);
   FrameSequence sequence;

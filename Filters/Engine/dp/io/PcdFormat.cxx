@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PCD reader and writer (the Point Cloud Library's format, v0.7: ascii, binary,
 // binary_compressed).
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
 
@@ -132,7 +132,7 @@ std::vector<int> perFieldNumbers(const std::vector<std::string_view>& values,
   for (std::string_view value : values)
   {
     double v = 0;
-    if (!detail::parseNumber(value, v) || v <= 0 || !detail::wholeNumberWithin(v, 1 << 20))
+    if (!support::parseNumber(value, v) || v <= 0 || !support::wholeNumberWithin(v, 1 << 20))
       fail("bad " + std::string(written) + " entry '" + std::string(value) + "'");
     numbers.push_back(static_cast<int>(v));
   }
@@ -159,8 +159,8 @@ std::size_t parseCountValue(const std::vector<std::string_view>& values, std::st
                             const HeaderFailure& fail)
 {
   double v = -1;
-  if (values.size() != 1 || !detail::parseNumber(values[0], v) || v < 0 ||
-      !detail::wholeNumberWithin(v, detail::LargestCount))
+  if (values.size() != 1 || !support::parseNumber(values[0], v) || v < 0 ||
+      !support::wholeNumberWithin(v, support::LargestCount))
     fail("bad " + std::string(written) + " value '" +
          (values.empty() ? std::string() : std::string(values[0])) + "'");
   return static_cast<std::size_t>(v);
@@ -214,18 +214,18 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
 
   while (h.data.empty())
   {
-    if (!detail::nextLine(text, line))
+    if (!support::nextLine(text, line))
     {
       throw FileError(path, "PCD header has no DATA line (not a PCD file, or truncated)");
     }
     ++lineNumber;
     std::string_view rest = line;
-    const std::string_view written = detail::nextToken(rest);
-    const std::string keyword = detail::toLower(written);
+    const std::string_view written = support::nextToken(rest);
+    const std::string keyword = support::toLower(written);
     if (keyword.empty() || keyword[0] == '#' || keyword == "version" || keyword == "viewpoint")
       continue;
     std::vector<std::string_view> values;
-    for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
+    for (auto t = support::nextToken(rest); !t.empty(); t = support::nextToken(rest))
       values.push_back(t);
     if (parseFieldLine(keyword, values, written, fields, fail))
       continue;
@@ -236,7 +236,7 @@ PcdHeader parseHeader(const std::string& path, std::string_view& text)
     else if (keyword == "points")
       h.points = parseCountValue(values, written, fail), havePoints = true;
     else if (keyword == "data")
-      h.data = values.empty() ? "?" : detail::toLower(values[0]);
+      h.data = values.empty() ? "?" : support::toLower(values[0]);
     else
       fail("unknown keyword '" + std::string(written) + "'");
   }
@@ -338,11 +338,11 @@ void readAscii(const std::string& path, std::string_view cursor, const PcdHeader
     for (std::size_t k = 0; k < h.fields.size(); ++k)
       for (int c = 0; c < h.fields[k].count; ++c)
       {
-        const std::string_view token = detail::nextToken(cursor);
+        const std::string_view token = support::nextToken(cursor);
         if (token.empty())
           dataEndsEarly(path, h.points, i);
         double v = 0;
-        if (!detail::parseNumber(token, v))
+        if (!support::parseNumber(token, v))
           throw FileError(path, "PCD point " + std::to_string(i) + ": '" + std::string(token) +
                                     "' is not a number");
         out.values[i * l.valuesPerPoint + l.firstValue[k] + c] = v;
@@ -459,7 +459,7 @@ PointCloud assemble(const PcdHeader& h, const PcdLayout& l, const PcdValues& in)
 
 PointCloud readPCD(const std::string& path)
 {
-  const std::string bytes = detail::readWholeFile(path);
+  const std::string bytes = support::readWholeFile(path);
   std::string_view text(bytes);
   PcdHeader header = parseHeader(path, text);
   const PcdLayout layout = layoutOf(path, header.fields);
@@ -569,7 +569,7 @@ void writePCD(const std::string& path, const PointCloud& cloud, bool binary)
     if (!binary)
       out.back() = '\n';
   }
-  detail::writeWholeFile(path, out);
+  support::writeWholeFile(path, out);
 }
 
 } // namespace dp

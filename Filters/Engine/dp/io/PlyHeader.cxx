@@ -2,14 +2,14 @@
 // The PLY header's parser: the keyword lines up to end_header (see PlyHeader.h).
 #include "dp/io/PlyHeader.h"
 
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/PointCloud.h"
 
 #include <functional>
 #include <optional>
 #include <string_view>
 
-namespace dp::detail
+namespace dp::support
 {
 namespace
 {
@@ -166,4 +166,4 @@ PlyHeader parsePlyHeader(const std::string& path, const std::string& bytes)
   return header;
 }
 
-} // namespace dp::detail
+} // namespace dp::support

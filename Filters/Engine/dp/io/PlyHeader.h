@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** A property's value type, under either of its names (char or int8, float or float32...). */
@@ -85,4 +85,4 @@ struct PlyHeader
  *  line, a property before any element, no format line, no end_header). */
 PlyHeader parsePlyHeader(const std::string& path, const std::string& bytes);
 
-} // namespace dp::detail
+} // namespace dp::support

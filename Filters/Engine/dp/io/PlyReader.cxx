@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY reader (Turk's format: ASCII, binary little and big endian): the body the header
 // (PlyHeader.cxx) describes, its vertices and faces into a PointCloud.
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/PlyHeader.h"
 #include "dp/io/PointCloudIO.h"
 
@@ -14,12 +14,12 @@ namespace dp
 namespace
 {
 
-using detail::PlyBodyEncoding;
-using detail::PlyElement;
-using detail::PlyHeader;
-using detail::PlyProperty;
-using detail::PlyType;
-using detail::sizeOf;
+using support::PlyBodyEncoding;
+using support::PlyElement;
+using support::PlyHeader;
+using support::PlyProperty;
+using support::PlyType;
+using support::sizeOf;
 
 template <typename T>
 T loadSwapped(const char* p, bool swap)
@@ -118,12 +118,12 @@ public:
   {
     if (Mode == PlyBodyEncoding::Ascii)
     {
-      const std::string_view token = detail::nextToken(Body);
+      const std::string_view token = support::nextToken(Body);
       if (token.empty())
       {
         return false;
       }
-      if (!detail::parseNumber(token, value))
+      if (!support::parseNumber(token, value))
       {
         throw FileError(Path, "PLY body: '" + std::string(token) + "' is not a number");
       }
@@ -303,7 +303,7 @@ std::int64_t vertexIndex(const std::string& path, std::size_t face, double value
   const auto numberOfPoints = static_cast<double>(cloud.numberOfPoints());
   if (!(value >= 0 && value < numberOfPoints)) // NaN included
   {
-    const bool whole = detail::wholeNumberWithin(value, detail::LargestCount);
+    const bool whole = support::wholeNumberWithin(value, support::LargestCount);
     throw FileError(
         path, "PLY face " + std::to_string(face) + " uses vertex " +
                   (whole ? std::to_string(static_cast<long long>(value)) : std::to_string(value)) +
@@ -414,8 +414,8 @@ void skipElement(const std::string& path, const PlyElement& element, BodyReader&
 
 PointCloud readPLY(const std::string& path)
 {
-  const std::string bytes = detail::readWholeFile(path);
-  const PlyHeader header = detail::parsePlyHeader(path, bytes);
+  const std::string bytes = support::readWholeFile(path);
+  const PlyHeader header = support::parsePlyHeader(path, bytes);
   BodyReader reader(path, bytes, header);
   PointCloud cloud;
   bool sawVertex = false, sawFace = false;

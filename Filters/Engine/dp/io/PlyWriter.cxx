@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY writer: float32 vertices (+ normals, colours, attributes) and int32 faces, in ASCII or
 // binary of either byte order.
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <algorithm>
@@ -132,7 +132,7 @@ void writePLY(const std::string& path, const PointCloud& cloud, PlyEncoding enco
     appendVertex(out, cloud, i, encoding);
   for (std::size_t f = 0; f < cloud.numberOfFaces(); ++f)
     appendFace(out, path, cloud, f, encoding);
-  detail::writeWholeFile(path, out);
+  support::writeWholeFile(path, out);
 }
 
 } // namespace dp

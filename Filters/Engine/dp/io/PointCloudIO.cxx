@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/io/PointCloudIO.h"
 
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -11,7 +11,7 @@
 
 namespace dp
 {
-namespace detail
+namespace support
 {
 
 std::string readWholeFile(const std::string& path)
@@ -106,7 +106,7 @@ std::string toLower(std::string_view s)
   return out;
 }
 
-} // namespace detail
+} // namespace support
 
 PointFileFormat formatFromFileName(const std::string& path)
 {
@@ -116,7 +116,7 @@ PointFileFormat formatFromFileName(const std::string& path)
   {
     return PointFileFormat::Unknown;
   }
-  const std::string ext = detail::toLower(std::string_view(path).substr(dot + 1));
+  const std::string ext = support::toLower(std::string_view(path).substr(dot + 1));
   if (ext == "ply")
     return PointFileFormat::PLY;
   if (ext == "pcd")

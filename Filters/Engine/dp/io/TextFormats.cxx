@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Plain-text point formats (XYZ, PTS, CSV, TXT) and Wavefront OBJ.
-#include "dp/detail/FileText.h"
+#include "dp/support/FileText.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <algorithm>
@@ -14,7 +14,7 @@ namespace
 
 bool isCommentLine(std::string_view line)
 {
-  detail::skipSeparators(line);
+  support::skipSeparators(line);
   return line.empty() || line[0] == '#' || line.substr(0, 2) == "//";
 }
 
@@ -49,12 +49,12 @@ bool splitRow(std::string_view line, std::vector<double>& row, std::vector<std::
   tokens.clear();
   std::string_view rest = line;
   bool numeric = true;
-  for (auto token = detail::nextToken(rest, comma); !token.empty();
-       token = detail::nextToken(rest, comma))
+  for (auto token = support::nextToken(rest, comma); !token.empty();
+       token = support::nextToken(rest, comma))
   {
     double v = 0;
     tokens.emplace_back(token);
-    if (detail::parseNumber(token, v))
+    if (support::parseNumber(token, v))
       row.push_back(v);
     else
       numeric = false;
@@ -83,7 +83,7 @@ TextTable readTable(const std::string& path, std::string_view text, bool isPts)
   bool sawData = false;
   std::vector<double> row;
   std::vector<std::string> tokens;
-  while (detail::nextLine(text, line))
+  while (support::nextLine(text, line))
   {
     ++lineNumber;
     if (isCommentLine(line))
@@ -93,7 +93,7 @@ TextTable readTable(const std::string& path, std::string_view text, bool isPts)
     {
       // A header line naming the columns (CSV style).
       for (auto& token : tokens)
-        t.header.push_back(detail::toLower(token));
+        t.header.push_back(support::toLower(token));
       continue;
     }
     if (!numeric)
@@ -104,7 +104,7 @@ TextTable readTable(const std::string& path, std::string_view text, bool isPts)
     // A PTS file starts with a line holding only the point count.
     if (!sawData && isPts && row.size() == 1 && t.declaredCount == 0)
     {
-      if (!(row[0] >= 0) || !detail::wholeNumberWithin(row[0], detail::LargestCount))
+      if (!(row[0] >= 0) || !support::wholeNumberWithin(row[0], support::LargestCount))
         throw FileError(path, "line " + std::to_string(lineNumber) + ": the point count '" +
                                   std::string(line) + "' is not a count");
       t.declaredCount = static_cast<std::size_t>(row[0]);
@@ -218,7 +218,7 @@ public:
   {
     ++LineNumber;
     std::string_view rest = line;
-    const std::string_view keyword = detail::nextToken(rest);
+    const std::string_view keyword = support::nextToken(rest);
     if (keyword == "v" || keyword == "vn")
       coordinates(keyword == "v", rest);
     else if (keyword == "f")
@@ -259,8 +259,8 @@ private:
   {
     double xyz[6];
     int count = 0;
-    for (auto t = detail::nextToken(rest); !t.empty() && count < 6; t = detail::nextToken(rest))
-      if (!detail::parseNumber(t, xyz[count++]))
+    for (auto t = support::nextToken(rest); !t.empty() && count < 6; t = support::nextToken(rest))
+      if (!support::parseNumber(t, xyz[count++]))
         fail("'" + std::string(t) + "' is not a number");
     if (count < 3)
       fail("expected 3 coordinates (truncated file?)");
@@ -287,7 +287,7 @@ private:
   void face(std::string_view rest)
   {
     Face.clear();
-    for (auto t = detail::nextToken(rest); !t.empty(); t = detail::nextToken(rest))
+    for (auto t = support::nextToken(rest); !t.empty(); t = support::nextToken(rest))
       Face.push_back(faceVertex(t));
     if (Face.size() < 3)
       fail("a face needs at least 3 vertices");
@@ -300,8 +300,8 @@ private:
     const auto nv = static_cast<std::int64_t>(Cloud.numberOfPoints());
     const std::size_t slash = t.find('/');
     double v = 0;
-    if (!detail::parseNumber(t.substr(0, slash), v) || v == 0 ||
-        !detail::wholeNumberWithin(v, detail::LargestCount))
+    if (!support::parseNumber(t.substr(0, slash), v) || v == 0 ||
+        !support::wholeNumberWithin(v, support::LargestCount))
       fail("bad face vertex '" + std::string(t) + "'");
     auto index = static_cast<std::int64_t>(v);
     index = index > 0 ? index - 1 : nv + index;
@@ -313,8 +313,8 @@ private:
       return index; // v or v/vt
     const auto nn = static_cast<std::int64_t>(NormalList.size() / 3);
     double vn = 0;
-    if (detail::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0 &&
-        detail::wholeNumberWithin(vn, static_cast<double>(nn)))
+    if (support::parseNumber(t.substr(lastSlash + 1), vn) && vn != 0 &&
+        support::wholeNumberWithin(vn, static_cast<double>(nn)))
     {
       auto n = static_cast<std::int64_t>(vn);
       n = n > 0 ? n - 1 : nn + n;
@@ -336,8 +336,8 @@ private:
 
 PointCloud readTextPoints(const std::string& path)
 {
-  const std::string bytes = detail::readWholeFile(path);
-  const bool isPts = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
+  const std::string bytes = support::readWholeFile(path);
+  const bool isPts = support::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
   const TextTable table = readTable(path, bytes, isPts);
   if (table.columns == 0)
     return {}; // an empty frame; the caller decides whether that is an error
@@ -353,7 +353,7 @@ PointCloud readTextPoints(const std::string& path)
 void writeTextPoints(const std::string& path, const PointCloud& cloud)
 {
   cloud.validate();
-  const bool csv = detail::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".csv";
+  const bool csv = support::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".csv";
   const char separator = csv ? ',' : ' ';
   std::string out;
   if (csv)
@@ -374,16 +374,16 @@ void writeTextPoints(const std::string& path, const PointCloud& cloud)
       }
     out.back() = '\n';
   }
-  detail::writeWholeFile(path, out);
+  support::writeWholeFile(path, out);
 }
 
 PointCloud readOBJ(const std::string& path)
 {
-  const std::string bytes = detail::readWholeFile(path);
+  const std::string bytes = support::readWholeFile(path);
   std::string_view text(bytes);
   std::string_view line;
   ObjParser parser(path);
-  while (detail::nextLine(text, line))
+  while (support::nextLine(text, line))
     parser.statement(line);
   return parser.finish();
 }
@@ -418,7 +418,7 @@ void writeOBJ(const std::string& path, const PointCloud& cloud)
     }
     out += '\n';
   }
-  detail::writeWholeFile(path, out);
+  support::writeWholeFile(path, out);
 }
 
 } // namespace dp

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/ColourTerm.h"
 
-#include "dp/detail/KdTree.h"
-#include "dp/detail/Parallel.h"
+#include "dp/support/KdTree.h"
+#include "dp/support/Parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -34,11 +34,11 @@ struct ColourField::Level
   double cell = 0;               // 0: the frame's own points
   std::vector<double> ownPoints;
   std::vector<float> ownColours, ownCounts;
-  std::unique_ptr<detail::KdTree> tree;
+  std::unique_ptr<support::KdTree> tree;
 
   Level(const double* p, const float* c, std::size_t count) : points(p), colours(c)
   {
-    tree = std::make_unique<detail::KdTree>(points, count);
+    tree = std::make_unique<support::KdTree>(points, count);
   }
   // The means of `finest`'s points over cells of size `size`, in the cells' order (sorted keys:
   // the same on any platform).
@@ -85,7 +85,7 @@ struct ColourField::Level
     points = ownPoints.data();
     colours = ownColours.data();
     counts = ownCounts.data();
-    tree = std::make_unique<detail::KdTree>(points, ownCounts.size());
+    tree = std::make_unique<support::KdTree>(points, ownCounts.size());
   }
 };
 
@@ -267,7 +267,7 @@ double ColourTerm::evaluate(const double* x, double* gradient) const
   return total;
 }
 
-double ColourTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
+double ColourTerm::addModel(const double* x, support::BlockSparseMatrix& hessian,
                             double* gradient) const
 {
   const std::size_t n = Mass.size();

@@ -41,7 +41,7 @@
 namespace dp
 {
 
-namespace detail
+namespace support
 {
 class KdTree;
 }
@@ -93,7 +93,7 @@ public:
 
   const char* name() const override { return "colour"; }
   double evaluate(const double* x, double* gradient) const override;
-  double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, support::BlockSparseMatrix& hessian,
                   double* gradient) const override;
   /** The mesh's vertex normals at x, and the model there: until the next linearisation the term
    *  reads each vertex's colour as if it moved along the surface only. */

@@ -3,7 +3,7 @@
 
 #include "dp/track/RobustKernel.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -169,7 +169,7 @@ double CoverageTerm::evaluate(const double* x, double* gradient) const
   return e;
 }
 
-double CoverageTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
+double CoverageTerm::addModel(const double* x, support::BlockSparseMatrix& hessian,
                               double* gradient) const
 {
   const auto& tri = Mesh.triangles();

@@ -58,7 +58,7 @@ public:
 
   const char* name() const override { return "coverage"; }
   double evaluate(const double* x, double* gradient) const override;
-  double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, support::BlockSparseMatrix& hessian,
                   double* gradient) const override;
   /** Closest points, normal test and robust weights at x (kept as they are while no vertex has
    *  moved a fifth of a voxel since they were decided). */

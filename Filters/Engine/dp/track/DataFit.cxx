@@ -2,7 +2,7 @@
 #include "dp/track/DataFit.h"
 
 #include "dp/compress/Decomposition.h"
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
 
 #include <Eigen/Core>

@@ -5,7 +5,7 @@
 
 #include "dp/geometry/SurfaceLocator.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 
 #include <cmath>
 
@@ -117,7 +117,7 @@ double DistanceTerm::evaluate(const double* x, double* gradient) const
   return e;
 }
 
-double DistanceTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
+double DistanceTerm::addModel(const double* x, support::BlockSparseMatrix& hessian,
                               double* gradient) const
 {
   const std::size_t nv = Mass.size();

@@ -50,7 +50,7 @@ public:
 
   const char* name() const override { return "distance"; }
   double evaluate(const double* x, double* gradient) const override;
-  double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, support::BlockSparseMatrix& hessian,
                   double* gradient) const override;
   /** Normal test, outlier cut-off and robust weights at x; returns how many vertices changed
    *  side (kept or rejected). */

@@ -17,7 +17,7 @@
  */
 #pragma once
 
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockSparseMatrix.h"
 
 #include <array>
 #include <cstdint>
@@ -37,7 +37,7 @@ public:
 
   /** Adds the term's Gauss-Newton matrix to `hessian` and its gradient to `gradient` at x;
    *  returns the value. The matrix's pattern must hold the pairs of couplings(). */
-  virtual double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  virtual double addModel(const double* x, support::BlockSparseMatrix& hessian,
                           double* gradient) const = 0;
 
   /** Re-decides what a step holds fixed (correspondences, robust weights) at x. */

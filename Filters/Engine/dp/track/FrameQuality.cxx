@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameQuality.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
 
 #include <algorithm>

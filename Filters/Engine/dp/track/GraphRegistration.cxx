@@ -64,7 +64,7 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
   // The data terms' models are block diagonal here (the points -> mesh term gives its diagonal
   // upper bound), so a vertex couples only the nodes it blends: the graph's own edges.
   const TriangleMesh& mesh = graph.mesh();
-  VertexModel = detail::BlockSparseMatrix(mesh.numberOfVertices(), {});
+  VertexModel = support::BlockSparseMatrix(mesh.numberOfVertices(), {});
   resetReference();
   if (!Arms.empty())
   {
@@ -73,7 +73,7 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
       sum += arm.norm();
     MeanArm = sum / static_cast<double>(Arms.size());
   }
-  NodeModel = detail::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
+  NodeModel = support::BlockSparseMatrixOf<6>(graph.numberOfNodes(), graph.edges());
   // The blocks each directed edge (j, k) of E_reg adds to, found once: (j, j), (k, k), (j, k).
   for (const auto& edge : graph.edges())
     for (int direction = 0; direction < 2; ++direction)
@@ -94,7 +94,7 @@ GraphRegistration::GraphRegistration(const DeformationGraph& graph, double lengt
 }
 
 double GraphRegistration::regularisation(const DeformationGraph::State& state, double rigidity,
-                                         detail::BlockSparseMatrixOf<6>* hessian,
+                                         support::BlockSparseMatrixOf<6>* hessian,
                                          Eigen::VectorXd* gradient) const
 {
   const auto& edges = Graph.edges();
@@ -136,7 +136,7 @@ double GraphRegistration::regularisation(const DeformationGraph::State& state, d
 }
 
 double GraphRegistration::stretching(const DeformationGraph::State& state, double weight,
-                                     detail::BlockSparseMatrixOf<6>* hessian,
+                                     support::BlockSparseMatrixOf<6>* hessian,
                                      Eigen::VectorXd* gradient) const
 {
   // Per edge: s = the change of |(g_k + t_k) - (g_j + t_j)| from the reference length beyond a

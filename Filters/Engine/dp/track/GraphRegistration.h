@@ -50,8 +50,8 @@
  */
 #pragma once
 
-#include "dp/detail/BlockCholesky.h"
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockCholesky.h"
+#include "dp/support/BlockSparseMatrix.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/EnergyTerm.h"
 
@@ -117,12 +117,12 @@ public:
   /** E_reg of a state with weight `rigidity`; adds its Gauss-Newton model when asked (to a
    *  `hessian` of the graph's pattern: nodes, graph.edges()). */
   double regularisation(const DeformationGraph::State& state, double rigidity,
-                        detail::BlockSparseMatrixOf<6>* hessian = nullptr,
+                        support::BlockSparseMatrixOf<6>* hessian = nullptr,
                         Eigen::VectorXd* gradient = nullptr) const;
 
   const DeformationGraph& graph() const { return Graph; }
   /** The node-space matrix model() last built (lower triangle of 6 x 6 blocks). */
-  const detail::BlockSparseMatrixOf<6>& nodeModel() const { return NodeModel; }
+  const support::BlockSparseMatrixOf<6>& nodeModel() const { return NodeModel; }
 
 private:
   void project(const DeformationGraph::State& state, const Eigen::VectorXd& vertexGradient,
@@ -155,7 +155,7 @@ private:
                   double rigidity, double energy, double& damping, double& decrease,
                   std::vector<double>& trial);
   double stretching(const DeformationGraph::State& state, double weight,
-                    detail::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
+                    support::BlockSparseMatrixOf<6>* hessian, Eigen::VectorXd* gradient) const;
   static DeformationGraph::State retract(const DeformationGraph::State& state,
                                          const Eigen::VectorXd& step);
 
@@ -168,14 +168,14 @@ private:
   double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
   std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
   std::vector<Eigen::Vector3d> Arms;        // per directed edge (j, k): the reference of g_k - g_j
-  detail::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
-  detail::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
-  std::vector<detail::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
+  support::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
+  support::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
+  std::vector<support::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()
   // Per directed edge (j, k) of E_reg: its blocks (j, j), (k, k), (j, k) in NodeModel, and in
   // any matrix of the same pattern (regularisation()'s `hessian`: slots follow the pattern).
-  std::vector<std::array<detail::BlockSparseMatrixOf<6>::Slot, 3>> EdgeSlots;
+  std::vector<std::array<support::BlockSparseMatrixOf<6>::Slot, 3>> EdgeSlots;
   Eigen::VectorXd NodeGradient;
-  detail::BlockCholeskyOf<6> Solver;
+  support::BlockCholeskyOf<6> Solver;
   bool Analysed = false;
 };
 

@@ -4,7 +4,7 @@
 namespace dp
 {
 
-double InternalEnergyTerm::addModel(const double* x, detail::BlockSparseMatrix& hessian,
+double InternalEnergyTerm::addModel(const double* x, support::BlockSparseMatrix& hessian,
                                     double* gradient) const
 {
   const bool haveSlots = SlotsOf == &hessian;

@@ -23,7 +23,7 @@ public:
   {
     return gradient ? Cloth.addGradient(x, gradient) : Cloth.value(x);
   }
-  double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, support::BlockSparseMatrix& hessian,
                   double* gradient) const override;
   void couplings(std::vector<std::array<std::int64_t, 2>>& pairs) const override;
 
@@ -31,8 +31,8 @@ private:
   const ClothEnergy& Cloth;
   // The blocks each cloth term's vertex pairs add to, in the order ClothEnergy visits them, for
   // the matrix they were found in (the pattern is fixed, so they are found once).
-  mutable std::vector<detail::BlockSparseMatrix::Slot> Slots;
-  mutable const detail::BlockSparseMatrix* SlotsOf = nullptr;
+  mutable std::vector<support::BlockSparseMatrix::Slot> Slots;
+  mutable const support::BlockSparseMatrix* SlotsOf = nullptr;
 };
 
 } // namespace dp

@@ -87,7 +87,7 @@ bool constrainedStep(const Matrix6& A, const Vector6& b, Vector6& step)
 int alignRigidly(std::vector<double>& x, const DistanceTerm& distance)
 {
   const std::size_t nv = x.size() / 3;
-  detail::BlockSparseMatrix diagonal(nv, {});
+  support::BlockSparseMatrix diagonal(nv, {});
   std::vector<double> gradient(x.size());
   int kept = 0;
   for (int iteration = 0; iteration < RigidIterations; ++iteration)

@@ -26,7 +26,7 @@ constexpr double RetryDamping = 1e-2;
 // iterate is a descent direction of the quadratic model, so an early stop still gives a usable
 // (inexact Newton) step.
 template <typename Preconditioner>
-Eigen::VectorXd conjugateGradients(const detail::BlockSparseMatrix::Matrix& A,
+Eigen::VectorXd conjugateGradients(const support::BlockSparseMatrix::Matrix& A,
                                    const Eigen::VectorXd& b, const Preconditioner& precondition,
                                    double tolerance, int limit)
 {
@@ -148,7 +148,7 @@ struct StepDamping
 // The decrease the quadratic model (gradient, lower-stored Hessian H) promises for a step:
 // -(gradient.step + step.H.step / 2).
 double predictedDecrease(const Eigen::VectorXd& gradient, const Eigen::VectorXd& step,
-                         const detail::BlockSparseMatrix::Matrix& H)
+                         const support::BlockSparseMatrix::Matrix& H)
 {
   return -(gradient.dot(step) + 0.5 * step.dot(H.selfadjointView<Eigen::Lower>() * step));
 }

@@ -25,7 +25,7 @@
  */
 #pragma once
 
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockSparseMatrix.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/TracePreconditioner.h"
@@ -66,7 +66,7 @@ private:
   Eigen::VectorXd dampedStep(const Eigen::VectorXd& gradient, const Eigen::VectorXd& shift,
                              bool factorise);
 
-  detail::BlockSparseMatrix Hessian;
+  support::BlockSparseMatrix Hessian;
   TracePreconditioner Preconditioner; // (P (x) I_3)^-1, P the matrix of the blocks' traces / 3
 };
 

@@ -49,7 +49,7 @@ public:
     }
     return e;
   }
-  double addModel(const double* x, detail::BlockSparseMatrix& hessian,
+  double addModel(const double* x, support::BlockSparseMatrix& hessian,
                   double* gradient) const override
   {
     for (std::size_t v = 0; v < Mass.size(); ++v)

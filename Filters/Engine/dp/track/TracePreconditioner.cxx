@@ -14,7 +14,7 @@ namespace dp
 {
 namespace
 {
-using Matrix = detail::BlockSparseMatrix::Matrix;
+using Matrix = support::BlockSparseMatrix::Matrix;
 using Coordinates = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
 
 // Debian's CHOLMOD parallelises its supernodal assembly with OpenMP at a fixed 4 threads

@@ -25,7 +25,7 @@
  */
 #pragma once
 
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockSparseMatrix.h"
 
 #include <memory>
 
@@ -55,7 +55,7 @@ public:
 
   /** Factorises P (lower triangle stored; the same pattern at every call). False when P is not
    *  positive definite. */
-  bool factorise(const detail::BlockSparseMatrix::Matrix& P);
+  bool factorise(const support::BlockSparseMatrix::Matrix& P);
   /** z = (P (x) I_3)^-1 r, r holding each vertex's three coordinates in turn. */
   Eigen::VectorXd apply(const Eigen::VectorXd& r) const;
   /** Whether the last factorisation succeeded. */

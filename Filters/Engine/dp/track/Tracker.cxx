@@ -3,7 +3,7 @@
 
 #include "dp/geometry/MeshSurfaceSamples.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
 #include "dp/geometry/SurfaceLocator.h"

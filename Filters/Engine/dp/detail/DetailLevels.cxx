@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/finemesh/DetailLevels.h"
+#include "dp/detail/DetailLevels.h"
 
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/DataFit.h"

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/finemesh/FrameSurface.h"
+#include "dp/detail/FrameSurface.h"
 
-#include "dp/detail/KdTree.h"
+#include "dp/support/KdTree.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceLocator.h"
 
@@ -73,7 +73,7 @@ struct FrameSurface::Data
   std::optional<SurfaceLocator> locator;
   std::vector<double> faceNormals; // unit, 3 per triangle
   // A point frame.
-  std::unique_ptr<detail::KdTree> tree;
+  std::unique_ptr<support::KdTree> tree;
   std::vector<float> normals;
   bool oriented = true;
   double sign = 1; // -1: the data's orientation is turned around
@@ -128,7 +128,7 @@ FrameSurface FrameSurface::ofPoints(const double* points, std::size_t count, con
   d->oriented = normals != nullptr;
   d->normals = normals ? std::vector<float>(normals, normals + 3 * count)
                        : unorientedNormals(d->positions.data(), count);
-  d->tree = std::make_unique<detail::KdTree>(d->positions.data(), count);
+  d->tree = std::make_unique<support::KdTree>(d->positions.data(), count);
   return FrameSurface(std::move(d));
 }
 

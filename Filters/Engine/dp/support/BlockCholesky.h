@@ -15,7 +15,7 @@
  */
 #pragma once
 
-#include "dp/detail/BlockSparseMatrix.h"
+#include "dp/support/BlockSparseMatrix.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/OrderingMethods>
@@ -24,7 +24,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 template <int Size>
@@ -212,4 +212,4 @@ private:
   std::vector<Block> Lower;          // L_ij, i > j
 };
 
-} // namespace dp::detail
+} // namespace dp::support

@@ -11,7 +11,7 @@
 #include <utility>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 class KdTree
@@ -79,4 +79,4 @@ private:
   std::unique_ptr<Tree> Index;
 };
 
-} // namespace dp::detail
+} // namespace dp::support

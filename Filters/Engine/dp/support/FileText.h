@@ -10,7 +10,7 @@
 #include <string>
 #include <string_view>
 
-namespace dp::detail
+namespace dp::support
 {
 
 /** Reads a whole file; throws FileError naming it when it is missing or unreadable. */
@@ -100,4 +100,4 @@ inline bool parseNumber(std::string_view token, double& value)
   return result.ec == std::errc() && result.ptr == token.data() + token.size();
 }
 
-} // namespace dp::detail
+} // namespace dp::support

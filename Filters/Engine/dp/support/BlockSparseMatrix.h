@@ -16,7 +16,7 @@
 #include <stdexcept>
 #include <vector>
 
-namespace dp::detail
+namespace dp::support
 {
 
 template <int Size>
@@ -248,4 +248,4 @@ private:
 /** One 3x3 block per mesh vertex. */
 using BlockSparseMatrix = BlockSparseMatrixOf<3>;
 
-} // namespace dp::detail
+} // namespace dp::support

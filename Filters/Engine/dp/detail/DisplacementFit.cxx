@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/finemesh/DisplacementFit.h"
+#include "dp/detail/DisplacementFit.h"
 
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

@@ -15,7 +15,7 @@
  */
 #pragma once
 
-#include "dp/finemesh/DisplacementFit.h"
+#include "dp/detail/DisplacementFit.h"
 #include "dp/track/FrameSamples.h"
 
 #include <cstdint>

@@ -1,14 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // A 3-vector of doubles as a plain std::array (so .data() passes it to the x y z triple
 // interfaces, e.g. KdTree) and the few operations the surface reconstruction and its remesher
-// use. The operators are declared in dp::detail, which argument-dependent lookup does not search
-// for std::array: code outside dp::detail brings them in with using-declarations.
+// use. The operators are declared in dp::support, which argument-dependent lookup does not search
+// for std::array: code outside dp::support brings them in with using-declarations.
 #pragma once
 
 #include <array>
 #include <cmath>
 
-namespace dp::detail
+namespace dp::support
 {
 
 using Vec3 = std::array<double, 3>;
@@ -38,4 +38,4 @@ inline double norm(const Vec3& a)
   return std::sqrt(dot(a, a));
 }
 
-} // namespace dp::detail
+} // namespace dp::support

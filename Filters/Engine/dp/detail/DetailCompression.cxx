@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
-#include "dp/finemesh/DetailCompression.h"
+#include "dp/detail/DetailCompression.h"
 
 #include "dp/compress/DetailCoding.h"
-#include "dp/detail/Parallel.h"
+#include "dp/support/Parallel.h"
 #include "dp/geometry/TriangleMesh.h"
 
 #include <cmath>

@@ -28,7 +28,7 @@
  */
 #pragma once
 
-#include "dp/finemesh/FrameSurface.h"
+#include "dp/detail/FrameSurface.h"
 #include "dp/geometry/SubdivisionMap.h"
 
 #include <cstddef>
