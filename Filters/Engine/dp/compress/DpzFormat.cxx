@@ -14,8 +14,8 @@
 #include "dp/compress/ModelCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
-#include "dp/support/FileText.h"
 #include "dp/io/MemoryBudget.h"
+#include "dp/support/FileText.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -680,16 +680,16 @@ void writeCompressedSequence(const std::string& path, const CompressedSequence& 
   const std::vector<std::uint8_t> bytes = encodeCompressedSequence(sequence);
   // Write beside and rename, so a failed write never leaves a half file under the name.
   support::writeBesideAndMove(path,
-                             [&](const std::string& partial)
-                             {
-                               std::ofstream out(partial, std::ios::binary | std::ios::trunc);
-                               if (!out)
-                                 throw std::runtime_error(path + ": cannot open for writing");
-                               out.write(reinterpret_cast<const char*>(bytes.data()),
-                                         static_cast<std::streamsize>(bytes.size()));
-                               if (!out)
-                                 throw std::runtime_error(path + ": write failed");
-                             });
+                              [&](const std::string& partial)
+                              {
+                                std::ofstream out(partial, std::ios::binary | std::ios::trunc);
+                                if (!out)
+                                  throw std::runtime_error(path + ": cannot open for writing");
+                                out.write(reinterpret_cast<const char*>(bytes.data()),
+                                          static_cast<std::streamsize>(bytes.size()));
+                                if (!out)
+                                  throw std::runtime_error(path + ": write failed");
+                              });
 }
 
 CompressedSequence readCompressedSequence(const std::string& path)

@@ -2,8 +2,8 @@
 #include "dp/detail/DetailCompression.h"
 
 #include "dp/compress/DetailCoding.h"
-#include "dp/support/Parallel.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "dp/support/Parallel.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/detail/FrameSurface.h"
 
-#include "dp/support/KdTree.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceLocator.h"
+#include "dp/support/KdTree.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/export/GltfExport.h"
 #include "dp/compress/DetailCoding.h"
-#include "dp/support/FileText.h"
 #include "dp/geometry/SubdivisionMap.h"
+#include "dp/support/FileText.h"
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>
@@ -505,14 +505,14 @@ GlbSummary writeGlb(const std::string& path, const CompressedSequence& given,
 
   // Written beside and renamed, so a failed write never leaves a broken file under the name.
   support::writeBesideAndMove(path,
-                             [&](const std::string& partial)
-                             {
-                               if (options.meshopt)
-                                 writeMeshoptGlb(partial, path, model, m.vertices);
-                               else if (!tinygltf::TinyGLTF().WriteGltfSceneToFile(
-                                            &model, partial, true, true, false, true))
-                                 throw std::runtime_error(path + ": cannot write the glTF file");
-                             });
+                              [&](const std::string& partial)
+                              {
+                                if (options.meshopt)
+                                  writeMeshoptGlb(partial, path, model, m.vertices);
+                                else if (!tinygltf::TinyGLTF().WriteGltfSceneToFile(
+                                             &model, partial, true, true, false, true))
+                                  throw std::runtime_error(path + ": cannot write the glTF file");
+                              });
   return {level.level, m.vertices, m.components()};
 }
 

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/DistanceField.h"
 
-#include "dp/support/KdTree.h"
 #include "dp/field/PointBand.h"
+#include "dp/support/KdTree.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Prune.h>

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/SurfaceReconstruction.h"
 
-#include "dp/support/KdTree.h"
-#include "dp/support/Vec3.h"
 #include "dp/field/OutsideBand.h"
 #include "dp/field/PointBand.h"
 #include "dp/geometry/BoundingBox.h"
@@ -10,6 +8,8 @@
 #include "dp/geometry/IsotropicRemesher.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceNoise.h"
+#include "dp/support/KdTree.h"
+#include "dp/support/Vec3.h"
 
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/Morphology.h>

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/field/TemplateMesh.h"
 
-#include "dp/support/Vec3.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/IsotropicRemesher.h"
 #include "dp/geometry/NormalEstimation.h"
+#include "dp/support/Vec3.h"
 
 #include <algorithm>
 #include <cmath>

@@ -11,8 +11,8 @@
  */
 #pragma once
 
-#include "dp/support/Vec3.h"
 #include "dp/geometry/IsotropicRemesher.h"
+#include "dp/support/Vec3.h"
 
 #include <cstddef>
 #include <vector>

@@ -2,10 +2,10 @@
 // A rig of simulated depth cameras around an animated mesh (DepthRig.h).
 #include "dp/geometry/DepthRig.h"
 
-#include "dp/support/Parallel.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/DeterministicRandom.h"
 #include "dp/geometry/SurfaceSampler.h"
+#include "dp/support/Parallel.h"
 
 #include <nlohmann/json.hpp>
 

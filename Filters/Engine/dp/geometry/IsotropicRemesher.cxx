@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/IsotropicRemesher.h"
 
-#include "dp/support/KdTree.h"
 #include "dp/geometry/CornerTable.h"
+#include "dp/support/KdTree.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

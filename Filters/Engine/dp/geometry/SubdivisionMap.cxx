@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/geometry/SubdivisionMap.h"
 
-#include "dp/support/Parallel.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "dp/support/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

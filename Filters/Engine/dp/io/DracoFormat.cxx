@@ -12,9 +12,9 @@
 // Written: positions quantised to 14 bits of the bounding box (at most 2^-15 of its largest side
 // off), normals to 10 bits, colours losslessly; triangles (edgebreaker) where the cloud has faces
 // that are all triangles, else the points alone (kd-tree).
-#include "dp/support/FileText.h"
 #include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
+#include "dp/support/FileText.h"
 
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>
@@ -357,10 +357,9 @@ void writeDRC(const std::string& path, const PointCloud& cloud)
            : encoder.EncodePointCloudToBuffer(*target, &out);
   if (!status.ok())
     throw FileError(path, "Draco cannot encode it: " + status.error_msg_string());
-  support::writeBesideAndMove(path,
-                             [&](const std::string& partial) {
-                               support::writeWholeFile(partial, std::string(out.data(), out.size()));
-                             });
+  support::writeBesideAndMove(
+      path, [&](const std::string& partial)
+      { support::writeWholeFile(partial, std::string(out.data(), out.size())); });
 }
 
 } // namespace dp

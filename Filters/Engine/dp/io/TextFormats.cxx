@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Plain-text point formats (XYZ, PTS, CSV, TXT) and Wavefront OBJ.
-#include "dp/support/FileText.h"
 #include "dp/io/PointCloudIO.h"
+#include "dp/support/FileText.h"
 
 #include <algorithm>
 #include <cmath>
@@ -337,7 +337,8 @@ private:
 PointCloud readTextPoints(const std::string& path)
 {
   const std::string bytes = support::readWholeFile(path);
-  const bool isPts = support::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
+  const bool isPts =
+      support::toLower(path.substr(path.size() >= 4 ? path.size() - 4 : 0)) == ".pts";
   const TextTable table = readTable(path, bytes, isPts);
   if (table.columns == 0)
     return {}; // an empty frame; the caller decides whether that is an error

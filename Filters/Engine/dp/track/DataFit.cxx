@@ -2,8 +2,8 @@
 #include "dp/track/DataFit.h"
 
 #include "dp/compress/Decomposition.h"
-#include "dp/support/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
+#include "dp/support/Parallel.h"
 
 #include <Eigen/Core>
 

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameOrientation.h"
 
-#include "dp/support/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "dp/support/Parallel.h"
 #include "dp/track/FrameData.h"
 
 #include <algorithm>

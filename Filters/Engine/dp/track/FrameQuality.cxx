@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/track/FrameQuality.h"
 
-#include "dp/support/Parallel.h"
 #include "dp/geometry/SurfaceLocator.h"
+#include "dp/support/Parallel.h"
 
 #include <algorithm>
 #include <cmath>

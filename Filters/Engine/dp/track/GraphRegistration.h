@@ -164,10 +164,10 @@ private:
   double Voxel;
   double StretchWeight = 1.0;
   int Acceleration = 0;
-  double MeanArm = 1;                       // of the template's edges (coordinates())
-  double RobustScale = 0;                   // of E_reg's edges (world units; 0: least squares)
-  std::vector<double> EdgeWeight;           // per directed edge (2 per edge), decided per step
-  std::vector<Eigen::Vector3d> Arms;        // per directed edge (j, k): the reference of g_k - g_j
+  double MeanArm = 1;                        // of the template's edges (coordinates())
+  double RobustScale = 0;                    // of E_reg's edges (world units; 0: least squares)
+  std::vector<double> EdgeWeight;            // per directed edge (2 per edge), decided per step
+  std::vector<Eigen::Vector3d> Arms;         // per directed edge (j, k): the reference of g_k - g_j
   support::BlockSparseMatrix VertexModel;    // data terms' model: block diagonal
   support::BlockSparseMatrixOf<6> NodeModel; // pattern: the graph's edges
   std::vector<support::BlockSparseMatrixOf<6>::Slot> ProjectionSlots; // see project()

@@ -25,8 +25,8 @@
  */
 #pragma once
 
-#include "dp/support/BlockSparseMatrix.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "dp/support/BlockSparseMatrix.h"
 #include "dp/track/EnergyTerm.h"
 #include "dp/track/TracePreconditioner.h"
 

@@ -3,10 +3,10 @@
 
 #include "dp/geometry/MeshSurfaceSamples.h"
 
-#include "dp/support/Parallel.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
 #include "dp/geometry/SurfaceLocator.h"
+#include "dp/support/Parallel.h"
 #include "dp/track/ClothRegions.h"
 #include "dp/track/ColourTerm.h"
 #include "dp/track/CoverageTerm.h"
