@@ -1,13 +1,14 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "vtkPCACompressFilter.h"
 
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/CompressionFigures.h"
 #include "dp/compress/CompressionOptions.h"
+#include "dp/compress/DataFitCompression.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/detail/DetailCompression.h"
 #include "dp/geometry/SubdivisionMap.h"
-#include "dp/track/DataFit.h"
 #include "vtkDPOptions.h"
 #include "vtkDPPointSetAccess.h"
 

@@ -29,6 +29,7 @@
 #include "TakeMeasures.h"
 #include "TrackingTruth.h"
 
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/DepthRig.h"

@@ -3,9 +3,9 @@
 // motion of the same template, and how far each decompressed take lies from the data.
 #pragma once
 
+#include "dp/compress/DataFitCompression.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/TriangleMesh.h"
-#include "dp/track/DataFit.h"
 #include "dp/track/Tracker.h"
 
 #include <cmath>

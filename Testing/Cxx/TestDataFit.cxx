@@ -2,11 +2,11 @@
 // A take's fit to its data (measureDataFit), compression judged by it (compressAgainstData,
 // PcaErrorMeasure::RmsDeviation), and the slide along the surface (slideAlongSurface): how far it
 // moves a vertex, and where the truth is known, that it moves it toward the truth.
+#include "dp/compress/DataFitCompression.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
-#include "dp/track/DataFit.h"
 
 #include <gtest/gtest.h>
 

@@ -5,6 +5,7 @@
 // layer coded against the data keeps the fine mesh's fit within the growth asked.
 #include "FineMeshShapes.h"
 
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"

@@ -2,6 +2,7 @@
 // The memory budget (dp/io/MemoryBudget.h) and what each reader allocates for hostile and
 // honest files: every reading is measured in a process of its own (ReaderMemoryProbe), its
 // resident peak against the bound the reader states.
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/io/AnimatedMesh.h"

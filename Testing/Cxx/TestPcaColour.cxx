@@ -2,6 +2,7 @@
 // The .dpz colour stream: exact round trips through memory and a file, version-1 files (no
 // colour) still read, a corrupt or truncated colour stream and colours of the wrong count
 // refused (by the .glb writer too).
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/export/GltfExport.h"
 #include "dp/io/AnimatedMesh.h"

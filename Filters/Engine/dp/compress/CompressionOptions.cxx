@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/compress/CompressionOptions.h"
 
+#include "dp/compress/ColourStream.h"
+
 #include <sstream>
 
 namespace dp

@@ -8,14 +8,15 @@
 // allocated for it, so a corrupt or hostile file is refused with its name and the reason.
 // Worst case: the budget; below it, the model's values (16 bytes each) at the range coder's
 // densest, about 6 KiB per byte of the geometry, and zstd sections at 32 768x.
+#include "dp/compress/ColourStream.h"
 #include "dp/compress/ConnectivityCoding.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/compress/IntegerCodec.h"
 #include "dp/compress/ModelCoding.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/RangeCoder.h"
+#include "dp/io/FileText.h"
 #include "dp/io/MemoryBudget.h"
-#include "dp/support/FileText.h"
 
 #include <zlib.h>
 #include <zstd.h>
@@ -31,8 +32,12 @@
 
 namespace dp
 {
+
 using compress::BasisStride;
 using compress::ByteReader;
+using compress::checkColourCount;
+using compress::colourResiduals;
+using compress::coloursFromResiduals;
 using compress::EarlierNeighbours;
 using compress::MeanStride;
 using compress::putRaw;
@@ -88,55 +93,6 @@ void putSection(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>&
   putRaw<std::uint64_t>(out, packed.size());
   putRaw<std::uint32_t>(out, crc(packed.data(), packed.size()));
   out.insert(out.end(), packed.begin(), packed.end());
-}
-
-// The colour section's bytes before zstd: channel-major (the red of every frame and vertex, then
-// the green, then the blue), frame 0 as it is and each later frame as its difference (mod 256)
-// from the same vertex's previous frame. A vertex keeps about its colour from frame to frame, so
-// the differences are small: on a tracked take with colour zstd packs them to 63 % of what it
-// makes of the colours as they are, and the channel-major order to 5 % less than r g b per vertex.
-std::vector<std::uint8_t> colourResiduals(const std::vector<std::uint8_t>& colours,
-                                          std::size_t vertices, std::size_t frames)
-{
-  std::vector<std::uint8_t> out(colours.size());
-  const std::size_t frameBytes = 3 * vertices;
-  std::size_t o = 0;
-  for (std::size_t c = 0; c < 3; ++c)
-    for (std::size_t t = 0; t < frames; ++t)
-      for (std::size_t v = 0; v < vertices; ++v)
-      {
-        const std::size_t i = t * frameBytes + 3 * v + c;
-        out[o++] = static_cast<std::uint8_t>(colours[i] - (t > 0 ? colours[i - frameBytes] : 0));
-      }
-  return out;
-}
-
-// colourResiduals undone.
-std::vector<std::uint8_t> coloursFromResiduals(const std::vector<std::uint8_t>& residuals,
-                                               std::size_t vertices, std::size_t frames)
-{
-  std::vector<std::uint8_t> colours(residuals.size());
-  const std::size_t frameBytes = 3 * vertices;
-  std::size_t o = 0;
-  for (std::size_t c = 0; c < 3; ++c)
-    for (std::size_t t = 0; t < frames; ++t)
-      for (std::size_t v = 0; v < vertices; ++v)
-      {
-        const std::size_t i = t * frameBytes + 3 * v + c;
-        colours[i] =
-            static_cast<std::uint8_t>(residuals[o++] + (t > 0 ? colours[i - frameBytes] : 0));
-      }
-  return colours;
-}
-
-// Refuses colours of a count other than none or three bytes per vertex and frame.
-void checkColourCount(const PcaModel& m, std::size_t count)
-{
-  if (count != 0 && count != 3 * m.vertices * m.frames)
-    throw std::invalid_argument("the sequence has " + std::to_string(count) + " colour bytes; " +
-                                std::to_string(m.frames) + " frames of " +
-                                std::to_string(m.vertices) + " vertices need " +
-                                std::to_string(3 * m.vertices * m.frames) + " (r g b each)");
 }
 
 std::vector<std::uint8_t> getSection(ByteReader& in, const std::uint8_t* bytes,
@@ -578,46 +534,10 @@ std::vector<std::uint8_t> encodeCompressedSequence(const CompressedSequence& s)
   return out;
 }
 
-void holdColours(std::vector<std::uint8_t>& held, const std::vector<std::uint8_t>& colours,
-                 int tolerance)
+std::size_t compress::colourSectionBytes(const std::vector<std::uint8_t>& colours,
+                                         std::size_t vertices, std::size_t frames)
 {
-  if (held.size() != colours.size())
-  {
-    held = colours;
-    return;
-  }
-  for (std::size_t i = 0; i < colours.size(); ++i)
-    if (std::abs(static_cast<int>(colours[i]) - static_cast<int>(held[i])) > tolerance)
-      held[i] = colours[i];
-}
-
-void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours, int tolerance)
-{
-  const PcaModel& m = sequence.pca.model;
-  checkColourCount(m, colours.size());
-  if (tolerance < 0 || tolerance > MaximumColourTolerance)
-    throw std::invalid_argument("the colour tolerance must be 0 to " +
-                                std::to_string(MaximumColourTolerance) + " levels, not " +
-                                std::to_string(tolerance));
-  if (tolerance > 0 && !colours.empty())
-  {
-    const std::size_t frameBytes = 3 * m.vertices;
-    std::vector<std::uint8_t> held;
-    for (std::size_t t = 0; t < m.frames; ++t)
-    {
-      const auto frame = colours.begin() + static_cast<std::ptrdiff_t>(t * frameBytes);
-      holdColours(held, std::vector<std::uint8_t>(frame, frame + frameBytes), tolerance);
-      std::copy(held.begin(), held.end(), frame);
-    }
-  }
-  sequence.colours = std::move(colours);
-  sequence.report.colourTolerance = sequence.colours.empty() ? 0 : tolerance;
-  sequence.report.colourBytes =
-      sequence.colours.empty()
-          ? 0
-          : SectionHeaderBytes +
-                compress::zstdCompress(colourResiduals(sequence.colours, m.vertices, m.frames))
-                    .size();
+  return SectionHeaderBytes + zstdCompress(colourResiduals(colours, vertices, frames)).size();
 }
 
 CompressedSequence decodeCompressedSequence(const std::uint8_t* bytes, std::size_t size,

@@ -87,9 +87,6 @@ struct PcaOptions
   bool quantise = true;       // false: the paper's float PCA (no quantisation, no coding)
 };
 
-/** The colour tolerances setColours takes, in levels of 255. */
-constexpr int MaximumColourTolerance = 64;
-
 /** A decomposed sequence: frame(t) = mean + basis x weights, in either layout. */
 struct PcaModel
 {
@@ -159,26 +156,6 @@ struct CompressedSequence
   DetailLayer detail;
   PcaReport report;
 };
-
-/**
- * Gives `sequence` its colours (frames x vertices x 3 bytes, as CompressedSequence::colours) and
- * sets report.colourBytes to what they take in the file, so a caller can say it before writing.
- * With a `tolerance` over 0 the colours are first made cheaper to store: each channel of each
- * vertex keeps its value from frame to frame while the given colour stays within `tolerance`
- * levels of it, and takes the given value when it departs further. Every stored byte is then
- * within `tolerance` of the given one; the tracked colour's frame-to-frame noise (a vertex's
- * colour is read anew from each frame's points) mostly becomes repeats, which the stream's
- * differences from the previous frame store as zeros, and the colour stops flickering. A real
- * change of colour (a shadow, a turn of the material to the light) still passes, in one step.
- * Throws std::invalid_argument when the count is not frames * vertices * 3 or the tolerance is
- * outside [0, MaximumColourTolerance].
- */
-void setColours(CompressedSequence& sequence, std::vector<std::uint8_t> colours, int tolerance = 0);
-
-/** One frame of setColours' hold: `held`, the colours stored for the frame before (empty, or
- *  another size, for the first frame), becomes the colours stored for this frame's `colours`. */
-void holdColours(std::vector<std::uint8_t>& held, const std::vector<std::uint8_t>& colours,
-                 int tolerance);
 
 /**
  * Decomposes and compresses `frames` x 3`vertices` positions (frame-major: frame t starts at

@@ -28,9 +28,9 @@
  */
 #pragma once
 
+#include "dp/compress/DataFitCompression.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/SubdivisionMap.h"
-#include "dp/track/DataFit.h"
 
 #include <functional>
 #include <vector>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/detail/DetailLevels.h"
 
+#include "dp/geometry/DataFit.h"
 #include "dp/geometry/TriangleMesh.h"
-#include "dp/track/DataFit.h"
 
 #include <algorithm>
 #include <cmath>

@@ -16,7 +16,7 @@
 #pragma once
 
 #include "dp/detail/DisplacementFit.h"
-#include "dp/track/FrameSamples.h"
+#include "dp/geometry/FrameSamples.h"
 
 #include <cstdint>
 #include <string>

@@ -2,7 +2,7 @@
 #include "dp/export/GltfExport.h"
 #include "dp/compress/DetailCoding.h"
 #include "dp/geometry/SubdivisionMap.h"
-#include "dp/support/FileText.h"
+#include "dp/io/FileText.h"
 
 #include <meshoptimizer.h>
 #include <nlohmann/json.hpp>

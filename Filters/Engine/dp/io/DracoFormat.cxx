@@ -12,9 +12,9 @@
 // Written: positions quantised to 14 bits of the bounding box (at most 2^-15 of its largest side
 // off), normals to 10 bits, colours losslessly; triangles (edgebreaker) where the cloud has faces
 // that are all triangles, else the points alone (kd-tree).
+#include "dp/io/FileText.h"
 #include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <draco/compression/decode.h>
 #include <draco/compression/encode.h>

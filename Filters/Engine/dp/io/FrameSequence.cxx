@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/io/FrameSequence.h"
 
+#include "dp/io/FileText.h"
 #include "dp/io/PointCloud.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <nlohmann/json.hpp>
 

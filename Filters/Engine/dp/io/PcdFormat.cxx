@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PCD reader and writer (the Point Cloud Library's format, v0.7: ascii, binary,
 // binary_compressed).
+#include "dp/io/FileText.h"
 #include "dp/io/MemoryBudget.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <cmath>
 #include <cstring>

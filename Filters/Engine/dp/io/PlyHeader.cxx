@@ -2,8 +2,8 @@
 // The PLY header's parser: the keyword lines up to end_header (see PlyHeader.h).
 #include "dp/io/PlyHeader.h"
 
+#include "dp/io/FileText.h"
 #include "dp/io/PointCloud.h"
-#include "dp/support/FileText.h"
 
 #include <functional>
 #include <optional>

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY reader (Turk's format: ASCII, binary little and big endian): the body the header
 // (PlyHeader.cxx) describes, its vertices and faces into a PointCloud.
+#include "dp/io/FileText.h"
 #include "dp/io/PlyHeader.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // PLY writer: float32 vertices (+ normals, colours, attributes) and int32 faces, in ASCII or
 // binary of either byte order.
+#include "dp/io/FileText.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <algorithm>
 #include <charconv>

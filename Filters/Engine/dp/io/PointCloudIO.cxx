@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 #include "dp/io/PointCloudIO.h"
 
-#include "dp/support/FileText.h"
+#include "dp/io/FileText.h"
 
 #include <cerrno>
 #include <cstdio>

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // Plain-text point formats (XYZ, PTS, CSV, TXT) and Wavefront OBJ.
+#include "dp/io/FileText.h"
 #include "dp/io/PointCloudIO.h"
-#include "dp/support/FileText.h"
 
 #include <algorithm>
 #include <cmath>

@@ -37,10 +37,10 @@
  */
 #pragma once
 
+#include "dp/geometry/FrameSamples.h"
 #include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/EnergyTerm.h"
-#include "dp/track/FrameSamples.h"
 #include "dp/track/TrackerOptions.h"
 
 #include <cstdint>

@@ -29,9 +29,9 @@
 #pragma once
 
 #include "dp/field/DistanceField.h"
+#include "dp/geometry/FrameSamples.h"
 #include "dp/geometry/NormalEstimation.h"
 #include "dp/geometry/SurfaceNoise.h"
-#include "dp/track/FrameSamples.h"
 
 #include <atomic>
 #include <cstdint>

@@ -49,9 +49,9 @@
  */
 #pragma once
 
+#include "dp/geometry/FrameSamples.h"
 #include "dp/geometry/TriangleMesh.h"
 #include "dp/track/ClothEnergy.h"
-#include "dp/track/FrameSamples.h"
 #include "dp/track/TrackerOptions.h"
 
 #include <cstdint>

@@ -1,13 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 /**
- * @file DataFit.h
- * @brief How well a tracked take fits its data, and compression judged by it.
- *
- * measureDataFit(): the RMS distance from each frame's samples (the well-spread subsample the
- * tracker kept, FrameResult::samples) to that frame's mesh surface, over every frame. Samples
- * farther than `reach` from the mesh are counted apart (data the mesh does not explain: parts
- * the template lacks, outliers) and left out of the RMS, so that a few of them do not hide the
- * fit of the rest. Holes in the data cost nothing: the measure runs from the points to the mesh.
+ * @file DataFitCompression.h
+ * @brief Compression judged by a take's fit to its data (DataFit.h).
  *
  * compressAgainstData(): compression whose error target is the data's, not a share of the
  * motion's size: the decompressed take's distance to the samples may grow by at most `growth`
@@ -33,29 +27,13 @@
 #pragma once
 
 #include "dp/compress/PcaCompression.h"
-#include "dp/geometry/TriangleMesh.h"
-#include "dp/track/FrameSamples.h"
+#include "dp/geometry/DataFit.h"
 
 #include <functional>
 #include <vector>
 
 namespace dp
 {
-
-struct DataFit
-{
-  double rms = 0;              // of the samples within reach (world units)
-  std::size_t samples = 0;     // within reach
-  std::size_t beyondReach = 0; // farther (not in the RMS)
-};
-
-/** The fit of a take: frame t's mesh is `positions` + 3 nv t (frame-major, nv = the mesh's
- *  vertices), its samples samples[t] (null or empty: a frame without data). Only the samples
- *  that `within` marks (one flag per frame's sample, in order; empty: all within `reach`)
- *  count. */
-DataFit measureDataFit(const TriangleMesh& mesh, const double* positions,
-                       const std::vector<const FrameSamples*>& samples, double reach,
-                       std::vector<std::vector<bool>>* within = nullptr);
 
 struct DataFitCompression
 {
