@@ -318,13 +318,22 @@ TEST(DracoFormat, CountsBeyondTheFileOrTheMemoryBudgetAreRefusedBeforeDecoding)
   dp::test::writeText(path, finding);
   expectFileError([&] { dp::readPointCloud(path); }, path, "more than any coding holds");
   // A kd-tree point cloud of bitstream 2.2 declaring 10 points in its header and 503 971 840 in
-  // its attribute data, which Draco sizes the attribute by (a fuzzer's finding: 6 GB asked for).
+  // its attribute data, which Draco sizes the attribute by (a fuzzer's finding: 6 GB asked for):
+  // Draco's encoder writes the same count twice.
   const std::string oldKdTree =
       std::string("DRACO") + '\x02' + '\x02' + '\x00' + '\x01' + std::string(2, '\0') +
       std::string("\x0a\x00\x00\x00", 4) + '\x01' + '\x01' + std::string("\x00\x09\x03\x00", 4) +
       '\x00' + '\x00' + '\x00' + std::string("\x00\x00\x0a\x1e", 4) + std::string(16, '\x01');
   dp::test::writeText(path, oldKdTree);
-  expectFileError([&] { dp::readPointCloud(path); }, path, "declares 503971840 points");
+  expectFileError([&] { dp::readPointCloud(path); }, path,
+                  "its two point counts differ (10 and 503971840)");
+  // The same stream whose second count is 0 (a fuzzer's finding: Draco then read the 10 points'
+  // positions from an attribute of none, undefined behaviour inside Draco).
+  std::string noneAgain = oldKdTree;
+  std::fill(noneAgain.begin() + 24, noneAgain.begin() + 28, '\0');
+  dp::test::writeText(path, noneAgain);
+  expectFileError([&] { dp::readPointCloud(path); }, path,
+                  "its two point counts differ (10 and 0)");
   // An honest file over the budget: refused by its counts, before the library decodes it.
   dp::writePointCloud(path, colouredTube(3));
   ::setenv("DP_MEMORY_BUDGET", "64K", 1);

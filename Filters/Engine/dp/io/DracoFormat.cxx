@@ -85,8 +85,9 @@ struct CountReader
 
 // A kd-tree point cloud before bitstream 2.3 declares its points a second time, inside its
 // attribute data, and Draco sizes the attributes by that count: it is read here, past the
-// attribute descriptors. Draco's kd-tree encoder writes one attribute decoder; a stream with more
-// would have the later ones' counts behind the first's data, so it is refused.
+// attribute descriptors, and must be the header's. Draco's kd-tree encoder writes one attribute
+// decoder; a stream with more would have the later ones' counts behind the first's data, so it is
+// refused.
 double oldKdTreePoints(CountReader& in)
 {
   const auto decoders = in.raw<std::uint8_t>();
@@ -115,7 +116,14 @@ DracoCounts pointCloudCounts(CountReader& in, std::uint8_t method)
   DracoCounts counts;
   counts.points = declared < 0 ? 0 : declared;
   if (method == draco::POINT_CLOUD_KD_TREE_ENCODING && in.version < 2 * 256 + 3)
-    counts.points = std::max(counts.points, oldKdTreePoints(in));
+  {
+    // Draco's encoder writes the same count twice; Draco decodes the attributes by the second.
+    const double again = oldKdTreePoints(in);
+    if (again != counts.points)
+      refuse(in.path, "its two point counts differ (" +
+                          std::to_string(static_cast<std::uint64_t>(counts.points)) + " and " +
+                          std::to_string(static_cast<std::uint64_t>(again)) + ")");
+  }
   return counts;
 }
 
@@ -194,13 +202,32 @@ bool numeric(const draco::PointAttribute& attribute)
   return type != draco::DT_BOOL && type != draco::DT_INVALID && type < draco::DT_TYPES_COUNT;
 }
 
+// Whether every point's value lies inside the attribute's decoded values (a corrupt stream can
+// leave an attribute with fewer values than points).
+bool holdsEveryPoint(const draco::PointAttribute& attribute, std::size_t points)
+{
+  if (points > 0 && (attribute.size() == 0 || attribute.buffer() == nullptr))
+    return false;
+  for (std::size_t i = 0; i < points; ++i)
+    if (attribute.mapped_index(draco::PointIndex(static_cast<std::uint32_t>(i))).value() >=
+        attribute.size())
+      return false;
+  return true;
+}
+
+// An attribute that can be read for every point: present, numeric, holding every point.
+bool readable(const draco::PointAttribute* attribute, std::size_t points)
+{
+  return attribute && numeric(*attribute) && holdsEveryPoint(*attribute, points);
+}
+
 void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
 {
   const std::size_t n = source.num_points();
   const draco::PointAttribute* position =
       source.GetNamedAttribute(draco::GeometryAttribute::POSITION);
-  if (!position || position->num_components() < 3 || !numeric(*position))
-    throw std::runtime_error("it has no positions of 3 numbers");
+  if (!readable(position, n) || position->num_components() < 3)
+    throw std::runtime_error("it has no positions of 3 numbers for each of its points");
   cloud.points.resize(3 * n);
   float value[4] = {0, 0, 0, 0};
   for (std::size_t i = 0; i < n; ++i)
@@ -209,7 +236,7 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
     std::copy(value, value + 3, cloud.points.begin() + 3 * i);
   }
   const draco::PointAttribute* normal = source.GetNamedAttribute(draco::GeometryAttribute::NORMAL);
-  if (normal && normal->num_components() == 3 && numeric(*normal))
+  if (readable(normal, n) && normal->num_components() == 3)
   {
     cloud.normals.resize(3 * n);
     for (std::size_t i = 0; i < n; ++i)
@@ -217,8 +244,7 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
                                   cloud.normals.data() + 3 * i);
   }
   const draco::PointAttribute* colour = source.GetNamedAttribute(draco::GeometryAttribute::COLOR);
-  if (colour && (colour->num_components() == 3 || colour->num_components() == 4) &&
-      numeric(*colour))
+  if (readable(colour, n) && (colour->num_components() == 3 || colour->num_components() == 4))
   {
     const int channels = colour->num_components();
     cloud.colorComponents = channels;
