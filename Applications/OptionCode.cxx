@@ -6,11 +6,10 @@
 // and `check` (the test suite runs it) lists the regions out of date, exit 1.
 #include "dp/io/OptionCode.h"
 #include "dp/compress/CompressionOptions.h"
+#include "dp/io/FileText.h"
 #include "dp/track/TrackerOptionTable.h"
 
-#include <fstream>
 #include <iostream>
-#include <sstream>
 #include <stdexcept>
 
 namespace
@@ -44,16 +43,6 @@ std::string generated(const std::string& path, const dp::OptionRegion& region)
   return dp::option_forms::describeMarkdown(table.specs, table.defaults);
 }
 
-std::string readText(const std::string& path)
-{
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw std::runtime_error(path + ": cannot be read");
-  std::ostringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 } // namespace
 
 int main(int argc, char** argv)
@@ -70,14 +59,14 @@ int main(int argc, char** argv)
     for (const char* file : RegionFiles)
     {
       const std::string path = std::string(argv[2]) + "/" + file;
-      const std::string before = readText(path);
+      const std::string before = dp::support::readWholeFile(path);
       const std::string after = dp::rewriteOptionRegions(
           before, path, [&](const dp::OptionRegion& r) { return generated(path, r); });
       if (after == before)
         continue;
       ++stale;
       if (mode == "write")
-        std::ofstream(path, std::ios::binary) << after;
+        dp::support::writeWholeFile(path, after);
       std::cout << path << (mode == "write" ? ": rewritten\n" : ": out of date with the tables\n");
     }
     if (mode == "check" && stale > 0)

@@ -2,25 +2,43 @@
 #include "dp/compress/ColourStream.h"
 
 #include <cstdlib>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
 namespace dp
 {
 
-std::vector<std::uint8_t> compress::colourResiduals(const std::vector<std::uint8_t>& colours,
-                                                    std::size_t vertices, std::size_t frames)
+namespace
 {
-  std::vector<std::uint8_t> out(colours.size());
+
+// Visits the colour bytes in the stream's channel-major order: `visit(o, i, before)` with o the
+// stream's position, i the byte's in the frame-major colours and `before` the same vertex and
+// channel's byte in the frame before (none in frame 0).
+template <typename Visit>
+void channelMajor(std::size_t vertices, std::size_t frames, Visit visit)
+{
   const std::size_t frameBytes = 3 * vertices;
   std::size_t o = 0;
   for (std::size_t c = 0; c < 3; ++c)
     for (std::size_t t = 0; t < frames; ++t)
-      for (std::size_t v = 0; v < vertices; ++v)
+      for (std::size_t v = 0; v < vertices; ++v, ++o)
       {
         const std::size_t i = t * frameBytes + 3 * v + c;
-        out[o++] = static_cast<std::uint8_t>(colours[i] - (t > 0 ? colours[i - frameBytes] : 0));
+        visit(o, i, t > 0 ? std::optional<std::size_t>(i - frameBytes) : std::nullopt);
       }
+}
+
+} // namespace
+
+std::vector<std::uint8_t> compress::colourResiduals(const std::vector<std::uint8_t>& colours,
+                                                    std::size_t vertices, std::size_t frames)
+{
+  std::vector<std::uint8_t> out(colours.size());
+  channelMajor(vertices, frames,
+               [&](std::size_t o, std::size_t i, std::optional<std::size_t> before) {
+                 out[o] = static_cast<std::uint8_t>(colours[i] - (before ? colours[*before] : 0));
+               });
   return out;
 }
 
@@ -28,16 +46,11 @@ std::vector<std::uint8_t> compress::coloursFromResiduals(const std::vector<std::
                                                          std::size_t vertices, std::size_t frames)
 {
   std::vector<std::uint8_t> colours(residuals.size());
-  const std::size_t frameBytes = 3 * vertices;
-  std::size_t o = 0;
-  for (std::size_t c = 0; c < 3; ++c)
-    for (std::size_t t = 0; t < frames; ++t)
-      for (std::size_t v = 0; v < vertices; ++v)
-      {
-        const std::size_t i = t * frameBytes + 3 * v + c;
-        colours[i] =
-            static_cast<std::uint8_t>(residuals[o++] + (t > 0 ? colours[i - frameBytes] : 0));
-      }
+  channelMajor(vertices, frames,
+               [&](std::size_t o, std::size_t i, std::optional<std::size_t> before) {
+                 colours[i] =
+                     static_cast<std::uint8_t>(residuals[o] + (before ? colours[*before] : 0));
+               });
   return colours;
 }
 
