@@ -13,13 +13,14 @@ namespace
 
 using Row = OptionDescription<CompressionOptions>;
 using Rows = OptionRows<CompressionOptions>;
-using P = OptionPanel;
+using Panel = OptionPanel;
 
-std::vector<Row> targetRows()
+// The error target's measure and its targets on the motion (measure kg and max-vertex).
+std::vector<Row> motionTargetRows()
 {
   return {
       Rows::choice(
-          "compression.measure", "ErrorMeasure", P::Shown, {"kg", "max-vertex", "data"},
+          "compression.measure", "ErrorMeasure", Panel::Shown, {"kg", "max-vertex", "data"},
           "what the error target measures: the Karni-Gotsman error of the motion, the largest "
           "vertex error, or the distance to the data the mesh was tracked to (the input must "
           "carry it: the track filter's output)",
@@ -33,7 +34,7 @@ std::vector<Row> targetRows()
                     "points may grow: a target of the data's, not the motion's (10 suits noisy "
                     "captures; the main job's default)."),
       Rows::real(
-          "compression.kgTarget", "KGTarget", P::Shown, MinimumKarniGotsmanTarget,
+          "compression.kgTarget", "KGTarget", Panel::Shown, MinimumKarniGotsmanTarget,
           MaximumKarniGotsmanTarget, "percent",
           "measure kg: the largest Karni-Gotsman error, the norm of the positions' error over "
           "that of their motion about each frame's centroid",
@@ -44,15 +45,23 @@ std::vector<Row> targetRows()
                     "reconstruction.")
           .shownWith("ErrorMeasure=0"),
       Rows::real(
-          "compression.maxVertexTarget", "MaxVertexTarget", P::Shown, 1e-7, 0.5, "of the diagonal",
+          "compression.maxVertexTarget", "MaxVertexTarget", Panel::Shown, 1e-7, 0.5,
+          "of the diagonal",
           "measure max-vertex: the largest distance of a vertex from its place, over the "
           "sequence's bounding-box diagonal",
           [](auto& o) -> auto& { return o.maxVertexTarget; })
           .withHelp("Error Measure max vertex: the largest distance of a vertex from its place, as "
                     "a fraction of the sequence's bounding-box diagonal (e.g. 0.002).")
           .shownWith("ErrorMeasure=1"),
+  };
+}
+
+// The error target on the data (measure data).
+std::vector<Row> dataTargetRows()
+{
+  return {
       Rows::real(
-          "compression.fitGrowth", "FitGrowth", P::Shown, MinimumFitGrowth, MaximumFitGrowth,
+          "compression.fitGrowth", "FitGrowth", Panel::Shown, MinimumFitGrowth, MaximumFitGrowth,
           "percent",
           "measure data: how much the decompressed mesh's RMS distance to the data may grow over "
           "the tracked mesh's (10 suits noisy captures)",
@@ -62,7 +71,7 @@ std::vector<Row> targetRows()
                     " suits noisy captures; the main job's default).")
           .shownWith("ErrorMeasure=2"),
       Rows::flag(
-          "compression.slide", "SlideAlongSurface", P::Advanced,
+          "compression.slide", "SlideAlongSurface", Panel::Advanced,
           "measure data: also code the take with each vertex slid along its surface toward a "
           "model of fewer components (the tracker's sliding, which the data do not see, costs "
           "bits), and keep the fewer bits that keep the fit",
@@ -79,7 +88,7 @@ std::vector<Row> codingRows()
 {
   return {
       Rows::choice(
-          "compression.layout", "Layout", P::Shown, {"trajectories", "shapes", "automatic"},
+          "compression.layout", "Layout", Panel::Shown, {"trajectories", "shapes", "automatic"},
           "the components: vertex trajectories with per-vertex weights (the paper), shapes with "
           "per-frame weights (morph targets), or both coded and the one of fewer bits kept",
           [](auto& o) -> auto& { return o.layout; })
@@ -91,21 +100,22 @@ std::vector<Row> codingRows()
                     "hold). Automatic: both are coded and the one of fewer bits kept (field data "
                     "Layout: 0 trajectories, 1 shapes)."),
       Rows::integer(
-          "compression.components", "NumberOfComponents", P::Advanced, 0, 1e6,
+          "compression.components", "NumberOfComponents", Panel::Advanced, 0, 1e6,
           "principal components kept, the target then setting only the quantisation; 0: the "
           "fewest bytes that meet the target",
           [](auto& o) -> auto& { return o.components; })
           .withHelp("0: as few bytes as meet the error target. Otherwise this many components, the "
                     "target then only setting the quantisation."),
       Rows::flag(
-          "compression.quantise", "Quantize", P::Advanced,
+          "compression.quantise", "Quantize", Panel::Advanced,
           "quantise, predict and range-code the components; off: the paper's float PCA, to "
           "study it (the writers always quantise)",
           [](auto& o) -> auto& { return o.quantise; })
           .withHelp("Quantise, predict and entropy-code the components (default). Off: the paper's "
                     "float PCA, to study it (the writers always quantise)."),
       Rows::integer(
-          "compression.colourTolerance", "ColourTolerance", P::Advanced, 0, MaximumColourTolerance,
+          "compression.colourTolerance", "ColourTolerance", Panel::Advanced, 0,
+          MaximumColourTolerance,
           "where the input carries colour: the levels (of 255) a stored colour may differ from "
           "the given one; more holds each vertex's colour while it stays within them (no "
           "flicker, a smaller colour stream); 0: lossless",
@@ -120,7 +130,9 @@ std::vector<Row> codingRows()
 
 std::vector<Row> makeTable()
 {
-  std::vector<Row> rows = targetRows();
+  std::vector<Row> rows = motionTargetRows();
+  for (Row& row : dataTargetRows())
+    rows.push_back(std::move(row));
   for (Row& row : codingRows())
     rows.push_back(std::move(row));
   return rows;

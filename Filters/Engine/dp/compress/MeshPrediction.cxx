@@ -59,6 +59,8 @@ namespace
 {
 
 using Graph = std::vector<std::vector<std::size_t>>;
+// A level of the decimation: its vertices, each with its ring at removal.
+using RemovedLevel = std::vector<std::pair<std::size_t, std::vector<std::size_t>>>;
 
 // The edge graph, each vertex's neighbours in index order.
 Graph edgeGraph(const std::vector<std::int64_t>& triangles, std::size_t vertices)
@@ -87,8 +89,7 @@ Graph edgeGraph(const std::vector<std::int64_t>& triangles, std::size_t vertices
 // neighbours first, then by index; none with more than RowPredictor::MaximumNeighbours), each
 // taken out of the graph with its ring joined up, so the next level's graph still links what it
 // linked. Returns the set, each vertex with its ring at removal.
-std::vector<std::pair<std::size_t, std::vector<std::size_t>>>
-removeIndependentSet(Graph& g, std::vector<char>& alive)
+RemovedLevel removeIndependentSet(Graph& g, std::vector<char>& alive)
 {
   std::vector<std::size_t> candidates;
   for (std::size_t v = 0; v < g.size(); ++v)
@@ -97,7 +98,7 @@ removeIndependentSet(Graph& g, std::vector<char>& alive)
   std::stable_sort(candidates.begin(), candidates.end(),
                    [&](std::size_t a, std::size_t b) { return g[a].size() < g[b].size(); });
   std::vector<char> blocked(g.size(), 0);
-  std::vector<std::pair<std::size_t, std::vector<std::size_t>>> removed;
+  RemovedLevel removed;
   for (std::size_t v : candidates)
     if (!blocked[v])
     {
@@ -124,15 +125,13 @@ removeIndependentSet(Graph& g, std::vector<char>& alive)
   return removed;
 }
 
-} // namespace
-
-VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std::size_t vertices)
+// The decimation's levels, finest first: independent sets taken out of `g` until there are
+// MaximumLevels, no more than MinimumBase vertices are left, or none can be taken.
+std::vector<RemovedLevel> decimate(Graph& g, std::vector<char>& alive, std::size_t vertices)
 {
-  Graph g = edgeGraph(triangles, vertices);
-  std::vector<char> alive(vertices, 1);
-  std::vector<std::vector<std::pair<std::size_t, std::vector<std::size_t>>>> levels;
+  std::vector<RemovedLevel> levels;
   std::size_t left = vertices;
-  while (levels.size() < MaximumLevels && left > MinimumBase)
+  while (levels.size() < VertexTraversal::MaximumLevels && left > VertexTraversal::MinimumBase)
   {
     levels.push_back(removeIndependentSet(g, alive));
     if (levels.back().empty())
@@ -142,12 +141,18 @@ VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std
     }
     left -= levels.back().size();
   }
-  // The base: what is left, breadth first over the last level's graph, each vertex predicted
-  // from its neighbours met before it.
+  return levels;
+}
+
+// The base into `t`: what is left alive, breadth first over the last level's graph, each vertex
+// predicted from its neighbours met before it.
+void traverseBase(const Graph& g, const std::vector<char>& alive, VertexTraversal& t)
+{
+  const std::size_t vertices = g.size();
   std::vector<std::size_t> rank(vertices, vertices); // vertices: not met yet
   std::vector<char> queued(vertices, 0);
   std::deque<std::size_t> queue;
-  start.assign(1, 0);
+  t.start.assign(1, 0);
   for (std::size_t seed = 0; seed < vertices; ++seed)
   {
     if (!alive[seed] || queued[seed])
@@ -158,12 +163,12 @@ VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std
     {
       const std::size_t v = queue.front();
       queue.pop_front();
-      rank[v] = order.size();
-      order.push_back(v);
+      rank[v] = t.order.size();
+      t.order.push_back(v);
       for (std::size_t n : g[v])
         if (rank[n] < rank[v])
-          earlier.push_back(n);
-      start.push_back(earlier.size());
+          t.earlier.push_back(n);
+      t.start.push_back(t.earlier.size());
       for (std::size_t n : g[v])
         if (!queued[n])
         {
@@ -172,6 +177,16 @@ VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std
         }
     }
   }
+}
+
+} // namespace
+
+VertexTraversal::VertexTraversal(const std::vector<std::int64_t>& triangles, std::size_t vertices)
+{
+  Graph g = edgeGraph(triangles, vertices);
+  std::vector<char> alive(vertices, 1);
+  const std::vector<RemovedLevel> levels = decimate(g, alive, vertices);
+  traverseBase(g, alive, *this);
   base = order.size();
   // Then the levels, coarsest first: each vertex predicted from its whole ring.
   for (auto level = levels.rbegin(); level != levels.rend(); ++level)

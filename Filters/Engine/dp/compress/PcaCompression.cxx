@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // compressSequence: the bit-rate search over the parts in dp/compress/ (the decomposition, the
-// quantiser, the integer codec); the .dpz file is in dp/compress/DpzFormat.cxx.
+// quantiser, the integer codec); the .dpz file is in dp/compress/DpzFormat.h.
 #include "dp/compress/PcaCompression.h"
 #include "dp/compress/Decomposition.h"
 #include "dp/compress/IntegerCodec.h"
@@ -69,6 +69,41 @@ PcaOptions asSearched(const PcaOptions& options, const Eigen::Map<const MatrixXd
   const double samples = static_cast<double>(A.size() / 3);
   o.target = spread > 0 ? std::min(99.9, 100 * options.target * std::sqrt(samples) / spread) : 99.9;
   return o;
+}
+
+// The largest step `passes` (step, trial model) accepts, as far as found: from `step` halved
+// until one passes (or doubled while twice the passing one passes), then bisected geometrically
+// between the passing and the failing step.
+template <typename Passes>
+double largestPassingStep(double step, const Passes& passes)
+{
+  double good = 0, bad = 0;
+  QuantisedPca trial;
+  for (int i = 0; i < 40 && good == 0; ++i, step *= 0.5)
+    if (passes(step, trial))
+      good = step;
+    else
+      bad = step;
+  if (good == 0)
+    throw std::runtime_error("cannot meet the error target by quantisation");
+  if (bad == 0)
+  {
+    bad = good * 2;
+    for (int i = 0; i < 10 && passes(bad, trial); ++i)
+    {
+      good = bad;
+      bad *= 2;
+    }
+  }
+  for (int i = 0; i < 6; ++i)
+  {
+    const double middle = std::sqrt(good * bad);
+    if (passes(middle, trial))
+      good = middle;
+    else
+      bad = middle;
+  }
+  return good;
 }
 
 /** One candidate component count, coded. */
@@ -224,32 +259,7 @@ private:
       const double e2 = compress::estimatedError2(basis, weights, D.mean, result.model, residual2);
       return 100 * std::sqrt(std::max(0.0, e2)) / SpreadNorm <= goal;
     };
-    double good = 0, bad = 0, step = budget(goal, truncation, count);
-    QuantisedPca trial;
-    for (int i = 0; i < 40 && good == 0; ++i, step *= 0.5)
-      if (passes(step, trial))
-        good = step;
-      else
-        bad = step;
-    if (good == 0)
-      throw std::runtime_error("cannot meet the error target by quantisation");
-    if (bad == 0)
-    {
-      bad = good * 2;
-      for (int i = 0; i < 10 && passes(bad, trial); ++i)
-      {
-        good = bad;
-        bad *= 2;
-      }
-    }
-    for (int i = 0; i < 6; ++i)
-    {
-      const double middle = std::sqrt(good * bad);
-      if (passes(middle, trial))
-        good = middle;
-      else
-        bad = middle;
-    }
+    double good = largestPassingStep(budget(goal, truncation, count), passes);
     QuantisedPca q;
     bool met = false;
     for (int i = 0; i < 60 && !(met = passesActually(good, q)); ++i)

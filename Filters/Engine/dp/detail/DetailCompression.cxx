@@ -88,6 +88,138 @@ void checkFrames(const FittedDetail& d, const CompressedSequence& s)
                                 " of " + std::to_string(s.pca.model.vertices));
 }
 
+// Throws std::runtime_error("aborted") where `progress` asks to stop at `fraction` done.
+void reportProgress(const std::function<bool(double)>& progress, double fraction)
+{
+  if (progress && !progress(fraction))
+    throw std::runtime_error("aborted");
+}
+
+// Refuses a growth that is not a positive number and samples of another frame count.
+void checkSearch(const FittedDetail& detail, const std::vector<const FrameSamples*>& samples,
+                 double growth)
+{
+  if (!(growth > 0) || !std::isfinite(growth))
+    throw std::invalid_argument("the allowed growth of the distance to the data (" +
+                                std::to_string(growth) + ") must be > 0");
+  if (samples.size() != detail.frames)
+    throw std::invalid_argument("samples for " + std::to_string(samples.size()) +
+                                " frames; the detail layer has " + std::to_string(detail.frames));
+}
+
+/**
+ * The fits to a take's samples that the step search measures: the fitted fine mesh's, and the
+ * decoded base's subdivided and displaced by given values; on every stride-th frame. The samples
+ * within reach are those of the first fit measured, for every fit after it.
+ */
+class FineFits
+{
+public:
+  FineFits(const CompressedSequence& sequence, const FittedDetail& detail, const TriangleMesh& mesh,
+           const std::vector<const FrameSamples*>& samples, double reach)
+      : Sequence(sequence), Detail(detail), Mesh(mesh), Samples(samples), Reach(reach),
+        Base(3 * detail.map.baseVertices()), Smooth(3 * detail.map.fineVertices()),
+        Normals(3 * detail.map.fineVertices())
+  {
+  }
+
+  const FittedDetail& detail() const { return Detail; }
+
+  // The fitted fine meshes' fit.
+  DataFit fitted(std::size_t stride)
+  {
+    return fineFit(
+        Detail, Mesh, Samples, Reach, Within,
+        [&](std::size_t t, std::vector<double>& x) { fittedFrame(Detail, t, x, Scratch); }, stride);
+  }
+
+  // The decoded fine meshes' fit for displacements `values` (per fine vertex and frame).
+  DataFit decoded(const std::vector<double>& values, std::size_t stride)
+  {
+    const SubdivisionMap& map = Detail.map;
+    const std::size_t n = map.fineVertices();
+    return fineFit(
+        Detail, Mesh, Samples, Reach, Within,
+        [&](std::size_t t, std::vector<double>& x)
+        {
+          Sequence.pca.model.frame(t, Base.data());
+          map.subdivide(Base.data(), Smooth.data(), Normals.data());
+          x.resize(3 * n);
+          displaceAlongNormals(Smooth.data(), Normals.data(), &values[n * t], n, x.data());
+        },
+        stride);
+  }
+
+private:
+  const CompressedSequence& Sequence;
+  const FittedDetail& Detail;
+  const TriangleMesh& Mesh;
+  const std::vector<const FrameSamples*>& Samples;
+  double Reach;
+  std::vector<std::vector<bool>> Within;
+  std::vector<double> Scratch, Base, Smooth, Normals;
+};
+
+// The search's rounds on every stride-th frame: each step from the deviation the allowed growth
+// over `searched` (the fitted mesh's fit on those frames) leaves, over the cost of a step measured
+// the round before. Returns the largest step that kept the fit, else the closest one found, else
+// (a take without samples) a thousandth of the reach; counts the rounds in `out`.
+double searchStep(FineFits& fits, const std::vector<double>& carried, const DataFit& searched,
+                  std::size_t stride, double growth, double reach,
+                  const std::function<bool(double)>& progress, DetailCompression& out)
+{
+  const FittedDetail& detail = fits.detail();
+  const double f2 = searched.rms * searched.rms;
+  const double allowed = (1 + growth) * searched.rms;
+  double c = 1, best = 0, closest = HUGE_VAL, closestStep = 0;
+  for (int round = 0; round < MaxRounds && searched.samples > 0; ++round)
+  {
+    const double deviation2 = (allowed * allowed - f2) / c * (round == 0 ? 1.0 : Margin * Margin);
+    const double step = std::sqrt(12 * deviation2);
+    const DataFit fit =
+        fits.decoded(quantiseDetail(detail.map, carried.data(), detail.frames, step), stride);
+    ++out.rounds;
+    reportProgress(progress, 0.2 + 0.7 * (round + 1) / MaxRounds);
+    if (fit.rms <= allowed && step > best)
+    {
+      best = step;
+      out.decompressed = fit;
+    }
+    if (fit.rms < closest)
+    {
+      closest = fit.rms;
+      closestStep = step;
+    }
+    if (fit.rms <= allowed && fit.rms >= (1 - Close) * allowed)
+      break;
+    const double measured = fit.rms * fit.rms - f2;
+    c = measured > 0 ? measured / (step * step / 12) : c / 4;
+  }
+  // No step kept the fit (the carrying over alone grew it): the closest one found, or for a take
+  // without samples a step of a thousandth of the reach.
+  if (best == 0)
+    best = closestStep > 0 ? closestStep : 1e-3 * reach;
+  return best;
+}
+
+// The step checked on every frame; where the frames the search measured were kinder than the
+// take, it is made smaller until the take keeps the fit. Sets out.decompressed.
+double checkedOnEveryFrame(FineFits& fits, const std::vector<double>& carried, double step,
+                           double growth, DetailCompression& out)
+{
+  const FittedDetail& detail = fits.detail();
+  for (int check = 0;; ++check)
+  {
+    const std::vector<double> decoded =
+        quantiseDetail(detail.map, carried.data(), detail.frames, step);
+    out.decompressed = fits.decoded(decoded, 1);
+    if (out.decompressed.rms <= (1 + growth) * out.fitted.rms || check == MaxRounds)
+      break;
+    step *= Margin * Margin;
+  }
+  return step;
+}
+
 } // namespace
 
 std::vector<double> carriedToDecodedBase(const FittedDetail& d, const CompressedSequence& s)
@@ -125,96 +257,22 @@ DetailCompression compressDetailAgainstData(CompressedSequence& sequence,
                                             double reach, double growth,
                                             const std::function<bool(double)>& progress)
 {
-  if (!(growth > 0) || !std::isfinite(growth))
-    throw std::invalid_argument("the allowed growth of the distance to the data (" +
-                                std::to_string(growth) + ") must be > 0");
-  if (samples.size() != detail.frames)
-    throw std::invalid_argument("samples for " + std::to_string(samples.size()) +
-                                " frames; the detail layer has " + std::to_string(detail.frames));
-  auto report = [&](double fraction)
-  {
-    if (progress && !progress(fraction))
-      throw std::runtime_error("aborted");
-  };
+  checkSearch(detail, samples, growth);
   const std::vector<double> carried = carriedToDecodedBase(detail, sequence);
   const SubdivisionMap& map = detail.map;
-  const std::size_t n = map.fineVertices();
-  const TriangleMesh mesh(map.fineTriangles(), n);
-  std::vector<std::vector<bool>> within;
+  const TriangleMesh mesh(map.fineTriangles(), map.fineVertices());
+  FineFits fits(sequence, detail, mesh, samples, reach);
   DetailCompression out;
-  std::vector<double> scratch;
-  out.fitted =
-      fineFit(detail, mesh, samples, reach, within,
-              [&](std::size_t t, std::vector<double>& x) { fittedFrame(detail, t, x, scratch); });
-  report(0.2);
-  // The decoded fine mesh of frame t for displacements `values`, on every stride-th frame.
-  std::vector<double> base(3 * map.baseVertices()), smooth(3 * n), normals(3 * n);
-  auto decodedFit = [&](const std::vector<double>& values, std::size_t stride)
-  {
-    return fineFit(
-        detail, mesh, samples, reach, within,
-        [&](std::size_t t, std::vector<double>& x)
-        {
-          sequence.pca.model.frame(t, base.data());
-          map.subdivide(base.data(), smooth.data(), normals.data());
-          x.resize(3 * n);
-          displaceAlongNormals(smooth.data(), normals.data(), &values[n * t], n, x.data());
-        },
-        stride);
-  };
+  out.fitted = fits.fitted(1);
+  reportProgress(progress, 0.2);
   // The search measures every stride-th frame, against the fitted mesh's fit on the same frames.
   const std::size_t stride = std::max<std::size_t>(1, detail.frames / SearchFrames);
-  const DataFit searched = stride == 1 ? out.fitted
-                                       : fineFit(
-                                             detail, mesh, samples, reach, within,
-                                             [&](std::size_t t, std::vector<double>& x)
-                                             { fittedFrame(detail, t, x, scratch); },
-                                             stride);
-  const double f2 = searched.rms * searched.rms;
-  const double allowed = (1 + growth) * searched.rms;
-  double c = 1, best = 0, closest = HUGE_VAL, closestStep = 0;
-  for (int round = 0; round < MaxRounds && searched.samples > 0; ++round)
-  {
-    const double deviation2 = (allowed * allowed - f2) / c * (round == 0 ? 1.0 : Margin * Margin);
-    const double step = std::sqrt(12 * deviation2);
-    const DataFit fit =
-        decodedFit(quantiseDetail(map, carried.data(), detail.frames, step), stride);
-    ++out.rounds;
-    report(0.2 + 0.7 * (round + 1) / MaxRounds);
-    if (fit.rms <= allowed && step > best)
-    {
-      best = step;
-      out.decompressed = fit;
-    }
-    if (fit.rms < closest)
-    {
-      closest = fit.rms;
-      closestStep = step;
-    }
-    if (fit.rms <= allowed && fit.rms >= (1 - Close) * allowed)
-      break;
-    const double measured = fit.rms * fit.rms - f2;
-    c = measured > 0 ? measured / (step * step / 12) : c / 4;
-  }
-  if (best == 0)
-  {
-    // No step kept the fit (the carrying over alone grew it): the closest one found, or for a
-    // take without samples a step of a thousandth of the reach.
-    best = closestStep > 0 ? closestStep : 1e-3 * reach;
-  }
-  // The step is checked on every frame; where the frames the search measured were kinder than
-  // the take, it is made smaller until the take keeps the fit.
-  for (int check = 0;; ++check)
-  {
-    const std::vector<double> decoded = quantiseDetail(map, carried.data(), detail.frames, best);
-    out.decompressed = decodedFit(decoded, 1);
-    if (out.decompressed.rms <= (1 + growth) * out.fitted.rms || check == MaxRounds)
-      break;
-    best *= Margin * Margin;
-  }
+  const DataFit searched = stride == 1 ? out.fitted : fits.fitted(stride);
+  double best = searchStep(fits, carried, searched, stride, growth, reach, progress, out);
+  best = checkedOnEveryFrame(fits, carried, best, growth, out);
   setDetail(sequence, map.levels(), carried, best);
   out.growth = out.fitted.rms > 0 ? out.decompressed.rms / out.fitted.rms - 1 : 0;
-  report(1.0);
+  reportProgress(progress, 1.0);
   return out;
 }
 

@@ -52,6 +52,88 @@ double medianMagnitude(std::vector<double> values)
   return *middle;
 }
 
+// The membrane's system (W + Mu I + lambda L) over the fine mesh's edges: L the graph Laplacian,
+// W the data weights; row i's neighbours are neighbours[start[i] .. start[i + 1]).
+struct MembraneSystem
+{
+  const std::vector<std::size_t>& start;
+  const std::vector<std::int64_t>& neighbours;
+  const std::vector<double>& w;
+  double lambda;
+  std::size_t n;
+
+  // y = the system times x.
+  void multiply(const std::vector<double>& x, std::vector<double>& y) const
+  {
+    forEachIndex(n,
+                 [&](std::size_t i)
+                 {
+                   double laplacian = 0;
+                   for (std::size_t k = start[i]; k < start[i + 1]; ++k)
+                     laplacian += x[i] - x[static_cast<std::size_t>(neighbours[k])];
+                   y[i] = (w[i] + Mu) * x[i] + lambda * laplacian;
+                 });
+  }
+
+  // The inverse of the system's diagonal: the conjugate gradients' Jacobi preconditioner.
+  std::vector<double> inverseDiagonal() const
+  {
+    std::vector<double> inverse(n);
+    forEachIndex(n,
+                 [&](std::size_t i)
+                 {
+                   const auto degree = static_cast<double>(start[i + 1] - start[i]);
+                   inverse[i] = 1.0 / (w[i] + Mu + lambda * degree);
+                 });
+    return inverse;
+  }
+};
+
+// Where each fine vertex's normal line meets the data: its distance there into `observation`
+// and the data's weight into `weight` (both left 0 where it meets none).
+void crossData(const double* finePositions, const double* fineNormals, const FrameSurface& data,
+               const DisplacementFitOptions& options, std::vector<double>& observation,
+               std::vector<double>& weight)
+{
+  const double minimumCosine = std::cos(options.normalAngle * Pi / 180);
+  const double radius = options.radius > 0 ? options.radius : options.reach / 4;
+  forEachIndex(observation.size(),
+               [&](std::size_t i)
+               {
+                 const FrameSurface::Crossing c =
+                     data.cross(finePositions + 3 * i, fineNormals + 3 * i, options.reach,
+                                minimumCosine, radius);
+                 if (c.found)
+                 {
+                   observation[i] = c.distance;
+                   weight[i] = c.weight;
+                 }
+               });
+}
+
+// A robust round's weights `w`: each observation's `weight` lowered by its residual from the
+// displacements `d` over a width of the residuals' robust spread (at least a share of the reach).
+void reweight(const std::vector<double>& observation, const std::vector<double>& weight,
+              const std::vector<double>& d, std::size_t observed, double reach,
+              std::vector<double>& w)
+{
+  const std::size_t n = observation.size();
+  std::vector<double> residual;
+  residual.reserve(observed);
+  for (std::size_t i = 0; i < n; ++i)
+    if (weight[i] > 0)
+      residual.push_back(observation[i] - d[i]);
+  // Residuals within a share of the reach always keep most of their weight: exact data (a mesh)
+  // leaves a tiny spread, beyond which detail the membrane smooths is no outlier.
+  const double width =
+      std::max(RobustWidth * 1.4826 * medianMagnitude(residual), RobustFloor * reach);
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    const double r = (observation[i] - d[i]) / width;
+    w[i] = weight[i] / (1 + r * r);
+  }
+}
+
 } // namespace
 
 DisplacementFitter::DisplacementFitter(const SubdivisionMap& map) : Map(map)
@@ -84,25 +166,10 @@ int DisplacementFitter::solve(const std::vector<double>& w, const std::vector<do
                               std::vector<double>& d) const
 {
   const std::size_t n = d.size();
-  auto multiply = [&](const std::vector<double>& x, std::vector<double>& y)
-  {
-    forEachIndex(n,
-                 [&](std::size_t i)
-                 {
-                   double laplacian = 0;
-                   for (std::size_t k = NeighbourStart[i]; k < NeighbourStart[i + 1]; ++k)
-                     laplacian += x[i] - x[static_cast<std::size_t>(Neighbours[k])];
-                   y[i] = (w[i] + Mu) * x[i] + lambda * laplacian;
-                 });
-  };
-  std::vector<double> inverseDiagonal(n), r(n), z(n), p(n), q(n);
-  forEachIndex(n,
-               [&](std::size_t i)
-               {
-                 const auto degree = static_cast<double>(NeighbourStart[i + 1] - NeighbourStart[i]);
-                 inverseDiagonal[i] = 1.0 / (w[i] + Mu + lambda * degree);
-               });
-  multiply(d, q);
+  const MembraneSystem system{NeighbourStart, Neighbours, w, lambda, n};
+  std::vector<double> r(n), z(n), p(n), q(n);
+  const std::vector<double> inverseDiagonal = system.inverseDiagonal();
+  system.multiply(d, q);
   forEachIndex(n,
                [&](std::size_t i)
                {
@@ -119,7 +186,7 @@ int DisplacementFitter::solve(const std::vector<double>& w, const std::vector<do
   {
     if (orderedSum(n, [&](std::size_t i) { return r[i] * r[i]; }) <= goal2)
       break;
-    multiply(p, q);
+    system.multiply(p, q);
     const double pq = orderedSum(n, [&](std::size_t i) { return p[i] * q[i]; });
     if (!(pq > 0))
       break;
@@ -147,21 +214,8 @@ DisplacementFit DisplacementFitter::fit(const double* finePositions, const doubl
     throw std::invalid_argument("the detail layer's reach must be > 0, not " +
                                 std::to_string(options.reach));
   const std::size_t n = Map.fineVertices();
-  const double minimumCosine = std::cos(options.normalAngle * Pi / 180);
-  const double radius = options.radius > 0 ? options.radius : options.reach / 4;
   std::vector<double> observation(n, 0.0), weight(n, 0.0);
-  forEachIndex(n,
-               [&](std::size_t i)
-               {
-                 const FrameSurface::Crossing c =
-                     data.cross(finePositions + 3 * i, fineNormals + 3 * i, options.reach,
-                                minimumCosine, radius);
-                 if (c.found)
-                 {
-                   observation[i] = c.distance;
-                   weight[i] = c.weight;
-                 }
-               });
+  crossData(finePositions, fineNormals, data, options, observation, weight);
   DisplacementFit out;
   out.displacement = observation;
   out.met.resize(n);
@@ -178,20 +232,7 @@ DisplacementFit DisplacementFitter::fit(const double* finePositions, const doubl
     out.iterations += solve(w, wo, options.smoothness, options, out.displacement);
     if (round == options.robustRounds)
       break;
-    std::vector<double> residual;
-    residual.reserve(out.observed);
-    for (std::size_t i = 0; i < n; ++i)
-      if (weight[i] > 0)
-        residual.push_back(observation[i] - out.displacement[i]);
-    // Residuals within a share of the reach always keep most of their weight: exact data (a
-    // mesh) leaves a tiny spread, beyond which detail the membrane smooths is no outlier.
-    const double width =
-        std::max(RobustWidth * 1.4826 * medianMagnitude(residual), RobustFloor * options.reach);
-    for (std::size_t i = 0; i < n; ++i)
-    {
-      const double r = (observation[i] - out.displacement[i]) / width;
-      w[i] = weight[i] / (1 + r * r);
-    }
+    reweight(observation, weight, out.displacement, out.observed, options.reach, w);
   }
   out.residual.resize(n);
   for (std::size_t i = 0; i < n; ++i)

@@ -96,17 +96,21 @@ struct PlacedPoints
   std::vector<std::uint32_t> outsideIndex;
 };
 
-PlacedPoints placePoints(const double* points, std::size_t count, const ImageGrid& grid)
+// Where a point falls: its image row (y, z) and column (x), clamped into the image, and whether
+// it lies inside the image.
+struct PointPlace
+{
+  std::uint32_t row;
+  std::int32_t column;
+  bool inside;
+};
+
+std::vector<PointPlace> placeEachPoint(const double* points, std::size_t count,
+                                       const ImageGrid& grid)
 {
   const auto& dim = grid.dimensions;
-  const std::size_t nx = static_cast<std::size_t>(dim[0]), ny = static_cast<std::size_t>(dim[1]);
-  struct Place
-  {
-    std::uint32_t row;
-    std::int32_t column;
-    bool inside;
-  };
-  std::vector<Place> place(count);
+  const std::size_t ny = static_cast<std::size_t>(dim[1]);
+  std::vector<PointPlace> place(count);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 4096),
                     [&](const tbb::blocked_range<std::size_t>& r)
                     {
@@ -125,9 +129,17 @@ PlacedPoints placePoints(const double* points, std::size_t count, const ImageGri
                                     static_cast<std::int32_t>(index[0]), inside};
                       }
                     });
+  return place;
+}
+
+PlacedPoints placePoints(const double* points, std::size_t count, const ImageGrid& grid)
+{
+  const auto& dim = grid.dimensions;
+  const std::size_t nx = static_cast<std::size_t>(dim[0]), ny = static_cast<std::size_t>(dim[1]);
+  const std::vector<PointPlace> place = placeEachPoint(points, count, grid);
   PlacedPoints out;
   out.first.assign(ny * static_cast<std::size_t>(dim[2]) + 1, 0);
-  for (const Place& q : place)
+  for (const PointPlace& q : place)
     ++out.first[q.row + 1];
   for (std::size_t r = 1; r < out.first.size(); ++r)
     out.first[r] += out.first[r - 1];
@@ -136,7 +148,7 @@ PlacedPoints placePoints(const double* points, std::size_t count, const ImageGri
   for (std::size_t p = 0; p < count; ++p)
   {
     const double* x = points + 3 * p;
-    const Place& q = place[p];
+    const PointPlace& q = place[p];
     out.rows[next[q.row]++] = {x[0], x[1], x[2], static_cast<std::uint32_t>(p), q.column};
     if (q.inside)
       out.seeds.push_back(static_cast<std::size_t>(q.column) + nx * q.row);

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// A rig of simulated depth cameras around an animated mesh (DepthRig.h).
+// A rig of simulated depth cameras around an animated mesh (DepthRig.h); its description and
+// the sequences it writes are in DepthRigFiles.cxx.
 #include "dp/geometry/DepthRig.h"
 
 #include "dp/geometry/BoundingBox.h"
@@ -7,15 +8,9 @@
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/support/Parallel.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <stdexcept>
-
-namespace fs = std::filesystem;
 
 namespace dp
 {
@@ -87,6 +82,113 @@ void unproject(const DepthCamera& c, double x, double y, double z, double p[3])
   p[2] = z;
 }
 
+// Whether the sensor returns a pixel of a surface of `albedo` at depth `z`, seen at incidence
+// `theta` (radians), where `behind` is the depth a silhouette pixel may mix with (0: none); `z`
+// becomes the depth returned, noisy and quantised.
+bool sensorReturns(const DepthSensorModel& sensor, double theta,
+                   const std::array<double, 3>& albedo, double behind, DeterministicRandom& random,
+                   double& z)
+{
+  // No return at grazing incidence (fading in over the last degrees), fewer on dark surfaces.
+  const double luminance = 0.3 * albedo[0] + 0.59 * albedo[1] + 0.11 * albedo[2];
+  const double grazing = (theta / Degree - (sensor.grazingLimit - GrazingRamp)) / GrazingRamp;
+  const double dark = sensor.darkDropout * std::max(0.0, 1 - luminance / DarkLuminance);
+  // A silhouette pixel may mix the surface with what lies behind it (a flying pixel), its
+  // return then partly the background's, whatever the incidence.
+  const bool mixed = behind > 0 && random.uniform() < sensor.mixedPixels;
+  if (mixed)
+    z += random.uniform() * (behind - z);
+  else if (random.uniform() < grazing || random.uniform() < dark)
+    return false;
+  z = sensor.quantised(z + random.gaussian() * sensor.axialNoise(z, theta));
+  return !(z < sensor.nearRange || z > sensor.farRange);
+}
+
+// The r g b bytes a camera of channel `gain`s records of a surface of `albedo` at incidence
+// cosine `cosine`: shaded, with noise, appended to `colours`.
+void appendColour(const std::array<double, 3>& albedo, double cosine,
+                  const std::array<double, 3>& gain, DeterministicRandom& random,
+                  std::vector<std::uint8_t>& colours)
+{
+  const double shade = 0.3 + 0.7 * cosine;
+  for (int d = 0; d < 3; ++d)
+  {
+    const double level = 255 * albedo[d] * shade * gain[d] + 1.5 * random.gaussian();
+    colours.push_back(static_cast<std::uint8_t>(std::clamp(std::round(level), 0.0, 255.0)));
+  }
+}
+
+// Refuses a rig of no or too many cameras, and sizes and errors that are not positive numbers.
+void checkRigOptions(const RigOptions& options)
+{
+  if (options.cameras < 1 || options.cameras > 64)
+    throw std::invalid_argument("a rig has 1 to 64 cameras, not " +
+                                std::to_string(options.cameras));
+  if (!(options.subjectHeight > 0) || !(options.distance >= 0) || !(options.rotationError >= 0) ||
+      !(options.translationError >= 0) || !(options.colourGain >= 0) || !(options.meshJump > 0))
+    throw std::invalid_argument("the rig's sizes and errors must be positive numbers");
+}
+
+// The extent of the take's first frame `rest` along `up` (refused where it has none).
+double extentAlong(const std::vector<double>& rest, const double up[3])
+{
+  double low = 1e300, high = -1e300;
+  for (std::size_t v = 0; v + 2 < rest.size(); v += 3)
+  {
+    low = std::min(low, dot(&rest[v], up));
+    high = std::max(high, dot(&rest[v], up));
+  }
+  if (!(high > low))
+    throw std::invalid_argument("the take's first frame has no extent along the rig's up axis");
+  return high - low;
+}
+
+// Every frame's bounding box (min xyz, max xyz) into `box`; `rest` is frame 0's positions.
+void takeBox(const AnimatedMesh& take, const std::vector<double>& rest, double box[6])
+{
+  for (int i = 0; i < 3; ++i)
+  {
+    box[i] = 1e300;
+    box[3 + i] = -1e300;
+  }
+  for (std::size_t f = 0; f < take.numberOfFrames(); ++f)
+  {
+    const std::vector<double> p = f == 0 ? rest : take.positions(f);
+    for (std::size_t v = 0; v + 2 < p.size(); v += 3)
+      for (int i = 0; i < 3; ++i)
+      {
+        box[i] = std::min(box[i], p[v + i]);
+        box[3 + i] = std::max(box[3 + i], p[v + i]);
+      }
+  }
+}
+
+// The floor's 4 corners (metres): at the take's lowest point along up (its level into `level`),
+// a square of the subject's height a side about the capture volume's centre.
+std::vector<double> floorCorners(const double box[6], const double centre[3], const double up[3],
+                                 double scale, double subjectHeight, double& level)
+{
+  double lowest = 1e300;
+  for (int corner = 0; corner < 8; ++corner)
+  {
+    const double p[3] = {box[corner & 1 ? 3 : 0], box[corner & 2 ? 4 : 1], box[corner & 4 ? 5 : 2]};
+    lowest = std::min(lowest, dot(p, up) * scale);
+  }
+  const double side[3] = {up[1] != 0 ? 1.0 : 0.0, up[1] != 0 ? 0.0 : 1.0, 0};
+  double across[3] = {up[1] * side[2] - up[2] * side[1], up[2] * side[0] - up[0] * side[2],
+                      up[0] * side[1] - up[1] * side[0]};
+  const double h = subjectHeight, lift = lowest - dot(centre, up);
+  level = lowest;
+  std::vector<double> corners;
+  for (int k = 0; k < 4; ++k)
+  {
+    const double a = (k == 1 || k == 2) ? h : -h, b = k >= 2 ? h : -h;
+    for (int i = 0; i < 3; ++i)
+      corners.push_back(centre[i] + lift * up[i] + a * side[i] + b * across[i]);
+  }
+  return corners;
+}
+
 } // namespace
 
 // One camera's points of one frame: in the camera's (believed) frame in metres, with each
@@ -103,37 +205,15 @@ struct DepthRig::Capture
 DepthRig::DepthRig(const AnimatedMesh& take, const RigOptions& options)
     : Options(options), Sensor(depthSensorModel(options.sensor)), Triangles(take.triangles())
 {
-  if (options.cameras < 1 || options.cameras > 64)
-    throw std::invalid_argument("a rig has 1 to 64 cameras, not " +
-                                std::to_string(options.cameras));
-  if (!(options.subjectHeight > 0) || !(options.distance >= 0) || !(options.rotationError >= 0) ||
-      !(options.translationError >= 0) || !(options.colourGain >= 0) || !(options.meshJump > 0))
-    throw std::invalid_argument("the rig's sizes and errors must be positive numbers");
+  checkRigOptions(options);
   const std::array<double, 3> up = upOf(options.up);
   std::copy(up.begin(), up.end(), Up);
   Rest = take.positions(0);
   RestDiagonal = boundingBoxDiagonal(Rest);
-  double low = 1e300, high = -1e300;
-  for (std::size_t v = 0; v + 2 < Rest.size(); v += 3)
-  {
-    low = std::min(low, dot(&Rest[v], Up));
-    high = std::max(high, dot(&Rest[v], Up));
-  }
-  if (!(high > low))
-    throw std::invalid_argument("the take's first frame has no extent along the rig's up axis");
-  Scale = options.subjectHeight / (high - low);
+  Scale = options.subjectHeight / extentAlong(Rest, Up);
   // The capture volume: every frame's box, and a margin of 5 % of its size.
-  double box[6] = {1e300, 1e300, 1e300, -1e300, -1e300, -1e300};
-  for (std::size_t f = 0; f < take.numberOfFrames(); ++f)
-  {
-    const std::vector<double> p = f == 0 ? Rest : take.positions(f);
-    for (std::size_t v = 0; v + 2 < p.size(); v += 3)
-      for (int i = 0; i < 3; ++i)
-      {
-        box[i] = std::min(box[i], p[v + i]);
-        box[3 + i] = std::max(box[3 + i], p[v + i]);
-      }
-  }
+  double box[6];
+  takeBox(take, Rest, box);
   double centre[3], radius2 = 0;
   for (int i = 0; i < 3; ++i)
   {
@@ -144,27 +224,7 @@ DepthRig::DepthRig(const AnimatedMesh& take, const RigOptions& options)
     radius2 += 0.25 * (box[3 + i] - box[i]) * (box[3 + i] - box[i]) * Scale * Scale;
   }
   if (options.floor)
-  {
-    // At the take's lowest point along up, a square of the subject's height a side.
-    double lowest = 1e300;
-    for (int corner = 0; corner < 8; ++corner)
-    {
-      const double p[3] = {box[corner & 1 ? 3 : 0], box[corner & 2 ? 4 : 1],
-                           box[corner & 4 ? 5 : 2]};
-      lowest = std::min(lowest, dot(p, Up) * Scale);
-    }
-    const double side[3] = {Up[1] != 0 ? 1.0 : 0.0, Up[1] != 0 ? 0.0 : 1.0, 0};
-    double across[3] = {Up[1] * side[2] - Up[2] * side[1], Up[2] * side[0] - Up[0] * side[2],
-                        Up[0] * side[1] - Up[1] * side[0]};
-    const double h = options.subjectHeight, lift = lowest - dot(centre, Up);
-    FloorLevel = lowest;
-    for (int k = 0; k < 4; ++k)
-    {
-      const double a = (k == 1 || k == 2) ? h : -h, b = k >= 2 ? h : -h;
-      for (int i = 0; i < 3; ++i)
-        FloorCorners.push_back(centre[i] + lift * Up[i] + a * side[i] + b * across[i]);
-    }
-  }
+    FloorCorners = floorCorners(box, centre, Up, Scale, options.subjectHeight, FloorLevel);
   placeCameras(centre, std::sqrt(radius2));
 }
 
@@ -293,32 +353,15 @@ DepthRig::Capture DepthRig::capture(const std::vector<double>& positions, std::s
       unproject(seen, x, y, z, ray);
       const Surface s = surfaceAt(image, i, scene, triangles, seen, ray);
       const double theta = std::acos(s.cosine);
-      // No return at grazing incidence (fading in over the last degrees), fewer on dark surfaces.
-      const double luminance = 0.3 * s.albedo[0] + 0.59 * s.albedo[1] + 0.11 * s.albedo[2];
-      const double grazing = (theta / Degree - (Sensor.grazingLimit - GrazingRamp)) / GrazingRamp;
-      const double dark = Sensor.darkDropout * std::max(0.0, 1 - luminance / DarkLuminance);
-      // A silhouette pixel may mix the surface with what lies behind it (a flying pixel), its
-      // return then partly the background's, whatever the incidence.
       const double behind = behindSilhouette(image, x, y, z);
-      const bool mixed = behind > 0 && random.uniform() < Sensor.mixedPixels;
-      if (mixed)
-        z += random.uniform() * (behind - z);
-      else if (random.uniform() < grazing || random.uniform() < dark)
-        continue;
-      z = Sensor.quantised(z + random.gaussian() * Sensor.axialNoise(z, theta));
-      if (z < Sensor.nearRange || z > Sensor.farRange)
+      if (!sensorReturns(Sensor, theta, s.albedo, behind, random, z))
         continue;
       const double lateral = Sensor.lateralNoise(theta);
       double p[3];
       unproject(seen, x + random.gaussian() * lateral, y + random.gaussian() * lateral, z, p);
       c.pointOfPixel[i] = static_cast<std::int32_t>(c.points.size() / 3);
       c.points.insert(c.points.end(), p, p + 3);
-      const double shade = 0.3 + 0.7 * s.cosine;
-      for (int d = 0; d < 3; ++d)
-      {
-        const double level = 255 * s.albedo[d] * shade * Gains[k][d] + 1.5 * random.gaussian();
-        c.colours.push_back(static_cast<std::uint8_t>(std::clamp(std::round(level), 0.0, 255.0)));
-      }
+      appendColour(s.albedo, s.cosine, Gains[k], random, c.colours);
     }
   estimateNormals(c);
   return c;
@@ -503,70 +546,6 @@ PointCloud DepthRig::depthMesh(const std::vector<double>& positions, std::size_t
       }
     }
   return compacted(all, faces, used);
-}
-
-std::string DepthRig::description() const
-{
-  nlohmann::json rig;
-  const DepthSensorModel& s = Sensor;
-  rig["sensor"] = {{"name", s.name},
-                   {"resolution", {s.width, s.height}},
-                   {"fieldOfView", {s.horizontalFov, s.verticalFov}},
-                   {"range", {s.nearRange, s.farRange}},
-                   {"axialNoise", {s.c0, s.c1, s.c2, s.angular, s.angularPower}},
-                   {"lateralNoise", {s.lateral, s.lateralAngular}},
-                   {"depthUnit", s.depthUnit},
-                   {"disparity", {s.focalBaseline, s.disparityStep}},
-                   {"grazingLimit", s.grazingLimit},
-                   {"mixedPixels", s.mixedPixels},
-                   {"darkDropout", s.darkDropout}};
-  rig["metresPerUnit"] = Scale;
-  rig["captureVolume"] = {{Box[0], Box[1], Box[2]}, {Box[3], Box[4], Box[5]}};
-  rig["cameras"] = nlohmann::json::array();
-  for (std::size_t k = 0; k < cameras(); ++k)
-  {
-    const auto pose = [this](const DepthCamera& c)
-    {
-      std::array<double, 3> t;
-      for (int i = 0; i < 3; ++i)
-        t[static_cast<std::size_t>(i)] = c.translation[static_cast<std::size_t>(i)] / Scale;
-      return nlohmann::json{{"rotation", c.rotation}, {"translation", t}};
-    };
-    rig["cameras"].push_back(
-        {{"believed", pose(Believed[k])}, {"actual", pose(Actual[k])}, {"gain", Gains[k]}});
-  }
-  return rig.dump(2);
-}
-
-std::string writeRigSequence(const AnimatedMesh& take, const RigOptions& options,
-                             const std::string& outDir, const SequenceWriteOptions& writing,
-                             bool depthMeshes)
-{
-  const DepthRig rig(take, options);
-  std::string series;
-  if (!depthMeshes)
-    series = writeFrameSequence(take, outDir, writing,
-                                [&](const std::vector<double>& positions, std::size_t f)
-                                { return rig.fusedCloud(positions, f); });
-  for (std::size_t k = 0; depthMeshes && k < rig.cameras(); ++k)
-  {
-    const std::string folder =
-        rig.cameras() == 1 ? outDir : (fs::path(outDir) / ("camera_" + std::to_string(k))).string();
-    SequenceWriteOptions w = writing;
-    w.writeGroundTruth = writing.writeGroundTruth && k == 0;
-    const std::string written =
-        writeFrameSequence(take, folder, w,
-                           [&](const std::vector<double>& positions, std::size_t f)
-                           { return rig.depthMesh(positions, k, f); });
-    if (k == 0)
-      series = written;
-  }
-  const std::string path = (fs::path(outDir) / "rig.json").string();
-  std::ofstream out(path);
-  out << rig.description() << "\n";
-  if (!out)
-    throw FileError(path, "cannot be written");
-  return series;
 }
 
 } // namespace dp

@@ -171,39 +171,11 @@ public:
   {
     for (int round = 0; round < 4 && Live != wanted; ++round)
     {
-      std::vector<std::pair<double, int>> edges;
-      for (int c = 0; c < static_cast<int>(Corner.size()); ++c)
-        if (Corner[c] >= 0 && (Opp[c] < 0 || c < Opp[c]))
-          edges.push_back({edgeLength(c), c});
+      std::vector<std::pair<double, int>> edges = edgesWithLengths();
       if (Live > wanted)
-      {
-        std::sort(edges.begin(), edges.end());
-        for (const auto& [l, c] : edges)
-        {
-          if (Live <= wanted)
-            break;
-          if (Corner[c] >= 0)
-            collapse(c, 1.6 * length);
-        }
-      }
+        collapseShortest(edges, wanted, length);
       else
-      {
-        std::sort(edges.rbegin(), edges.rend());
-        // Each split adds one vertex; an edge split earlier in this round is not split again.
-        std::vector<int> chosen;
-        for (const auto& e : edges)
-          if (chosen.size() < wanted - Live)
-            chosen.push_back(e.second);
-        std::vector<char> touched(X.size() + chosen.size(), 0);
-        for (int c : chosen)
-        {
-          const int a = Corner[next(c)], b = Corner[prev(c)];
-          if (Corner[c] < 0 || touched[a] || touched[b])
-            continue;
-          touched[a] = touched[b] = 1;
-          split(c);
-        }
-      }
+        splitLongest(edges, wanted);
     }
     for (int i = 0; i < 3; ++i)
     {
@@ -222,6 +194,50 @@ public:
   }
 
 private:
+  // Each edge once, as (its length, a corner facing it).
+  std::vector<std::pair<double, int>> edgesWithLengths() const
+  {
+    std::vector<std::pair<double, int>> edges;
+    for (int c = 0; c < static_cast<int>(Corner.size()); ++c)
+      if (Corner[c] >= 0 && (Opp[c] < 0 || c < Opp[c]))
+        edges.push_back({edgeLength(c), c});
+    return edges;
+  }
+
+  // Collapses `edges`, shortest first, until there are `wanted` vertices.
+  void collapseShortest(std::vector<std::pair<double, int>>& edges, std::size_t wanted,
+                        double length)
+  {
+    std::sort(edges.begin(), edges.end());
+    for (const auto& [l, c] : edges)
+    {
+      if (Live <= wanted)
+        break;
+      if (Corner[c] >= 0)
+        collapse(c, 1.6 * length);
+    }
+  }
+
+  // Splits the longest of `edges` for the vertices wanted. Each split adds one vertex; an edge
+  // split earlier in this round is not split again.
+  void splitLongest(std::vector<std::pair<double, int>>& edges, std::size_t wanted)
+  {
+    std::sort(edges.rbegin(), edges.rend());
+    std::vector<int> chosen;
+    for (const auto& e : edges)
+      if (chosen.size() < wanted - Live)
+        chosen.push_back(e.second);
+    std::vector<char> touched(X.size() + chosen.size(), 0);
+    for (int c : chosen)
+    {
+      const int a = Corner[next(c)], b = Corner[prev(c)];
+      if (Corner[c] < 0 || touched[a] || touched[b])
+        continue;
+      touched[a] = touched[b] = 1;
+      split(c);
+    }
+  }
+
   void splitLonger(double maxLength)
   {
     for (int pass = 0; pass < 8; ++pass)

@@ -70,6 +70,128 @@ double loopBeta(std::size_t n)
   return n > 3 ? 3.0 / (8.0 * static_cast<double>(n)) : 3.0 / 16.0;
 }
 
+// Each vertex's edges (CSR): vertex v's are edge[first[v] .. first[v + 1]).
+struct VertexEdges
+{
+  std::vector<std::size_t> first, edge;
+};
+
+VertexEdges vertexEdgesOf(const Edges& e, std::size_t vertices)
+{
+  VertexEdges ve;
+  std::vector<std::size_t>& first = ve.first;
+  first.assign(vertices + 1, 0);
+  for (const auto& ab : e.ends)
+  {
+    ++first[static_cast<std::size_t>(ab[0]) + 1];
+    ++first[static_cast<std::size_t>(ab[1]) + 1];
+  }
+  for (std::size_t v = 0; v < vertices; ++v)
+    first[v + 1] += first[v];
+  std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+  ve.edge.resize(first.back());
+  for (std::size_t i = 0; i < e.ends.size(); ++i)
+    for (const std::int64_t end : e.ends[i])
+      ve.edge[fill[static_cast<std::size_t>(end)]++] = i;
+  return ve;
+}
+
+// A level's masks as they are made: row r of its output is sum of weight[k] * input[column[k]],
+// k in [start[r], start[r + 1]).
+struct MaskRows
+{
+  std::vector<std::size_t> start{0};
+  std::vector<std::int64_t> column;
+  std::vector<double> weight;
+
+  void add(std::int64_t c, double w)
+  {
+    column.push_back(c);
+    weight.push_back(w);
+  }
+  void endRow() { start.push_back(column.size()); }
+};
+
+// Loop's masks of the level's old vertices: a vertex unused or at a corner stays, one on a
+// sharp crease moves along it, a smooth one towards its neighbours.
+void addVertexMasks(const Edges& e, std::size_t vertices, MaskRows& rows)
+{
+  const VertexEdges ve = vertexEdgesOf(e, vertices);
+  const std::vector<std::size_t>& first = ve.first;
+  for (std::size_t v = 0; v < vertices; ++v)
+  {
+    const std::size_t n = first[v + 1] - first[v];
+    const auto self = static_cast<std::int64_t>(v);
+    std::vector<std::int64_t> sharpNeighbours;
+    for (std::size_t k = first[v]; k < first[v + 1]; ++k)
+    {
+      const auto& ab = e.ends[ve.edge[k]];
+      if (e.sharp[ve.edge[k]])
+        sharpNeighbours.push_back(ab[0] == self ? ab[1] : ab[0]);
+    }
+    if (n == 0 || (!sharpNeighbours.empty() && sharpNeighbours.size() != 2))
+      rows.add(self, 1.0); // unused, or a corner
+    else if (sharpNeighbours.size() == 2)
+    {
+      rows.add(self, 0.75);
+      rows.add(sharpNeighbours[0], 0.125);
+      rows.add(sharpNeighbours[1], 0.125);
+    }
+    else
+    {
+      const double beta = loopBeta(n);
+      rows.add(self, 1.0 - static_cast<double>(n) * beta);
+      for (std::size_t k = first[v]; k < first[v + 1]; ++k)
+      {
+        const auto& ab = e.ends[ve.edge[k]];
+        rows.add(ab[0] == self ? ab[1] : ab[0], beta);
+      }
+    }
+    rows.endRow();
+  }
+}
+
+// Loop's masks of the vertices the level makes on its edges, one per edge in order.
+void addEdgeMasks(const Edges& e, MaskRows& rows)
+{
+  for (std::size_t i = 0; i < e.ends.size(); ++i)
+  {
+    const auto& ab = e.ends[i];
+    if (e.sharp[i])
+    {
+      rows.add(ab[0], 0.5);
+      rows.add(ab[1], 0.5);
+    }
+    else
+    {
+      rows.add(ab[0], 0.375);
+      rows.add(ab[1], 0.375);
+      rows.add(e.opposite[i][0], 0.125);
+      rows.add(e.opposite[i][1], 0.125);
+    }
+    rows.endRow();
+  }
+}
+
+// Each of the level's triangles split in four at its edges' new vertices (numbered from
+// `vertices` on in edge order).
+std::vector<std::int64_t> childTriangles(const std::vector<std::int64_t>& triangles, const Edges& e,
+                                         std::size_t vertices)
+{
+  std::vector<std::int64_t> children;
+  children.reserve(4 * triangles.size());
+  const auto offset = static_cast<std::int64_t>(vertices);
+  for (std::size_t t = 0; t < triangles.size(); t += 3)
+  {
+    const std::int64_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
+    const std::int64_t ab = offset + static_cast<std::int64_t>(e.ofCorner[t]);
+    const std::int64_t bc = offset + static_cast<std::int64_t>(e.ofCorner[t + 1]);
+    const std::int64_t ca = offset + static_cast<std::int64_t>(e.ofCorner[t + 2]);
+    children.insert(children.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
+  }
+  return children;
+}
+
 } // namespace
 
 SubdivisionMap::SubdivisionMap(const std::vector<std::int64_t>& baseTriangles,
@@ -101,92 +223,13 @@ SubdivisionMap::SubdivisionMap(const std::vector<std::int64_t>& baseTriangles,
 void SubdivisionMap::subdivide(std::vector<std::int64_t>& triangles, std::size_t vertices)
 {
   const Edges e = edgesOf(triangles);
-  const std::size_t edgeCount = e.ends.size();
-  // Each vertex's edges (CSR), to find its neighbours and its sharp edges.
-  std::vector<std::size_t> first(vertices + 1, 0);
-  for (const auto& ab : e.ends)
-  {
-    ++first[static_cast<std::size_t>(ab[0]) + 1];
-    ++first[static_cast<std::size_t>(ab[1]) + 1];
-  }
-  for (std::size_t v = 0; v < vertices; ++v)
-    first[v + 1] += first[v];
-  std::vector<std::size_t> incident(first.back()), fill(first.begin(), first.end() - 1);
-  for (std::size_t i = 0; i < edgeCount; ++i)
-    for (const std::int64_t end : e.ends[i])
-      incident[fill[static_cast<std::size_t>(end)]++] = i;
-
-  Level level;
-  level.start.push_back(0);
-  auto add = [&level](std::int64_t column, double weight)
-  {
-    level.column.push_back(column);
-    level.weight.push_back(weight);
-  };
-  for (std::size_t v = 0; v < vertices; ++v)
-  {
-    const std::size_t n = first[v + 1] - first[v];
-    std::vector<std::int64_t> sharpNeighbours;
-    for (std::size_t k = first[v]; k < first[v + 1]; ++k)
-    {
-      const auto& ab = e.ends[incident[k]];
-      if (e.sharp[incident[k]])
-        sharpNeighbours.push_back(ab[0] == static_cast<std::int64_t>(v) ? ab[1] : ab[0]);
-    }
-    const auto self = static_cast<std::int64_t>(v);
-    if (n == 0 || (!sharpNeighbours.empty() && sharpNeighbours.size() != 2))
-      add(self, 1.0); // unused, or a corner
-    else if (sharpNeighbours.size() == 2)
-    {
-      add(self, 0.75);
-      add(sharpNeighbours[0], 0.125);
-      add(sharpNeighbours[1], 0.125);
-    }
-    else
-    {
-      const double beta = loopBeta(n);
-      add(self, 1.0 - static_cast<double>(n) * beta);
-      for (std::size_t k = first[v]; k < first[v + 1]; ++k)
-      {
-        const auto& ab = e.ends[incident[k]];
-        add(ab[0] == self ? ab[1] : ab[0], beta);
-      }
-    }
-    level.start.push_back(level.column.size());
-  }
-  for (std::size_t i = 0; i < edgeCount; ++i)
-  {
-    const auto& ab = e.ends[i];
-    if (e.sharp[i])
-    {
-      add(ab[0], 0.5);
-      add(ab[1], 0.5);
-    }
-    else
-    {
-      add(ab[0], 0.375);
-      add(ab[1], 0.375);
-      add(e.opposite[i][0], 0.125);
-      add(e.opposite[i][1], 0.125);
-    }
-    level.start.push_back(level.column.size());
-    Parents.push_back(ab);
-  }
-  Levels.push_back(std::move(level));
-  Counts.push_back(vertices + edgeCount);
-
-  std::vector<std::int64_t> children;
-  children.reserve(4 * triangles.size());
-  const auto offset = static_cast<std::int64_t>(vertices);
-  for (std::size_t t = 0; t < triangles.size(); t += 3)
-  {
-    const std::int64_t a = triangles[t], b = triangles[t + 1], c = triangles[t + 2];
-    const std::int64_t ab = offset + static_cast<std::int64_t>(e.ofCorner[t]);
-    const std::int64_t bc = offset + static_cast<std::int64_t>(e.ofCorner[t + 1]);
-    const std::int64_t ca = offset + static_cast<std::int64_t>(e.ofCorner[t + 2]);
-    children.insert(children.end(), {a, ab, ca, ab, b, bc, ca, bc, c, ab, bc, ca});
-  }
-  triangles = std::move(children);
+  MaskRows rows;
+  addVertexMasks(e, vertices, rows);
+  addEdgeMasks(e, rows);
+  Levels.push_back({std::move(rows.start), std::move(rows.column), std::move(rows.weight)});
+  Parents.insert(Parents.end(), e.ends.begin(), e.ends.end());
+  Counts.push_back(vertices + e.ends.size());
+  triangles = childTriangles(triangles, e, vertices);
 }
 
 void SubdivisionMap::apply(const double* base, double* fine) const

@@ -27,25 +27,31 @@ void faceNormal(const std::vector<std::int64_t>& tris, std::size_t t, const doub
   const double v[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
   cross(u, v, n);
 }
-} // namespace
 
-TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vertexCount)
-    : Triangles(std::move(triangles)), VertexCount(vertexCount)
+// A directed edge (a, b) with the opposite vertex of its triangle (a, b, opposite).
+struct Directed
 {
-  if (Triangles.size() % 3 != 0)
-    throw std::invalid_argument("triangle indices are not a multiple of 3");
+  std::int64_t a, b, opposite;
+};
+
+// The order of directed edges: by (a, b).
+bool before(const Directed& x, const Directed& y)
+{
+  return x.a != y.a ? x.a < y.a : x.b < y.b;
+}
+
+// The triangles' directed edges, sorted by (a, b); where a directed edge repeats (a non-manifold
+// fan) the last triangle's is kept. Throws std::invalid_argument for a vertex index out of range
+// or a triangle that repeats a vertex.
+std::vector<Directed> directedEdges(const std::vector<std::int64_t>& triangles,
+                                    std::size_t vertexCount)
+{
   const auto n = static_cast<std::int64_t>(vertexCount);
-  // Directed edges (a, b) with the opposite vertex c of their triangle (a, b, c), sorted by
-  // (a, b); where a directed edge repeats (a non-manifold fan) the last triangle's is kept.
-  struct Directed
-  {
-    std::int64_t a, b, opposite;
-  };
   std::vector<Directed> directed;
-  directed.reserve(Triangles.size());
-  for (std::size_t t = 0; t < numberOfTriangles(); ++t)
+  directed.reserve(triangles.size());
+  for (std::size_t t = 0; t < triangles.size() / 3; ++t)
   {
-    const std::int64_t* v = &Triangles[3 * t];
+    const std::int64_t* v = &triangles[3 * t];
     for (int k = 0; k < 3; ++k)
       if (v[k] < 0 || v[k] >= n)
         throw std::invalid_argument("triangle " + std::to_string(t) + " uses vertex " +
@@ -55,8 +61,6 @@ TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vert
     for (int k = 0; k < 3; ++k)
       directed.push_back({v[k], v[(k + 1) % 3], v[(k + 2) % 3]});
   }
-  auto before = [](const Directed& x, const Directed& y)
-  { return x.a != y.a ? x.a < y.a : x.b < y.b; };
   std::stable_sort(directed.begin(), directed.end(), before);
   std::size_t kept = 0;
   for (std::size_t i = 0; i < directed.size(); ++i)
@@ -66,6 +70,17 @@ TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vert
       directed[kept++] = directed[i];
   }
   directed.resize(kept);
+  return directed;
+}
+
+} // namespace
+
+TriangleMesh::TriangleMesh(std::vector<std::int64_t> triangles, std::size_t vertexCount)
+    : Triangles(std::move(triangles)), VertexCount(vertexCount)
+{
+  if (Triangles.size() % 3 != 0)
+    throw std::invalid_argument("triangle indices are not a multiple of 3");
+  const std::vector<Directed> directed = directedEdges(Triangles, vertexCount);
   Neighbours.assign(vertexCount, {});
   for (const Directed& e : directed)
   {

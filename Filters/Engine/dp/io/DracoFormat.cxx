@@ -258,17 +258,15 @@ void copyAttributes(const draco::PointCloud& source, PointCloud& cloud)
   }
 }
 
-} // namespace
-
-PointCloud readDRC(const std::string& path)
+// Refuses counts more than any coding of `size` bytes holds, then claims from the memory budget
+// what Draco's decoder and the decoded frame hold.
+void claimDecoding(const std::string& path, std::size_t size, const DracoCounts& counts)
 {
-  const std::string bytes = support::readWholeFile(path);
-  const DracoCounts counts = readDeclaredCounts(path, bytes);
-  const double most = MostCountsPerByte * static_cast<double>(bytes.size());
+  const double most = MostCountsPerByte * static_cast<double>(size);
   if (counts.points > most || counts.faces > most)
     refuse(path, "it declares " + std::to_string(static_cast<std::uint64_t>(counts.points)) +
                      " points and " + std::to_string(static_cast<std::uint64_t>(counts.faces)) +
-                     " faces in " + std::to_string(bytes.size()) +
+                     " faces in " + std::to_string(size) +
                      " bytes, more than any coding holds (corrupt)");
   MemoryAccount account(path);
   account.claim(counts.points * DecoderBytesPerPoint + counts.faces * DecoderBytesPerFace,
@@ -277,47 +275,72 @@ PointCloud readDRC(const std::string& path)
                     " faces");
   account.claim(counts.points * CloudBytesPerPoint + counts.faces * CloudBytesPerFace,
                 "the decoded frame");
+}
 
+// What Draco decodes of a file: its points, and the same as a mesh where the file holds one.
+struct DracoGeometry
+{
+  std::unique_ptr<draco::PointCloud> geometry;
+  const draco::Mesh* mesh = nullptr;
+};
+
+// The file's geometry as Draco decodes it: a mesh where `mesh`, else a point cloud.
+DracoGeometry decodeGeometry(const std::string& path, const std::string& bytes, bool mesh)
+{
   draco::DecoderBuffer buffer;
   buffer.Init(bytes.data(), bytes.size());
   draco::Decoder decoder;
-  std::unique_ptr<draco::PointCloud> geometry;
-  draco::Mesh* mesh = nullptr;
-  if (counts.mesh)
+  DracoGeometry out;
+  if (mesh)
   {
     auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
     if (!decoded.ok())
       refuse(path, decoded.status().error_msg_string() + " (corrupt or truncated)");
-    mesh = decoded.value().get();
-    geometry = std::move(decoded).value();
+    out.mesh = decoded.value().get();
+    out.geometry = std::move(decoded).value();
   }
   else
   {
     auto decoded = decoder.DecodePointCloudFromBuffer(&buffer);
     if (!decoded.ok())
       refuse(path, decoded.status().error_msg_string() + " (corrupt or truncated)");
-    geometry = std::move(decoded).value();
+    out.geometry = std::move(decoded).value();
   }
+  return out;
+}
+
+// The mesh's triangles as the cloud's faces.
+void copyTriangles(const draco::Mesh& mesh, PointCloud& cloud)
+{
+  cloud.faceOffsets.reserve(mesh.num_faces() + 1);
+  cloud.faceConnectivity.reserve(3 * std::size_t{mesh.num_faces()});
+  for (draco::FaceIndex f(0); f < mesh.num_faces(); ++f)
+  {
+    const draco::Mesh::Face& face = mesh.face(f);
+    const std::int64_t ids[3] = {face[0].value(), face[1].value(), face[2].value()};
+    cloud.addFace(ids, 3);
+  }
+}
+
+} // namespace
+
+PointCloud readDRC(const std::string& path)
+{
+  const std::string bytes = support::readWholeFile(path);
+  const DracoCounts counts = readDeclaredCounts(path, bytes);
+  claimDecoding(path, bytes.size(), counts);
+  const DracoGeometry decoded = decodeGeometry(path, bytes, counts.mesh);
   PointCloud cloud;
   try
   {
-    copyAttributes(*geometry, cloud);
+    copyAttributes(*decoded.geometry, cloud);
   }
   catch (const std::runtime_error& e)
   {
     refuse(path, e.what());
   }
-  if (mesh)
-  {
-    cloud.faceOffsets.reserve(mesh->num_faces() + 1);
-    cloud.faceConnectivity.reserve(3 * std::size_t{mesh->num_faces()});
-    for (draco::FaceIndex f(0); f < mesh->num_faces(); ++f)
-    {
-      const draco::Mesh::Face& face = mesh->face(f);
-      const std::int64_t ids[3] = {face[0].value(), face[1].value(), face[2].value()};
-      cloud.addFace(ids, 3);
-    }
-  }
+  if (decoded.mesh)
+    copyTriangles(*decoded.mesh, cloud);
   return cloud;
 }
 

@@ -399,6 +399,48 @@ void readBinary(const std::string& path, std::string_view body, const PcdHeader&
   }
 }
 
+// Every named field other than the coordinates, normals and colour as an attribute of the
+// cloud, its values not yet filled.
+void declareAttributes(const std::vector<PcdField>& fields, const PcdLayout& l, PointCloud& cloud)
+{
+  const bool hasNormals = l.hasNormals();
+  for (std::size_t k = 0; k < fields.size(); ++k)
+  {
+    const int i = static_cast<int>(k);
+    const bool known = i == l.xyz[0] || i == l.xyz[1] || i == l.xyz[2] || i == l.rgb ||
+                       (hasNormals && (i == l.normal[0] || i == l.normal[1] || i == l.normal[2]));
+    if (!known && fields[k].name != "_")
+      cloud.attributes.push_back({fields[k].name, fields[k].count, {}});
+  }
+}
+
+// A packed colour (0xAARRGGBB) as `components` (3 or 4) bytes r g b [a].
+void unpackColour(std::uint32_t packed, int components, std::uint8_t* out)
+{
+  out[0] = static_cast<std::uint8_t>((packed >> 16) & 0xff);
+  out[1] = static_cast<std::uint8_t>((packed >> 8) & 0xff);
+  out[2] = static_cast<std::uint8_t>(packed & 0xff);
+  if (components == 4)
+    out[3] = static_cast<std::uint8_t>((packed >> 24) & 0xff);
+}
+
+// The declared attributes' values, from their fields' values.
+void fillAttributes(const PcdHeader& h, const PcdLayout& l, const PcdValues& in, PointCloud& cloud)
+{
+  const std::size_t points = h.points;
+  for (auto& a : cloud.attributes)
+  {
+    std::size_t k = 0;
+    while (h.fields[k].name != a.name)
+      ++k;
+    a.values.resize(points * a.components);
+    for (std::size_t i = 0; i < points; ++i)
+      for (int c = 0; c < a.components; ++c)
+        a.values[i * a.components + c] =
+            static_cast<float>(in.values[i * l.valuesPerPoint + l.firstValue[k] + c]);
+  }
+}
+
 // The cloud: coordinates, normals, colours, and every other named field as an attribute.
 PointCloud assemble(const PcdHeader& h, const PcdLayout& l, const PcdValues& in)
 {
@@ -414,14 +456,7 @@ PointCloud assemble(const PcdHeader& h, const PcdLayout& l, const PcdValues& in)
     cloud.colorComponents = fields[l.rgb].name == "rgba" ? 4 : 3;
     cloud.colors.resize(cloud.colorComponents * points);
   }
-  for (std::size_t k = 0; k < fields.size(); ++k)
-  {
-    const int i = static_cast<int>(k);
-    const bool known = i == l.xyz[0] || i == l.xyz[1] || i == l.xyz[2] || i == l.rgb ||
-                       (hasNormals && (i == l.normal[0] || i == l.normal[1] || i == l.normal[2]));
-    if (!known && fields[k].name != "_")
-      cloud.attributes.push_back({fields[k].name, fields[k].count, {}});
-  }
+  declareAttributes(fields, l, cloud);
   for (std::size_t i = 0; i < points; ++i)
   {
     const double* v = &in.values[i * l.valuesPerPoint];
@@ -431,27 +466,10 @@ PointCloud assemble(const PcdHeader& h, const PcdLayout& l, const PcdValues& in)
       for (int c = 0; c < 3; ++c)
         cloud.normals[3 * i + c] = static_cast<float>(v[l.firstValue[l.normal[c]]]);
     if (l.rgb >= 0)
-    {
-      const std::uint32_t packed = in.packedColor[i];
-      std::uint8_t* out = &cloud.colors[cloud.colorComponents * i];
-      out[0] = static_cast<std::uint8_t>((packed >> 16) & 0xff);
-      out[1] = static_cast<std::uint8_t>((packed >> 8) & 0xff);
-      out[2] = static_cast<std::uint8_t>(packed & 0xff);
-      if (cloud.colorComponents == 4)
-        out[3] = static_cast<std::uint8_t>((packed >> 24) & 0xff);
-    }
+      unpackColour(in.packedColor[i], cloud.colorComponents,
+                   &cloud.colors[cloud.colorComponents * i]);
   }
-  for (auto& a : cloud.attributes)
-  {
-    std::size_t k = 0;
-    while (fields[k].name != a.name)
-      ++k;
-    a.values.resize(points * a.components);
-    for (std::size_t i = 0; i < points; ++i)
-      for (int c = 0; c < a.components; ++c)
-        a.values[i * a.components + c] =
-            static_cast<float>(in.values[i * l.valuesPerPoint + l.firstValue[k] + c]);
-  }
+  fillAttributes(h, l, in, cloud);
   return cloud;
 }
 

@@ -72,10 +72,8 @@ CoverageTerm::CoverageTerm(const SampleView& samples, const TriangleMesh& mesh, 
     Scale = options.weight / (static_cast<double>(n) * lengthScale * samples.voxel);
 }
 
-void CoverageTerm::linearise(const double* x)
+bool CoverageTerm::matchesHold(const double* x) const
 {
-  if (Matches.empty())
-    return;
   // Correspondences change only when the mesh moves: skip the search while no vertex has moved
   // a fifth of a voxel since the last one (late, short steps of a solve).
   const std::size_t nv = Mesh.numberOfVertices();
@@ -84,16 +82,29 @@ void CoverageTerm::linearise(const double* x)
     const double still = 0.2 * Samples.voxel;
     if (largestChange(x, LinearisedAt, 3 * nv) < still && LinearisedScale == Options.robustScale &&
         LinearisedReach == Options.maxDistance && !WholeSurface)
-      return;
+      return true;
   }
-  LinearisedAt.assign(x, x + 3 * nv);
-  LinearisedScale = Options.robustScale;
-  LinearisedReach = Options.maxDistance;
+  return false;
+}
+
+void CoverageTerm::placeLocator(const double* x)
+{
   if (!Built)
     Locator = SurfaceLocator(Mesh, x);
   else
     Locator.refit(x);
   Built = true;
+}
+
+void CoverageTerm::linearise(const double* x)
+{
+  if (Matches.empty() || matchesHold(x))
+    return;
+  const std::size_t nv = Mesh.numberOfVertices();
+  LinearisedAt.assign(x, x + 3 * nv);
+  LinearisedScale = Options.robustScale;
+  LinearisedReach = Options.maxDistance;
+  placeLocator(x);
   std::vector<double> normals(3 * nv);
   Mesh.vertexNormals(x, normals.data());
   const double cosLimit = std::cos(Options.normalTestDegrees * Pi / 180.0);

@@ -93,6 +93,11 @@ private:
     double r[3], n[3], along, c;
   };
   double pull(const double* x, const Match& m, Pull& p) const;
+  // Whether the matches last decided still hold at x: no vertex moved a fifth of a voxel since,
+  // the same robust scale and reach, and no search of the whole surface asked for.
+  bool matchesHold(const double* x) const;
+  // The locator over the mesh at x: built the first time, refitted after.
+  void placeLocator(const double* x);
 
   SampleView Samples;
   const TriangleMesh& Mesh;

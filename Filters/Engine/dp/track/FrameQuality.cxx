@@ -16,20 +16,11 @@ namespace
 constexpr double NoiseReach = 6.0;
 // The nearest points around a far point, three quarters of which must be far for it to count.
 constexpr std::size_t PatchPoints = 12;
-} // namespace
 
-FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
-                         const std::vector<double>& mass, double reach, const double* start)
+// Marks each well-spread point: 0 stray (not judged), 1 within `reach` of the mesh, 2 beyond.
+std::vector<std::uint8_t> markFarPoints(const FrameData& frame, const SurfaceLocator& locator,
+                                        double reach)
 {
-  FrameQuality q;
-  if (frame.empty())
-    return q;
-  // A noisy layer's points lie off any surface by a few thicknesses: the reach follows it, up
-  // to three times the reach asked (a frame of garbage is no layer to follow).
-  reach = std::max(reach, std::min(NoiseReach * frame.noise().thickness, 3 * reach));
-  q.noise = frame.noise().thickness;
-  q.reach = reach;
-  const SurfaceLocator locator(mesh, x);
   const auto& spread = frame.spread();
   const auto& stray = frame.strayInSpread();
   std::vector<std::uint8_t> far(spread.size(), 0);
@@ -41,9 +32,16 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
                               ? 1 + (locator.closest(frame.point(spread[i]), reach).triangle < 0)
                               : 0;
                });
-  // A far point counts when the surface around it is far too (most of its nearest points): a
-  // part the mesh let go of, not a point beyond the reach by noise or by detail the template's
-  // resolution cannot hold (scattered fingertips, folds).
+  return far;
+}
+
+// A far point counts when the surface around it is far too (most of its nearest points): a
+// part the mesh let go of, not a point beyond the reach by noise or by detail the template's
+// resolution cannot hold (scattered fingertips, folds). The others become near (1).
+void keepFarPatches(const FrameData& frame, const SurfaceLocator& locator, double reach,
+                    std::vector<std::uint8_t>& far)
+{
+  const auto& spread = frame.spread();
   forEachIndex(spread.size(),
                [&](std::size_t i)
                {
@@ -58,6 +56,14 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
                  if (4 * farAround < 3 * PatchPoints)
                    far[i] = 1;
                });
+}
+
+// The unexplained share and the points it is of (q.unexplained, q.samples).
+void measureUnexplained(const FrameData& frame, const SurfaceLocator& locator, double reach,
+                        FrameQuality& q)
+{
+  std::vector<std::uint8_t> far = markFarPoints(frame, locator, reach);
+  keepFarPatches(frame, locator, reach, far);
   std::size_t count = 0, judged = 0;
   for (std::uint8_t f : far)
   {
@@ -66,7 +72,14 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
   }
   q.samples = judged;
   q.unexplained = judged == 0 ? 0.0 : static_cast<double>(count) / static_cast<double>(judged);
+}
 
+// The unsupported share of the mesh and the part of it that departed from its data
+// (q.unsupported, q.departed).
+void measureUnsupported(const FrameData& frame, const TriangleMesh& mesh, const double* x,
+                        const std::vector<double>& mass, double reach, const double* start,
+                        FrameQuality& q)
+{
   const std::size_t nv = mesh.numberOfVertices();
   std::vector<double> lonely(nv, 0.0), left(nv, 0.0);
   const auto distance2 = [&](const double* p)
@@ -101,6 +114,23 @@ FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const
     if (2 * leftAround >= around.size())
       q.departed += left[v];
   }
+}
+} // namespace
+
+FrameQuality assessFrame(const FrameData& frame, const TriangleMesh& mesh, const double* x,
+                         const std::vector<double>& mass, double reach, const double* start)
+{
+  FrameQuality q;
+  if (frame.empty())
+    return q;
+  // A noisy layer's points lie off any surface by a few thicknesses: the reach follows it, up
+  // to three times the reach asked (a frame of garbage is no layer to follow).
+  reach = std::max(reach, std::min(NoiseReach * frame.noise().thickness, 3 * reach));
+  q.noise = frame.noise().thickness;
+  q.reach = reach;
+  const SurfaceLocator locator(mesh, x);
+  measureUnexplained(frame, locator, reach, q);
+  measureUnsupported(frame, mesh, x, mass, reach, start, q);
   return q;
 }
 

@@ -188,45 +188,66 @@ void GraphRegistration::project(const DeformationGraph::State& state,
       [&](std::int64_t a, std::int64_t, const double* block, int stride)
       {
         const auto v = static_cast<std::size_t>(a);
-        const auto influences = Graph.influencesBegin(v);
-        const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influences);
+        const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - Graph.influencesBegin(v));
         const std::size_t slots = next;
         next += n * n;
-        const Eigen::Vector3d rest(Graph.rest() + 3 * v);
-        const Eigen::Vector3d g = vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
         Eigen::Matrix3d M;
         for (int c = 0; c < 3; ++c)
           for (int r = 0; r < 3; ++r)
             M(r, c) = block[c * stride + r];
-        arms.resize(n);
-        products.resize(n);
-        for (std::size_t p = 0; p < n; ++p)
-        {
-          const std::int64_t j = influences[p].node;
-          const double w = influences[p].weight;
-          arms[p] = state.rotation[j] *
-                    (rest - Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(j))));
-          nodeGradient.segment<3>(6 * j) += w * arms[p].cross(g);
-          nodeGradient.segment<3>(6 * j + 3) += w * g;
-          products[p] = crossMatrix(arms[p]) * M;
-        }
+        projectGradient(state, v, M, vertexGradient, arms, products, nodeGradient);
         if (M.isZero(0.0))
           return;
-        for (std::size_t p = 0; p < n; ++p)
-          for (std::size_t q = 0; q < n; ++q)
-          {
-            // (j, k) and (k, j) are transposes: each pair is added once, to j <= k.
-            if (influences[p].node > influences[q].node)
-              continue;
-            const double w = influences[p].weight * influences[q].weight;
-            Matrix66 m;
-            m.topLeftCorner<3, 3>() = -w * products[p] * crossMatrix(arms[q]);
-            m.topRightCorner<3, 3>() = w * products[p];
-            m.bottomLeftCorner<3, 3>() = w * products[q].transpose();
-            m.bottomRightCorner<3, 3>() = w * M;
-            NodeModel.addBlock(ProjectionSlots[slots + p * n + q], m.data());
-          }
+        projectModel(v, M, arms, products, slots);
       });
+}
+
+void GraphRegistration::projectGradient(const DeformationGraph::State& state, std::size_t v,
+                                        const Eigen::Matrix3d& M,
+                                        const Eigen::VectorXd& vertexGradient,
+                                        std::vector<Eigen::Vector3d>& arms,
+                                        std::vector<Eigen::Matrix3d>& products,
+                                        Eigen::VectorXd& nodeGradient) const
+{
+  const auto influences = Graph.influencesBegin(v);
+  const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influences);
+  const Eigen::Vector3d rest(Graph.rest() + 3 * v);
+  const Eigen::Vector3d g = vertexGradient.segment<3>(static_cast<Eigen::Index>(3 * v));
+  arms.resize(n);
+  products.resize(n);
+  for (std::size_t p = 0; p < n; ++p)
+  {
+    const std::int64_t j = influences[p].node;
+    const double w = influences[p].weight;
+    arms[p] = state.rotation[j] *
+              (rest - Eigen::Vector3d(Graph.nodePosition(static_cast<std::size_t>(j))));
+    nodeGradient.segment<3>(6 * j) += w * arms[p].cross(g);
+    nodeGradient.segment<3>(6 * j + 3) += w * g;
+    products[p] = crossMatrix(arms[p]) * M;
+  }
+}
+
+void GraphRegistration::projectModel(std::size_t v, const Eigen::Matrix3d& M,
+                                     const std::vector<Eigen::Vector3d>& arms,
+                                     const std::vector<Eigen::Matrix3d>& products,
+                                     std::size_t slots)
+{
+  const auto influences = Graph.influencesBegin(v);
+  const auto n = static_cast<std::size_t>(Graph.influencesEnd(v) - influences);
+  for (std::size_t p = 0; p < n; ++p)
+    for (std::size_t q = 0; q < n; ++q)
+    {
+      // (j, k) and (k, j) are transposes: each pair is added once, to j <= k.
+      if (influences[p].node > influences[q].node)
+        continue;
+      const double w = influences[p].weight * influences[q].weight;
+      Matrix66 m;
+      m.topLeftCorner<3, 3>() = -w * products[p] * crossMatrix(arms[q]);
+      m.topRightCorner<3, 3>() = w * products[p];
+      m.bottomLeftCorner<3, 3>() = w * products[q].transpose();
+      m.bottomRightCorner<3, 3>() = w * M;
+      NodeModel.addBlock(ProjectionSlots[slots + p * n + q], m.data());
+    }
 }
 
 Eigen::Vector3d GraphRegistration::edgeResidual(const DeformationGraph::State& state,
@@ -417,23 +438,36 @@ int GraphRegistration::solve(DeformationGraph::State& state, const std::vector<E
     }
     if (!anderson)
       continue;
-    // Accelerated only in the tail, where steps are small and converge linearly: larger steps
-    // still jump between correspondences, and extrapolating them carried a passing leg's
-    // vertices toward the other leg's data (Tracker.KeepsALegThatPassesAnother). Not on the last
-    // step: an accelerated state is only kept once its energy is known.
-    Eigen::VectorXd next;
-    if (move > AcceleratedMove)
-      anderson->reset();
-    else if (const Eigen::VectorXd atPlain = coordinates(state, origin);
-             step + 1 < iterations && anderson->next(coordinates(start, origin), atPlain, next))
-    {
-      plain = state;
-      state = towardAccelerated(atPlain, next, origin, y);
+    // Not on the last step: an accelerated state is only kept once its energy is known.
+    accelerated =
+        accelerate(*anderson, move, step + 1 < iterations, start, origin, y, state, plain);
+    if (accelerated)
       startEnergy = energy;
-      accelerated = true;
-    }
   }
   return step;
+}
+
+bool GraphRegistration::accelerate(AndersonAcceleration& anderson, double move, bool allowed,
+                                   const DeformationGraph::State& start,
+                                   const DeformationGraph::State& origin,
+                                   const std::vector<double>& plainMesh,
+                                   DeformationGraph::State& state,
+                                   DeformationGraph::State& plain) const
+{
+  // Accelerated only in the tail, where steps are small and converge linearly: larger steps
+  // still jump between correspondences, and extrapolating them carried a passing leg's
+  // vertices toward the other leg's data (Tracker.KeepsALegThatPassesAnother).
+  Eigen::VectorXd next;
+  if (move > AcceleratedMove)
+    anderson.reset();
+  else if (const Eigen::VectorXd atPlain = coordinates(state, origin);
+           allowed && anderson.next(coordinates(start, origin), atPlain, next))
+  {
+    plain = state;
+    state = towardAccelerated(atPlain, next, origin, plainMesh);
+    return true;
+  }
+  return false;
 }
 
 DeformationGraph::State

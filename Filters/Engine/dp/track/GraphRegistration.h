@@ -62,6 +62,7 @@
 namespace dp
 {
 
+class AndersonAcceleration;
 class CoverageTerm;
 class DistanceTerm;
 
@@ -125,8 +126,20 @@ public:
   const support::BlockSparseMatrixOf<6>& nodeModel() const { return NodeModel; }
 
 private:
+  // The vertex model and gradient as the nodes' (NodeModel, `nodeGradient`): see project().
   void project(const DeformationGraph::State& state, const Eigen::VectorXd& vertexGradient,
                Eigen::VectorXd& nodeGradient);
+  // Vertex v's arms r_aj to the nodes it blends and P_j = [r_aj]x M (its model block M), and its
+  // gradient added to theirs, w_aj (r_aj x g_a, g_a).
+  void projectGradient(const DeformationGraph::State& state, std::size_t v,
+                       const Eigen::Matrix3d& M, const Eigen::VectorXd& vertexGradient,
+                       std::vector<Eigen::Vector3d>& arms, std::vector<Eigen::Matrix3d>& products,
+                       Eigen::VectorXd& nodeGradient) const;
+  // Adds B_aj^T M B_ak over the pairs of nodes vertex v blends to NodeModel, at ProjectionSlots
+  // from `slots` on.
+  void projectModel(std::size_t v, const Eigen::Matrix3d& M,
+                    const std::vector<Eigen::Vector3d>& arms,
+                    const std::vector<Eigen::Matrix3d>& products, std::size_t slots);
   Eigen::Vector3d edgeResidual(const DeformationGraph::State& state, std::size_t index,
                                int direction) const;
   void reweightEdges(const DeformationGraph::State& state, double robustScale);
@@ -134,6 +147,14 @@ private:
   // and builds the model: returns E at the state.
   double linearise(const DeformationGraph::State& state, const std::vector<EnergyTerm*>& terms,
                    double rigidity, std::vector<double>& x);
+  // After a plain step that moved the mesh by `move` voxels (from `start` to `state`, its mesh
+  // `plainMesh`): forgets the accelerator's history while steps are large; otherwise, when
+  // `allowed`, replaces state by the accelerated one (towardAccelerated), the plain one kept in
+  // `plain`. Returns whether it did.
+  bool accelerate(AndersonAcceleration& anderson, double move, bool allowed,
+                  const DeformationGraph::State& start, const DeformationGraph::State& origin,
+                  const std::vector<double>& plainMesh, DeformationGraph::State& state,
+                  DeformationGraph::State& plain) const;
   // The largest difference of two meshes' coordinates (world units).
   static double largestDifference(const std::vector<double>& a, const std::vector<double>& b);
   // The accelerator's `accelerated` coordinates as a state, brought back toward the plain step

@@ -210,6 +210,10 @@ private:
    *  try that failed: its start and coarse level are kept), solve the fine level to
    *  convergence. */
   Attempt attempt(const class FrameData& frame, Start start, const Attempt* capped = nullptr);
+  /** The frame's quality at positions x, its tear included; what departed is measured from
+   *  a's start. */
+  FrameQuality qualityOf(const class FrameData& frame, const std::vector<double>& x,
+                         const Attempt& a) const;
   /** The start's positions (the graph deformed by a.state, or the last frame's extrapolated
    *  and aligned when the coarse level is off). */
   std::vector<double> startPositions(Start start, Attempt& a, class DistanceTerm& distance,
