@@ -157,6 +157,79 @@ bool parsePrintFlag(const std::string& arg, int argc, char** argv, int& i, Setti
   return true;
 }
 
+// The flags of the input and the outputs; false for another flag.
+bool parseFileFlag(const std::string& arg, int argc, char** argv, int& i, Settings& s)
+{
+  using dp::cli::optionValue;
+  if (arg == "--pattern")
+    s.pattern = optionValue(argc, argv, i);
+  else if (arg == "--output")
+    s.output = optionValue(argc, argv, i);
+  else if (arg == "--quiet")
+    s.quiet = true;
+  else if (arg == "--meshopt")
+    s.meshopt = true;
+  else if (arg == "--no-view")
+    s.view = false;
+  else
+    return false;
+  return true;
+}
+
+// The flags of the tracked mesh: its template, its detail layer, the frames tracked; false for
+// another flag.
+bool parseMeshFlag(const std::string& arg, int argc, char** argv, int& i, Settings& s)
+{
+  using namespace dp::cli;
+  if (arg == "--template")
+    s.templateFile = optionValue(argc, argv, i);
+  else if (arg == "--template-from")
+  {
+    const std::string from = optionValue(argc, argv, i);
+    if (from != "auto" && from != "mesh" && from != "points")
+      throw UsageError("--template-from wants auto, mesh or points, not '" + from + "'");
+    s.templateFrom = from == "mesh"     ? vtkDeformableTrackFilter::TEMPLATE_FROM_MESH
+                     : from == "points" ? vtkDeformableTrackFilter::TEMPLATE_FROM_POINTS
+                                        : vtkDeformableTrackFilter::TEMPLATE_AUTO;
+  }
+  else if (arg == "--vertices")
+    s.vertices = static_cast<int>(parseCount(
+        arg, optionValue(argc, argv, i), dp::MinimumTemplateVertices, dp::MaximumTemplateVertices));
+  else if (arg == "--detail-levels")
+  {
+    const std::string value = optionValue(argc, argv, i);
+    s.detailLevels = value == "auto"
+                         ? vtkSurfaceDetailFilter::AUTOMATIC
+                         : static_cast<int>(parseCount(arg, value, 0, dp::MaximumDetailLevels));
+  }
+  else if (arg == "--frames")
+    s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
+  else
+    return false;
+  return true;
+}
+
+// The compression's shortcuts for rows of its option table; false for another flag.
+bool parseCompressionFlag(const std::string& arg, int argc, char** argv, int& i, Settings& s)
+{
+  using dp::cli::setShortcut;
+  if (arg == "--error-target")
+  {
+    setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.kgTarget");
+    s.compression.measure = dp::CompressionMeasure::KarniGotsman;
+  }
+  else if (arg == "--fit-growth")
+  {
+    setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.fitGrowth");
+    s.compression.measure = dp::CompressionMeasure::DistanceToData;
+  }
+  else if (arg == "--colour-tolerance")
+    setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.colourTolerance");
+  else
+    return false;
+  return true;
+}
+
 Settings parse(int argc, char** argv, bool& help)
 {
   using namespace dp::cli;
@@ -166,55 +239,9 @@ Settings parse(int argc, char** argv, bool& help)
     const std::string arg = argv[i];
     if (arg == "-h" || arg == "--help")
       help = true;
-    else if (arg == "--pattern")
-      s.pattern = optionValue(argc, argv, i);
-    else if (arg == "--output")
-      s.output = optionValue(argc, argv, i);
-    else if (arg == "--template")
-      s.templateFile = optionValue(argc, argv, i);
-    else if (arg == "--template-from")
-    {
-      const std::string from = optionValue(argc, argv, i);
-      if (from != "auto" && from != "mesh" && from != "points")
-        throw UsageError("--template-from wants auto, mesh or points, not '" + from + "'");
-      s.templateFrom = from == "mesh"     ? vtkDeformableTrackFilter::TEMPLATE_FROM_MESH
-                       : from == "points" ? vtkDeformableTrackFilter::TEMPLATE_FROM_POINTS
-                                          : vtkDeformableTrackFilter::TEMPLATE_AUTO;
-    }
-    else if (arg == "--vertices")
-      s.vertices =
-          static_cast<int>(parseCount(arg, optionValue(argc, argv, i), dp::MinimumTemplateVertices,
-                                      dp::MaximumTemplateVertices));
-    else if (arg == "--detail-levels")
-    {
-      const std::string value = optionValue(argc, argv, i);
-      s.detailLevels = value == "auto"
-                           ? vtkSurfaceDetailFilter::AUTOMATIC
-                           : static_cast<int>(parseCount(arg, value, 0, dp::MaximumDetailLevels));
-    }
-    else if (arg == "--frames")
-      s.frames = static_cast<long long>(parseCount(arg, optionValue(argc, argv, i), 1, 10000000));
-    else if (arg == "--error-target")
-    {
-      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.kgTarget");
-      s.compression.measure = dp::CompressionMeasure::KarniGotsman;
-    }
-    else if (arg == "--fit-growth")
-    {
-      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.fitGrowth");
-      s.compression.measure = dp::CompressionMeasure::DistanceToData;
-    }
-    else if (arg == "--colour-tolerance")
-      setShortcut(arg, argc, argv, i, {nullptr, &s.compression}, "compression.colourTolerance");
-    else if (arg == "--quiet")
-      s.quiet = true;
-    else if (arg == "--meshopt")
-      s.meshopt = true;
-    else if (arg == "--no-view")
-      s.view = false;
-    else if (parsePrintFlag(arg, argc, argv, i, s))
-      continue;
-    else if (parseTableOptionFlag(arg, argc, argv, i, {&s.tracker, &s.compression}))
+    else if (parseFileFlag(arg, argc, argv, i, s) || parseMeshFlag(arg, argc, argv, i, s) ||
+             parseCompressionFlag(arg, argc, argv, i, s) || parsePrintFlag(arg, argc, argv, i, s) ||
+             parseTableOptionFlag(arg, argc, argv, i, {&s.tracker, &s.compression}))
       continue;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
@@ -294,6 +321,37 @@ int reportBatch(const Settings& base, const std::vector<dp::cli::BatchInput>& in
   return status;
 }
 
+// Input `index` of a batch, handed out at turn `turn`: done into OUTPUT/<name>/ as a run on it
+// alone would do it; what batch.json says of how it ended.
+nlohmann::json runBatchInput(const Settings& base, const std::vector<dp::cli::BatchInput>& inputs,
+                             std::size_t index, int turn, const dp::cli::Ranks& ranks)
+{
+  const dp::cli::BatchInput& input = inputs[index];
+  const bool alone = ranks.size() == 1;
+  Settings s = base;
+  s.input = input.path;
+  s.output = (fs::path(base.output) / input.name).string();
+  s.quiet = base.quiet || !alone; // several processes' tables would interleave
+  int status = 130;
+  const bool started = !Interrupted; // after Ctrl-C the rest are not started
+  const auto start = std::chrono::steady_clock::now();
+  if (started)
+  {
+    if (alone)
+      std::cout << "== " << input.name << " (" << turn + 1 << " of " << inputs.size()
+                << "): " << input.path << "\n";
+    status = runJob(s);
+  }
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!alone)
+    std::cout << "[process " << ranks.rank() << "] " << input.name << ": " << outcome(status)
+              << " in " << std::lround(seconds) << " s" << std::endl;
+  return {{"index", index},          {"turn", turn},
+          {"exitStatus", status},    {"result", started ? outcome(status) : "not started"},
+          {"process", ranks.rank()}, {"seconds", seconds}};
+}
+
 // Several inputs: each into OUTPUT/<name>/ as a run on it alone would write it, spread over the
 // MPI ranks (largest first, to whoever is free); rank 0 writes OUTPUT/batch.json and says which
 // inputs failed.
@@ -302,41 +360,12 @@ int runBatch(const Settings& base, dp::cli::Ranks& ranks)
   const auto batchStart = std::chrono::steady_clock::now();
   const std::vector<dp::cli::BatchInput> inputs = dp::cli::describeBatch(base.inputs);
   const std::vector<std::size_t> order = dp::cli::largestFirst(inputs);
-  const bool alone = ranks.size() == 1;
   nlohmann::json mine = nlohmann::json::array();
   ranks.shareCounter();
   // Whoever is free takes the next input, largest first: the processes end about together
   // however unequal the takes are (their sizes on disk do not tell their work).
   for (int next = ranks.takeNext(); next < static_cast<int>(order.size()); next = ranks.takeNext())
-  {
-    const std::size_t index = order[static_cast<std::size_t>(next)];
-    const dp::cli::BatchInput& input = inputs[index];
-    Settings s = base;
-    s.input = input.path;
-    s.output = (fs::path(base.output) / input.name).string();
-    s.quiet = base.quiet || !alone; // several processes' tables would interleave
-    int status = 130;
-    const bool started = !Interrupted; // after Ctrl-C the rest are not started
-    const auto start = std::chrono::steady_clock::now();
-    if (started)
-    {
-      if (alone)
-        std::cout << "== " << input.name << " (" << next + 1 << " of " << inputs.size()
-                  << "): " << input.path << "\n";
-      status = runJob(s);
-    }
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!alone)
-      std::cout << "[process " << ranks.rank() << "] " << input.name << ": " << outcome(status)
-                << " in " << std::lround(seconds) << " s" << std::endl;
-    mine.push_back({{"index", index},
-                    {"turn", next},
-                    {"exitStatus", status},
-                    {"result", started ? outcome(status) : "not started"},
-                    {"process", ranks.rank()},
-                    {"seconds", seconds}});
-  }
+    mine.push_back(runBatchInput(base, inputs, order[static_cast<std::size_t>(next)], next, ranks));
   const std::vector<std::string> all = ranks.gather(mine.dump());
   int status = 0;
   if (ranks.rank() == 0)

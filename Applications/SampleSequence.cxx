@@ -146,6 +146,65 @@ bool parseRigOption(int argc, char** argv, int& i, Request& r)
   return true;
 }
 
+// The animated mesh's options and the random sampling's; false for another argument.
+bool parseSamplingOption(int argc, char** argv, int& i, Request& r)
+{
+  using namespace dp::cli;
+  const std::string arg = argv[i];
+  if (arg == "--mesh")
+    r.mesh = optionValue(argc, argv, i);
+  else if (arg == "--pattern")
+    r.pattern = optionValue(argc, argv, i);
+  else if (arg == "--frames")
+    r.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
+  else if (arg == "--points")
+    r.sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000),
+    r.pointsGiven = true;
+  else if (arg == "--seed")
+    r.sampling.seed = parseCount(arg, optionValue(argc, argv, i), 0, ~0ULL);
+  else if (arg == "--noise")
+    r.noise = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
+  else if (arg == "--holes")
+    r.sampling.holes = parseCount(arg, optionValue(argc, argv, i), 0, 10000);
+  else if (arg == "--hole-radius")
+    r.holeRadius = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
+  else if (arg == "--moving-holes")
+    r.sampling.holesMove = true;
+  else if (arg == "--colour")
+    r.sampling.colours = true;
+  else if (arg == "--no-normals")
+    r.sampling.normals = false;
+  else
+    return false;
+  return true;
+}
+
+// The per-frame meshes' options and the files' (format, interval, truth); false for another
+// argument.
+bool parseOutputOption(int argc, char** argv, int& i, Request& r)
+{
+  using namespace dp::cli;
+  const std::string arg = argv[i];
+  if (arg == "--per-frame-mesh")
+    r.meshVertices = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
+  else if (arg == "--mesh-defects")
+    r.defects = true;
+  else if (arg == "--format")
+  {
+    r.writing.extension = optionValue(argc, argv, i);
+    const std::string& e = r.writing.extension;
+    if (e != "ply" && e != "pcd" && e != "xyz" && e != "csv" && e != "obj" && e != "drc")
+      throw UsageError("option --format: '" + e + "' is not one of ply pcd xyz csv obj drc");
+  }
+  else if (arg == "--interval")
+    r.writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);
+  else if (arg == "--truth")
+    r.writing.writeGroundTruth = true;
+  else
+    return false;
+  return true;
+}
+
 // Reads the command line; a UsageError for a bad one.
 Request parseArguments(int argc, char** argv)
 {
@@ -159,46 +218,9 @@ Request parseArguments(int argc, char** argv)
       r.help = true;
       return r;
     }
-    else if (arg == "--mesh")
-      r.mesh = optionValue(argc, argv, i);
-    else if (arg == "--pattern")
-      r.pattern = optionValue(argc, argv, i);
-    else if (arg == "--frames")
-      r.frames = parseCount(arg, optionValue(argc, argv, i), 1, 100000);
-    else if (arg == "--points")
-      r.sampling.pointsPerFrame = parseCount(arg, optionValue(argc, argv, i), 1, 100000000),
-      r.pointsGiven = true;
-    else if (parseRigOption(argc, argv, i, r))
+    else if (parseSamplingOption(argc, argv, i, r) || parseRigOption(argc, argv, i, r) ||
+             parseOutputOption(argc, argv, i, r))
       continue;
-    else if (arg == "--seed")
-      r.sampling.seed = parseCount(arg, optionValue(argc, argv, i), 0, ~0ULL);
-    else if (arg == "--noise")
-      r.noise = parseDouble(arg, optionValue(argc, argv, i), 0, 1);
-    else if (arg == "--holes")
-      r.sampling.holes = parseCount(arg, optionValue(argc, argv, i), 0, 10000);
-    else if (arg == "--hole-radius")
-      r.holeRadius = parseDouble(arg, optionValue(argc, argv, i), 0, 10);
-    else if (arg == "--moving-holes")
-      r.sampling.holesMove = true;
-    else if (arg == "--colour")
-      r.sampling.colours = true;
-    else if (arg == "--per-frame-mesh")
-      r.meshVertices = parseCount(arg, optionValue(argc, argv, i), 20, 10000000);
-    else if (arg == "--mesh-defects")
-      r.defects = true;
-    else if (arg == "--no-normals")
-      r.sampling.normals = false;
-    else if (arg == "--format")
-    {
-      r.writing.extension = optionValue(argc, argv, i);
-      const std::string& e = r.writing.extension;
-      if (e != "ply" && e != "pcd" && e != "xyz" && e != "csv" && e != "obj" && e != "drc")
-        throw UsageError("option --format: '" + e + "' is not one of ply pcd xyz csv obj drc");
-    }
-    else if (arg == "--interval")
-      r.writing.frameInterval = parseDouble(arg, optionValue(argc, argv, i), 1e-12, 1e12);
-    else if (arg == "--truth")
-      r.writing.writeGroundTruth = true;
     else if (!arg.empty() && arg[0] == '-')
       throw UsageError("unknown option '" + arg + "'");
     else if (r.output.empty())

@@ -4,28 +4,22 @@
 #include "dp/field/TemplateMesh.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/TriangleMesh.h"
-#include "dp/track/FrameFigures.h"
 #include "dp/track/Tracker.h"
 #include "dp/track/TrackerOptionTable.h"
 #include "vtkDPOptions.h"
 #include "vtkDPPointSetAccess.h"
+#include "vtkDPTrackedFrame.h"
 
 #include "vtkCellArray.h"
-#include "vtkDoubleArray.h"
 #include "vtkFieldData.h"
-#include "vtkFloatArray.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkIntArray.h"
-#include "vtkNew.h"
 #include "vtkObjectFactory.h"
-#include "vtkPointData.h"
 #include "vtkPointSet.h"
-#include "vtkPoints.h"
 #include "vtkPolyData.h"
 #include "vtkSmartPointer.h"
 #include "vtkStreamingDemandDrivenPipeline.h"
-#include "vtkStringArray.h"
 #include "vtkUnsignedCharArray.h"
 
 #include <tbb/global_control.h>
@@ -44,20 +38,6 @@ vtkStandardNewMacro(vtkDeformableTrackFilter);
 
 // A frame's data under preparation (dp::Tracker::prepare, on another thread beside the frame
 // before).
-namespace
-{
-// What every frame's output shows beside the frame's own result.
-struct TakeContext
-{
-  vtkCellArray* polys;                        // the template's triangles
-  const std::vector<std::int64_t>* triangles; // ... as the engine holds them
-  const std::vector<double>* rest;            // the template's positions
-  double reach;                    // how far from the mesh a point still counts (DataReach)
-  const std::string* templateMade; // how the template was made (field data "Template")
-};
-
-} // namespace
-
 struct vtkDeformableTrackFilter::PendingFrame
 {
   std::future<dp::PreparedFrame> data;
@@ -77,10 +57,26 @@ struct vtkDeformableTrackFilter::Internals
   PendingFrame Next;
   long long Reading = -1;
 
-  TakeContext context() const
+  vtkDP::TakeContext context() const
   {
     return {Polys, &Tracker->mesh().triangles(), &Tracker->templatePositions(),
             Tracker->options().recovery.reach * Tracker->voxelSize(), &TemplateSummary};
+  }
+
+  // Frame `frame` of the cache as the output, the time it stands for stamped on it.
+  void show(vtkPolyData* output, std::size_t frame, double time) const
+  {
+    output->Initialize();
+    vtkDP::fillTrackedFrame(output, context(), Cache[frame], frame);
+    output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), time);
+  }
+
+  // The last frame tracked as the output (none: empty), while the next one's data is read.
+  void showLatest(vtkPolyData* output) const
+  {
+    output->Initialize();
+    if (!Cache.empty())
+      vtkDP::fillTrackedFrame(output, context(), Cache.back(), Cache.size() - 1);
   }
 
   void clear()
@@ -176,99 +172,6 @@ long long vtkDeformableTrackFilter::NextInputFrame(std::size_t requestedFrame)
 
 namespace
 {
-// The tracked positions on the template's triangles.
-void fillGeometry(vtkPolyData* output, vtkCellArray* polys, const dp::FrameResult& r)
-{
-  const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
-  vtkNew<vtkDoubleArray> coordinates;
-  coordinates->SetNumberOfComponents(3);
-  coordinates->SetNumberOfTuples(n);
-  std::copy(r.positions.begin(), r.positions.end(), coordinates->GetPointer(0));
-  vtkNew<vtkPoints> points;
-  points->SetData(coordinates);
-  output->SetPoints(points);
-  output->SetPolys(polys);
-}
-
-// Per vertex: Displacement (from the template), Residual, Frozen, Rejected, Normals (the active
-// normals: ParaView shades the mesh smoothly), and Colors where the points carry colour (then the
-// active scalars, which ParaView shows as colours).
-void fillPointData(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r)
-{
-  const std::vector<double>& rest = *take.rest;
-  const auto n = static_cast<vtkIdType>(r.positions.size() / 3);
-  vtkNew<vtkFloatArray> displacement;
-  displacement->SetName("Displacement");
-  displacement->SetNumberOfComponents(3);
-  displacement->SetNumberOfTuples(n);
-  vtkNew<vtkFloatArray> residual;
-  residual->SetName("Residual");
-  residual->SetNumberOfTuples(n);
-  vtkNew<vtkUnsignedCharArray> frozen, rejected;
-  frozen->SetName("Frozen");
-  frozen->SetNumberOfTuples(n);
-  rejected->SetName("Rejected");
-  rejected->SetNumberOfTuples(n);
-  for (vtkIdType i = 0; i < n; ++i)
-  {
-    for (int c = 0; c < 3; ++c)
-      displacement->SetTypedComponent(i, c,
-                                      static_cast<float>(r.positions[3 * i + c] - rest[3 * i + c]));
-    residual->SetValue(i, static_cast<float>(r.residual[i]));
-    frozen->SetValue(i, r.frozen[i]);
-    rejected->SetValue(i, r.rejected[i]);
-  }
-  vtkPointData* pd = output->GetPointData();
-  pd->SetVectors(displacement);
-  std::vector<double> normals(r.positions.size());
-  dp::vertexNormalsOf(*take.triangles, r.positions.data(), static_cast<std::size_t>(n),
-                      normals.data());
-  vtkNew<vtkFloatArray> shading;
-  shading->SetName("Normals");
-  shading->SetNumberOfComponents(3);
-  shading->SetNumberOfTuples(n);
-  std::copy(normals.begin(), normals.end(), shading->GetPointer(0));
-  pd->SetNormals(shading);
-  if (r.colours.size() == 3 * static_cast<std::size_t>(n))
-  {
-    pd->SetScalars(vtkDP::colorsArray(r.colours.data(), n));
-    pd->AddArray(residual);
-  }
-  else
-    pd->SetScalars(residual);
-  pd->AddArray(frozen);
-  pd->AddArray(rejected);
-}
-
-// Field data: the frame's figures (dp::FrameFigures), its well-spread subsample (what a
-// compressor downstream judges its error by with DataReach: vtkPCACompressFilter,
-// DISTANCE_TO_DATA), and how the template was made.
-void fillFieldData(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
-                   std::size_t frame)
-{
-  const dp::FrameFigures figures = dp::FrameFigures::of(r, frame, take.reach);
-  for (const dp::FrameFigures::Field& field : dp::FrameFigures::fields())
-    vtkDP::addFieldValue(output, field.name, figures.*field.value);
-  vtkNew<vtkFloatArray> samples;
-  samples->SetName("DataSamples");
-  samples->SetNumberOfComponents(3);
-  samples->SetNumberOfTuples(static_cast<vtkIdType>(r.samples.size()));
-  std::copy(r.samples.points.begin(), r.samples.points.end(), samples->GetPointer(0));
-  output->GetFieldData()->AddArray(samples);
-  vtkNew<vtkStringArray> made;
-  made->SetName("Template");
-  made->InsertNextValue(*take.templateMade);
-  output->GetFieldData()->AddArray(made);
-}
-
-void fillOutput(vtkPolyData* output, const TakeContext& take, const dp::FrameResult& r,
-                std::size_t frame)
-{
-  fillGeometry(output, take.polys, r);
-  fillPointData(output, take, r);
-  fillFieldData(output, take, r, frame);
-}
-
 // A frame that is a mesh, copied for the tracker to read as its surface.
 struct MeshFrame
 {
@@ -306,6 +209,14 @@ std::future<dp::PreparedFrame> startPreparing(Prepare prepare)
   const bool beside =
       tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism) > 1;
   return std::async(beside ? std::launch::async : std::launch::deferred, std::move(prepare));
+}
+
+// The time the output request asks for, `frameTime` (the requested frame's) when it names none.
+double requestedTimeOf(vtkInformation* outInfo, double frameTime)
+{
+  return outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+             ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
+             : frameTime;
 }
 } // namespace
 
@@ -522,11 +433,7 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
   if (!request->Has(vtkStreamingDemandDrivenPipeline::CONTINUE_EXECUTING()))
     this->SetAbortExecute(0);
   const std::size_t target = this->GetRequestedFrame(outInfo);
-  const double requestedTime =
-      outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-          ? outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP())
-          : this->GetInputFrameTime(target);
-
+  const double requestedTime = requestedTimeOf(outInfo, this->GetInputFrameTime(target));
   if (in.Cache.size() <= target)
   {
     const std::size_t frame = in.Cache.size();
@@ -543,9 +450,7 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
     if (step == PipelineStep::Prepared)
     {
       ContinueExecuting(request, !this->GetAbortExecute());
-      output->Initialize();
-      if (!in.Cache.empty())
-        fillOutput(output, in.context(), in.Cache.back(), in.Cache.size() - 1);
+      in.showLatest(output);
       return 1;
     }
     this->ShowProgressOf(frame, true);
@@ -558,15 +463,11 @@ int vtkDeformableTrackFilter::RequestFrameData(vtkInformation* request,
     // does not flash 100 % each time it asks again for a frame already done.
     ContinueExecuting(request, false);
   }
-
   const std::size_t shown = std::min(target, in.Cache.size() - 1);
-  output->Initialize();
-  fillOutput(output, in.context(), in.Cache[shown], shown);
   // Stopped short of the request (aborted): the output says which frame it is. The executive
   // does not run a request for the same time twice; a request for another time goes on from
   // the frames kept (a change of properties starts the take over).
-  output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(),
-                                shown == target ? requestedTime : this->GetInputFrameTime(shown));
+  in.show(output, shown, shown == target ? requestedTime : this->GetInputFrameTime(shown));
   return 1;
 }
 

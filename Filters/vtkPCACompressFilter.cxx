@@ -29,6 +29,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -100,6 +101,86 @@ struct vtkPCACompressFilter::Internals
     Map.reset();
     Displacements.clear();
     DetailFit = dp::DetailCompression{};
+  }
+
+  // A detail layer's frame 0: the base's connectivity and size, its map to the fine mesh.
+  std::string startDetail(vtkPolyData* input, vtkDataArray* base, vtkDataArray* triangles,
+                          const std::string& at)
+  {
+    Vertices = base->GetNumberOfTuples();
+    Triangles.resize(3 * static_cast<std::size_t>(triangles->GetNumberOfTuples()));
+    for (std::size_t i = 0; i < Triangles.size(); ++i)
+      Triangles[i] = static_cast<std::int64_t>(
+          triangles->GetComponent(static_cast<vtkIdType>(i / 3), static_cast<int>(i % 3)));
+    try
+    {
+      Map = std::make_unique<dp::SubdivisionMap>(Triangles, static_cast<std::size_t>(Vertices),
+                                                 DetailLevels);
+    }
+    catch (const std::exception& e)
+    {
+      return at + "the base mesh cannot be subdivided: " + e.what();
+    }
+    FineVertices = input->GetNumberOfPoints();
+    FinePolys = input->GetPolys();
+    if (static_cast<std::size_t>(FineVertices) != Map->fineVertices())
+      return at + std::to_string(FineVertices) + " fine points, but " +
+             std::to_string(DetailLevels) + " levels over the base make " +
+             std::to_string(Map->fineVertices());
+    return {};
+  }
+
+  // A detail layer's frame: its base positions and its displacements appended.
+  std::string appendDetail(vtkDataArray* base, vtkDataArray* detail, const std::string& at)
+  {
+    for (vtkIdType i = 0; i < Vertices; ++i)
+    {
+      double p[3];
+      base->GetTuple(i, p);
+      if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+        return at + "base point " + std::to_string(i) + " is not finite";
+      Positions.insert(Positions.end(), p, p + 3);
+    }
+    for (vtkIdType i = 0; i < FineVertices; ++i)
+    {
+      const double d = detail->GetTuple1(i);
+      if (!std::isfinite(d))
+        return at + "the detail of point " + std::to_string(i) + " is not finite";
+      Displacements.push_back(d);
+    }
+    return {};
+  }
+
+  // A detail layer's frame: its base's colours ("BaseColors") kept while every frame has them.
+  void appendBaseColours(vtkFieldData* fd)
+  {
+    auto* colours = vtkUnsignedCharArray::SafeDownCast(fd->GetArray("BaseColors"));
+    if (!ColoursInEveryFrame || !colours || colours->GetNumberOfComponents() != 3 ||
+        colours->GetNumberOfTuples() != Vertices)
+    {
+      ColoursInEveryFrame = false;
+      Colours.clear();
+    }
+    else
+      Colours.insert(Colours.end(), colours->GetPointer(0), colours->GetPointer(0) + 3 * Vertices);
+  }
+
+  // Result: the collected take compressed so that its distance to the data grows by at most
+  // the fit growth allowed (DISTANCE_TO_DATA), with its fit before and after.
+  void compressAgainstData(std::size_t frames, const std::vector<double>& times,
+                           const std::function<bool(double)>& progress)
+  {
+    std::vector<const dp::FrameSamples*> samples;
+    for (const dp::FrameSamples& s : Samples)
+      samples.push_back(&s);
+    dp::DataFitCompression c =
+        dp::compressAgainstData(dp::TriangleMesh(Triangles, static_cast<std::size_t>(Vertices)),
+                                Positions.data(), frames, samples, Reach, Options.fitGrowth / 100,
+                                dp::pcaOptionsOf(Options), Options.slide, times, progress);
+    Before = c.tracked;
+    After = c.decompressed;
+    Slid = c.slid;
+    Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
   }
 };
 
@@ -242,56 +323,18 @@ std::string vtkPCACompressFilter::CollectDetail(vtkPolyData* input, std::size_t 
                 "Detail (Surface Detail's output carries them)";
   if (frame == 0)
   {
-    in.Vertices = base->GetNumberOfTuples();
-    in.Triangles.resize(3 * static_cast<std::size_t>(triangles->GetNumberOfTuples()));
-    for (std::size_t i = 0; i < in.Triangles.size(); ++i)
-      in.Triangles[i] = static_cast<std::int64_t>(
-          triangles->GetComponent(static_cast<vtkIdType>(i / 3), static_cast<int>(i % 3)));
-    try
-    {
-      in.Map = std::make_unique<dp::SubdivisionMap>(
-          in.Triangles, static_cast<std::size_t>(in.Vertices), in.DetailLevels);
-    }
-    catch (const std::exception& e)
-    {
-      return at + "the base mesh cannot be subdivided: " + e.what();
-    }
-    in.FineVertices = input->GetNumberOfPoints();
-    in.FinePolys = input->GetPolys();
-    if (static_cast<std::size_t>(in.FineVertices) != in.Map->fineVertices())
-      return at + std::to_string(in.FineVertices) + " fine points, but " +
-             std::to_string(in.DetailLevels) + " levels over the base make " +
-             std::to_string(in.Map->fineVertices());
+    const std::string error = in.startDetail(input, base, triangles, at);
+    if (!error.empty())
+      return error;
   }
   else if (base->GetNumberOfTuples() != in.Vertices ||
            input->GetNumberOfPoints() != in.FineVertices)
     return at + "its base or fine mesh differs in size from frame 0's: the detail layer needs "
                 "one connectivity through the take";
-  for (vtkIdType i = 0; i < in.Vertices; ++i)
-  {
-    double p[3];
-    base->GetTuple(i, p);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
-      return at + "base point " + std::to_string(i) + " is not finite";
-    in.Positions.insert(in.Positions.end(), p, p + 3);
-  }
-  for (vtkIdType i = 0; i < in.FineVertices; ++i)
-  {
-    const double d = detail->GetTuple1(i);
-    if (!std::isfinite(d))
-      return at + "the detail of point " + std::to_string(i) + " is not finite";
-    in.Displacements.push_back(d);
-  }
-  auto* colours = vtkUnsignedCharArray::SafeDownCast(fd->GetArray("BaseColors"));
-  if (!in.ColoursInEveryFrame || !colours || colours->GetNumberOfComponents() != 3 ||
-      colours->GetNumberOfTuples() != in.Vertices)
-  {
-    in.ColoursInEveryFrame = false;
-    in.Colours.clear();
-  }
-  else
-    in.Colours.insert(in.Colours.end(), colours->GetPointer(0),
-                      colours->GetPointer(0) + 3 * in.Vertices);
+  const std::string error = in.appendDetail(base, detail, at);
+  if (!error.empty())
+    return error;
+  in.appendBaseColours(fd);
   return {};
 }
 
@@ -359,32 +402,19 @@ std::string vtkPCACompressFilter::Compress()
   for (std::size_t t = 0; t < frames; ++t)
     times[t] = this->GetInputFrameTime(t);
   this->SetProgressText("PCA Compress: compressing");
-  const auto progress = [this](double f)
+  const std::function<bool(double)> progress = [this](double f)
   {
     this->UpdateProgress(0.5 + 0.5 * f);
     return !this->GetAbortExecute();
   };
-  const auto vertices = static_cast<std::size_t>(in.Vertices);
   try
   {
     if (this->AgainstData())
-    {
-      std::vector<const dp::FrameSamples*> samples;
-      for (const dp::FrameSamples& s : in.Samples)
-        samples.push_back(&s);
-      dp::DataFitCompression c =
-          dp::compressAgainstData(dp::TriangleMesh(in.Triangles, vertices), in.Positions.data(),
-                                  frames, samples, in.Reach, in.Options.fitGrowth / 100,
-                                  dp::pcaOptionsOf(in.Options), in.Options.slide, times, progress);
-      in.Before = c.tracked;
-      in.After = c.decompressed;
-      in.Slid = c.slid;
-      in.Result = std::make_unique<dp::CompressedSequence>(std::move(c.sequence));
-    }
+      in.compressAgainstData(frames, times, progress);
     else
       in.Result = std::make_unique<dp::CompressedSequence>(
-          dp::compressSequence(in.Positions.data(), vertices, frames, dp::pcaOptionsOf(in.Options),
-                               in.Triangles, times, progress));
+          dp::compressSequence(in.Positions.data(), static_cast<std::size_t>(in.Vertices), frames,
+                               dp::pcaOptionsOf(in.Options), in.Triangles, times, progress));
     if (in.ColoursInEveryFrame && !in.Colours.empty())
       dp::setColours(*in.Result, std::move(in.Colours), in.Options.colourTolerance);
     if (in.DetailLevels > 0)

@@ -304,6 +304,21 @@ void addFrameIdentity(vtkPolyData* output, std::size_t index, const std::string&
   fileName->InsertNextValue(path);
   output->GetFieldData()->AddArray(fileName);
 }
+
+// The frame the output request asks for (the first without a time).
+std::size_t requestedIndex(const dp::FrameSequence& sequence, vtkInformation* outInfo)
+{
+  if (!outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
+    return 0;
+  return sequence.frameAtTime(outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
+}
+
+// The progress text while frame `index` (of `frames`) is read.
+std::string progressText(std::size_t index, std::size_t frames)
+{
+  return "Point Sequence Reader: frame " + std::to_string(index + 1) + " of " +
+         std::to_string(frames);
+}
 } // namespace
 
 vtkPointSequenceSource::vtkPointSequenceSource() : Internal(new Internals)
@@ -451,17 +466,10 @@ int vtkPointSequenceSource::RequestData(vtkInformation*, vtkInformationVector**,
   if (!this->BuildSequence())
     return 0;
   const dp::FrameSequence& sequence = this->Internal->Sequence;
-  std::size_t index = 0;
-  if (outInfo->Has(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()))
-  {
-    index =
-        sequence.frameAtTime(outInfo->Get(vtkStreamingDemandDrivenPipeline::UPDATE_TIME_STEP()));
-  }
+  const std::size_t index = requestedIndex(sequence, outInfo);
   const dp::Frame& frame = sequence[index];
   output->GetInformation()->Set(vtkDataObject::DATA_TIME_STEP(), frame.time);
-  const std::string progress = "Point Sequence Reader: frame " + std::to_string(index + 1) +
-                               " of " + std::to_string(sequence.size());
-  this->SetProgressText(progress.c_str());
+  this->SetProgressText(progressText(index, sequence.size()).c_str());
 
   try
   {
