@@ -6,6 +6,7 @@
 // and `check` (the test suite runs it) lists the regions out of date, exit 1.
 #include "dp/io/OptionCode.h"
 #include "dp/compress/CompressionOptions.h"
+#include "dp/detail/DetailOptions.h"
 #include "dp/io/FileText.h"
 #include "dp/track/TrackerOptionTable.h"
 
@@ -17,9 +18,14 @@ namespace
 
 // The files holding regions, from the source tree's root.
 const char* const RegionFiles[] = {
-    "Filters/vtkDeformableTrackFilter.h",    "Filters/vtkPCACompressFilter.h",
-    "Filters/vtkCompressedSequenceWriter.h", "ParaViewPlugin/DeformableTrackFilter.xml",
-    "ParaViewPlugin/PCACompressFilter.xml",  "Documentation/TrackerOptions.md",
+    "Filters/vtkDeformableTrackFilter.h",
+    "Filters/vtkPCACompressFilter.h",
+    "Filters/vtkCompressedSequenceWriter.h",
+    "Filters/vtkSurfaceDetailFilter.h",
+    "ParaViewPlugin/DeformableTrackFilter.xml",
+    "ParaViewPlugin/PCACompressFilter.xml",
+    "ParaViewPlugin/SurfaceDetailFilter.xml",
+    "Documentation/TrackerOptions.md",
     "Documentation/Compression.md",
 };
 
@@ -29,7 +35,9 @@ dp::OptionCodeTable tableNamed(const std::string& name)
     return dp::trackerOptions().codeTable("TrackerOption");
   if (name == "compression")
     return dp::compressionOptions().codeTable("CompressionOption");
-  throw std::invalid_argument("no option table '" + name + "' (tracker, compression)");
+  if (name == "detail")
+    return dp::detailOptions().codeTable("DetailOption");
+  throw std::invalid_argument("no option table '" + name + "' (tracker, compression, detail)");
 }
 
 std::string generated(const std::string& path, const dp::OptionRegion& region)

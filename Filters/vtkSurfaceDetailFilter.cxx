@@ -2,9 +2,11 @@
 #include "vtkSurfaceDetailFilter.h"
 
 #include "dp/detail/DetailLevels.h"
+#include "dp/detail/DetailOptions.h"
 #include "dp/detail/DisplacementFit.h"
 #include "dp/geometry/MeshSurfaceSamples.h"
 #include "dp/geometry/TriangleMesh.h"
+#include "vtkDPOptions.h"
 #include "vtkDPPointSetAccess.h"
 
 #include "vtkCellArray.h"
@@ -123,18 +125,154 @@ vtkSmartPointer<Array> namedArray(const char* name, int components, vtkIdType tu
   a->SetNumberOfTuples(tuples);
   return a;
 }
+
+// The properties in world units for this take: the reach a share of the base's mean edge length.
+dp::DisplacementFitOptions fitOptionsOf(const dp::DetailOptions& options,
+                                        const std::vector<std::int64_t>& baseTriangles,
+                                        const std::vector<double>& positions)
+{
+  dp::DisplacementFitOptions fit;
+  fit.reach = options.reach * dp::meanEdgeLength(baseTriangles, positions.data());
+  fit.smoothness = options.smoothness;
+  fit.normalAngle = options.normalAngle;
+  return fit;
+}
+
+// The levels the automatic choice takes, measured on the first frame's data (`choice` says what
+// it measured); none when the data hold no surface (`choice` says why).
+std::optional<int> chosenLevels(vtkPolyData* base, vtkPointSet* data,
+                                const std::vector<std::int64_t>& baseTriangles,
+                                const std::vector<double>& positions,
+                                const dp::DisplacementFitOptions& fit, std::string& choice)
+{
+  std::string error;
+  FrameInput d = frameInputOf(data, error, true);
+  if (!d.surface)
+  {
+    // Nothing to measure detail on: the tracked mesh is given as it is.
+    choice = "none: the first frame's data (input 1) hold no surface (" + error + ")";
+    return std::nullopt;
+  }
+  dp::FrameSamples samples;
+  if (!samplesOf(base, samples))
+    samples = std::move(d.samples);
+  const dp::DetailLevelChoice c = dp::chooseDetailLevels(
+      baseTriangles, positions, *d.surface, samples, d.mesh ? d.count : d.count / 2, fit);
+  choice = c.summary;
+  return c.levels;
+}
+
+// Triangles (3 ids each) as VTK cells.
+vtkSmartPointer<vtkCellArray> cellsOf(const std::vector<std::int64_t>& tri)
+{
+  auto cells = vtkSmartPointer<vtkCellArray>::New();
+  for (std::size_t t = 0; t < tri.size(); t += 3)
+  {
+    const vtkIdType ids[3] = {tri[t], tri[t + 1], tri[t + 2]};
+    cells->InsertNextCell(3, ids);
+  }
+  return cells;
+}
+
+// The fine mesh's positions: the base (`basePoints`) subdivided by `map` and displaced along its
+// normals as fitted; `normals` (3 per fine vertex) gets the displaced mesh's vertex normals.
+vtkSmartPointer<vtkDoubleArray> finePositions(const dp::SubdivisionMap& map,
+                                              const double* basePoints, const FrameDetail& detail,
+                                              std::vector<double>& normals)
+{
+  const std::size_t n = map.fineVertices();
+  std::vector<double> smooth(3 * n);
+  map.subdivide(basePoints, smooth.data(), normals.data());
+  auto coordinates = namedArray<vtkDoubleArray>("Points", 3, static_cast<vtkIdType>(n));
+  dp::displaceAlongNormals(smooth.data(), normals.data(), detail.displacement.data(), n,
+                           coordinates->GetPointer(0));
+  dp::vertexNormalsOf(map.fineTriangles(), coordinates->GetPointer(0), n, normals.data());
+  return coordinates;
+}
+
+// Per fine vertex (`n` of them): Normals (the active normals), Observed and Residual; the
+// displacements ("Detail") are returned, for the caller to add beside the colours or as the
+// active scalars.
+vtkSmartPointer<vtkFloatArray> addFinePointData(vtkPointData* pd, const FrameDetail& detail,
+                                                const std::vector<double>& normals, std::size_t n)
+{
+  const auto nv = static_cast<vtkIdType>(n);
+  auto displacement = namedArray<vtkFloatArray>("Detail", 1, nv);
+  auto shading = namedArray<vtkFloatArray>("Normals", 3, nv);
+  auto observed = namedArray<vtkUnsignedCharArray>("Observed", 1, nv);
+  auto residual = namedArray<vtkFloatArray>("Residual", 1, nv);
+  std::copy(detail.residual.begin(), detail.residual.end(), residual->GetPointer(0));
+  for (std::size_t i = 0; i < n; ++i)
+  {
+    displacement->SetValue(static_cast<vtkIdType>(i), static_cast<float>(detail.displacement[i]));
+    observed->SetValue(static_cast<vtkIdType>(i), detail.observed[i]);
+    for (int c = 0; c < 3; ++c)
+      shading->SetTypedComponent(static_cast<vtkIdType>(i), c,
+                                 static_cast<float>(normals[3 * i + c]));
+  }
+  pd->SetNormals(shading);
+  pd->AddArray(observed);
+  pd->AddArray(residual);
+  return displacement;
+}
+
+// The tracked mesh's colours carried to the fine mesh by `map` (the active scalars, with
+// `displacement` beside them; the base's in field data "BaseColors"); without colours,
+// `displacement` is the active scalars.
+void addFineColours(vtkPolyData* base, const dp::SubdivisionMap& map, vtkFloatArray* displacement,
+                    vtkPolyData* output)
+{
+  vtkPointData* pd = output->GetPointData();
+  if (vtkUnsignedCharArray* colours = vtkDP::pointColours(base))
+  {
+    const std::size_t nb = map.baseVertices();
+    const int k = colours->GetNumberOfComponents();
+    auto baseColours =
+        namedArray<vtkUnsignedCharArray>("BaseColors", 3, static_cast<vtkIdType>(nb));
+    for (std::size_t i = 0; i < nb; ++i)
+      for (int c = 0; c < 3; ++c)
+        baseColours->SetValue(static_cast<vtkIdType>(3 * i + c),
+                              colours->GetValue(static_cast<vtkIdType>(k * i + c)));
+    const std::vector<std::uint8_t> fine = dp::subdividedColours(map, baseColours->GetPointer(0));
+    pd->SetScalars(vtkDP::colorsArray(fine.data(), static_cast<vtkIdType>(map.fineVertices())));
+    pd->AddArray(displacement);
+    output->GetFieldData()->AddArray(baseColours);
+  }
+  else
+    pd->SetScalars(displacement);
+}
+
+// The frame's figures in field data: the levels, the share of the `n` fine vertices whose
+// normal line met the data, the fit's seconds, and what chose the levels.
+void addDetailFigures(vtkPolyData* output, int levels, const FrameDetail& detail, std::size_t n,
+                      const std::string& choice)
+{
+  vtkDP::addFieldValue(output, "DetailLevels", levels);
+  std::size_t seen = 0;
+  for (std::uint8_t o : detail.observed)
+    seen += o;
+  vtkDP::addFieldValue(output, "DetailObserved",
+                       static_cast<double>(seen) / static_cast<double>(n));
+  vtkDP::addFieldValue(output, "DetailSeconds", detail.seconds);
+  vtkNew<vtkStringArray> said;
+  said->SetName("DetailChoice");
+  said->InsertNextValue(choice);
+  output->GetFieldData()->AddArray(said);
+}
 } // namespace
 
 struct vtkSurfaceDetailFilter::Internals
 {
+  // The properties (dp::detailOptions() describes them); their defaults are the engine's.
+  dp::DetailOptions Options;
   std::vector<double> TimeSteps;
   double LastDataTime = 0;
   std::vector<std::int64_t> BaseTriangles;
   std::unique_ptr<dp::SubdivisionMap> Map;
   std::unique_ptr<dp::DisplacementFitter> Fitter;
   vtkSmartPointer<vtkCellArray> FinePolys;
-  dp::DisplacementFitOptions Options;
-  std::string Choice; // what the automatic choice measured
+  dp::DisplacementFitOptions FitOptions; // the properties in world units, for this take
+  std::string Choice;                    // what the automatic choice measured
   std::vector<std::optional<FrameDetail>> Cache;
 
   void clear()
@@ -149,11 +287,27 @@ struct vtkSurfaceDetailFilter::Internals
   bool cached(std::size_t frame) const { return frame < Cache.size() && Cache[frame]; }
 };
 
-vtkSurfaceDetailFilter::vtkSurfaceDetailFilter()
-    : DetailLevels(AUTOMATIC), Reach(1.0), Smoothness(dp::DisplacementFitOptions().smoothness),
-      NormalTestAngle(dp::DisplacementFitOptions().normalAngle), Internal(new Internals)
+vtkSurfaceDetailFilter::vtkSurfaceDetailFilter() : Internal(new Internals)
 {
   this->SetNumberOfInputPorts(2);
+}
+
+void vtkSurfaceDetailFilter::SetDetailOption(const char* name, double value)
+{
+  std::string error;
+  if (vtkDP::setOption(dp::detailOptions(), this->Internal->Options, name, value, error))
+    this->Modified();
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+}
+
+double vtkSurfaceDetailFilter::GetDetailOption(const char* name)
+{
+  std::string error;
+  const double v = vtkDP::getOption(dp::detailOptions(), this->Internal->Options, name, error);
+  if (!error.empty())
+    vtkErrorMacro(<< error);
+  return v;
 }
 
 vtkSurfaceDetailFilter::~vtkSurfaceDetailFilter()
@@ -210,33 +364,21 @@ bool vtkSurfaceDetailFilter::Prepare(vtkPolyData* base, vtkPointSet* data)
                   << (base->GetNumberOfPolys() == 0 ? "it has no polygons" : why));
     return false;
   }
-  in.Options = dp::DisplacementFitOptions();
-  in.Options.reach = this->Reach * dp::meanEdgeLength(in.BaseTriangles, positions.data());
-  in.Options.smoothness = this->Smoothness;
-  in.Options.normalAngle = this->NormalTestAngle;
+  in.FitOptions = fitOptionsOf(in.Options, in.BaseTriangles, positions);
   try
   {
-    int levels = this->DetailLevels;
+    int levels = in.Options.levels;
     if (levels == AUTOMATIC)
     {
-      std::string error;
-      FrameInput d = frameInputOf(data, error, true);
-      if (!d.surface)
+      const std::optional<int> chosen =
+          chosenLevels(base, data, in.BaseTriangles, positions, in.FitOptions, in.Choice);
+      if (!chosen)
       {
-        // Nothing to measure detail on: the tracked mesh is given as it is.
-        in.Choice = "none: the first frame's data (input 1) hold no surface (" + error + ")";
         vtkWarningMacro(<< "no detail layer: " << in.Choice);
         this->LevelsUsed = 0;
         return true;
       }
-      dp::FrameSamples samples;
-      if (!samplesOf(base, samples))
-        samples = std::move(d.samples);
-      const dp::DetailLevelChoice c =
-          dp::chooseDetailLevels(in.BaseTriangles, positions, *d.surface, samples,
-                                 d.mesh ? d.count : d.count / 2, in.Options);
-      levels = c.levels;
-      in.Choice = c.summary;
+      levels = *chosen;
     }
     else
       in.Choice = std::to_string(levels) + " level(s), as asked";
@@ -251,13 +393,7 @@ bool vtkSurfaceDetailFilter::Prepare(vtkPolyData* base, vtkPointSet* data)
     vtkErrorMacro(<< "no detail layer: " << e.what());
     return false;
   }
-  in.FinePolys = vtkSmartPointer<vtkCellArray>::New();
-  const auto& tri = in.Map->fineTriangles();
-  for (std::size_t t = 0; t < tri.size(); t += 3)
-  {
-    const vtkIdType ids[3] = {tri[t], tri[t + 1], tri[t + 2]};
-    in.FinePolys->InsertNextCell(3, ids);
-  }
+  in.FinePolys = cellsOf(in.Map->fineTriangles());
   return true;
 }
 
@@ -282,8 +418,9 @@ bool vtkSurfaceDetailFilter::FitFrame(std::size_t frame, vtkPolyData* base, vtkP
   FrameInput d = frameInputOf(data, error, false);
   if (d.surface)
   {
-    d.surface->orientAgainst(fine.data(), normals.data(), n, in.Options.reach);
-    dp::DisplacementFit fit = in.Fitter->fit(fine.data(), normals.data(), *d.surface, in.Options);
+    d.surface->orientAgainst(fine.data(), normals.data(), n, in.FitOptions.reach);
+    dp::DisplacementFit fit =
+        in.Fitter->fit(fine.data(), normals.data(), *d.surface, in.FitOptions);
     detail.displacement = std::move(fit.displacement);
     detail.observed = std::move(fit.met);
     detail.residual.assign(fit.residual.begin(), fit.residual.end());
@@ -310,74 +447,25 @@ void vtkSurfaceDetailFilter::FillOutput(std::size_t frame, vtkPolyData* base, vt
   Internals& in = *this->Internal;
   const FrameDetail& detail = *in.Cache[frame];
   const std::size_t nb = in.Map->baseVertices(), n = in.Map->fineVertices();
-  const auto nv = static_cast<vtkIdType>(n);
   auto basePoints = namedArray<vtkDoubleArray>("BasePoints", 3, static_cast<vtkIdType>(nb));
   for (std::size_t i = 0; i < nb; ++i)
     base->GetPoint(static_cast<vtkIdType>(i), basePoints->GetPointer(0) + 3 * i);
-  std::vector<double> smooth(3 * n), normals(3 * n);
-  in.Map->subdivide(basePoints->GetPointer(0), smooth.data(), normals.data());
-  auto coordinates = namedArray<vtkDoubleArray>("Points", 3, nv);
-  dp::displaceAlongNormals(smooth.data(), normals.data(), detail.displacement.data(), n,
-                           coordinates->GetPointer(0));
-  dp::vertexNormalsOf(in.Map->fineTriangles(), coordinates->GetPointer(0), n, normals.data());
+  std::vector<double> normals(3 * n);
   vtkNew<vtkPoints> points;
-  points->SetData(coordinates);
+  points->SetData(finePositions(*in.Map, basePoints->GetPointer(0), detail, normals));
   output->SetPoints(points);
   output->SetPolys(in.FinePolys);
-
-  auto displacement = namedArray<vtkFloatArray>("Detail", 1, nv);
-  auto shading = namedArray<vtkFloatArray>("Normals", 3, nv);
-  auto observed = namedArray<vtkUnsignedCharArray>("Observed", 1, nv);
-  auto residual = namedArray<vtkFloatArray>("Residual", 1, nv);
-  std::copy(detail.residual.begin(), detail.residual.end(), residual->GetPointer(0));
-  for (std::size_t i = 0; i < n; ++i)
-  {
-    displacement->SetValue(static_cast<vtkIdType>(i), static_cast<float>(detail.displacement[i]));
-    observed->SetValue(static_cast<vtkIdType>(i), detail.observed[i]);
-    for (int c = 0; c < 3; ++c)
-      shading->SetTypedComponent(static_cast<vtkIdType>(i), c,
-                                 static_cast<float>(normals[3 * i + c]));
-  }
-  vtkPointData* pd = output->GetPointData();
-  pd->SetNormals(shading);
-  pd->AddArray(observed);
-  pd->AddArray(residual);
+  const vtkSmartPointer<vtkFloatArray> displacement =
+      addFinePointData(output->GetPointData(), detail, normals, n);
   vtkFieldData* fd = output->GetFieldData();
   fd->ShallowCopy(base->GetFieldData());
-  if (vtkUnsignedCharArray* colours = vtkDP::pointColours(base))
-  {
-    // The tracked mesh's colours, carried to the fine mesh by the same map.
-    const int k = colours->GetNumberOfComponents();
-    auto baseColours =
-        namedArray<vtkUnsignedCharArray>("BaseColors", 3, static_cast<vtkIdType>(nb));
-    for (std::size_t i = 0; i < nb; ++i)
-      for (int c = 0; c < 3; ++c)
-        baseColours->SetValue(static_cast<vtkIdType>(3 * i + c),
-                              colours->GetValue(static_cast<vtkIdType>(k * i + c)));
-    const std::vector<std::uint8_t> fine =
-        dp::subdividedColours(*in.Map, baseColours->GetPointer(0));
-    pd->SetScalars(vtkDP::colorsArray(fine.data(), nv));
-    pd->AddArray(displacement);
-    fd->AddArray(baseColours);
-  }
-  else
-    pd->SetScalars(displacement);
+  addFineColours(base, *in.Map, displacement, output);
   fd->AddArray(basePoints);
   auto triangles = namedArray<vtkTypeInt64Array>(
       "BaseTriangles", 3, static_cast<vtkIdType>(in.BaseTriangles.size() / 3));
   std::copy(in.BaseTriangles.begin(), in.BaseTriangles.end(), triangles->GetPointer(0));
   fd->AddArray(triangles);
-  vtkDP::addFieldValue(output, "DetailLevels", this->LevelsUsed);
-  std::size_t seen = 0;
-  for (std::uint8_t o : detail.observed)
-    seen += o;
-  vtkDP::addFieldValue(output, "DetailObserved",
-                       static_cast<double>(seen) / static_cast<double>(n));
-  vtkDP::addFieldValue(output, "DetailSeconds", detail.seconds);
-  vtkNew<vtkStringArray> choice;
-  choice->SetName("DetailChoice");
-  choice->InsertNextValue(in.Choice);
-  fd->AddArray(choice);
+  addDetailFigures(output, this->LevelsUsed, detail, n, in.Choice);
 }
 
 int vtkSurfaceDetailFilter::RequestData(vtkInformation*, vtkInformationVector** inputVector,
@@ -417,9 +505,7 @@ int vtkSurfaceDetailFilter::RequestData(vtkInformation*, vtkInformationVector** 
 void vtkSurfaceDetailFilter::PrintSelf(ostream& os, vtkIndent indent)
 {
   this->Superclass::PrintSelf(os, indent);
-  os << indent << "DetailLevels: " << this->DetailLevels << "\n";
+  for (const auto& option : dp::detailOptions())
+    os << indent << option.name << ": " << option.said(option.get(this->Internal->Options)) << "\n";
   os << indent << "LevelsUsed: " << this->LevelsUsed << "\n";
-  os << indent << "Reach: " << this->Reach << "\n";
-  os << indent << "Smoothness: " << this->Smoothness << "\n";
-  os << indent << "NormalTestAngle: " << this->NormalTestAngle << "\n";
 }

@@ -59,36 +59,55 @@ public:
   {
     AUTOMATIC = -1
   };
-  ///@{
-  /** Subdivision levels of the fine mesh: 0 (none: the tracked mesh passes through) to 6, or
-   *  AUTOMATIC (-1, default: measured on the first frame). Each level has four times the
-   *  triangles of the one before. */
-  vtkSetClampMacro(DetailLevels, int, -1, 6);
-  vtkGetMacro(DetailLevels, int);
-  ///@}
-
   /** The levels in use: DetailLevels, or what AUTOMATIC chose (-1 before the first frame). */
   int GetLevelsUsed() const { return this->LevelsUsed; }
 
   ///@{
-  /** The farthest a fine vertex is moved, in mean edge lengths of the tracked mesh (default 1). */
-  vtkSetClampMacro(Reach, double, 0.01, 10.0);
-  vtkGetMacro(Reach, double);
+  /**
+   * Any detail option by its name in dp::DetailOptions ("detail.reach") or its property name
+   * ("Reach"); dp::detailOptions() describes them all (as does Documentation/Compression.md). A
+   * value out of the option's range is clamped to it, as vtkSetClampMacro does; an unknown name
+   * or a NaN is an error. The named accessors below are this under the property's name.
+   */
+  void SetDetailOption(const char* name, double value);
+  double GetDetailOption(const char* name);
   ///@}
 
+  // The named accessors of the table's options, written by build/bin/dp-option-code from the
+  // table (dp/io/OptionCode.h): edit the table, not here.
+  // BEGIN generated options: detail
+  // clang-format off
   ///@{
-  /** Weight of the membrane term against the data's (default 0.02): higher smooths noise in
-   *  point data away, and detail with it. */
-  vtkSetClampMacro(Smoothness, double, 0.0, 100.0);
-  vtkGetMacro(Smoothness, double);
+  /** Subdivision levels of the fine mesh (0: none, the tracked mesh passes through; each level
+   *  has four times the triangles of the one before). -1 (default): measured on the first frame:
+   *  the level whose fine mesh has about the capture's vertex count (half its point count), kept
+   *  where it lies at least a fifth closer to the data than the tracked mesh, else none
+   *  (DetailChoice says what was measured). (detail.levels; range [-1, 6]) */
+  void SetDetailLevels(int value) { this->SetDetailOption("DetailLevels", value); }
+  int GetDetailLevels() { return static_cast<int>(this->GetDetailOption("DetailLevels")); }
   ///@}
-
   ///@{
-  /** Data whose normal turns more than this from a fine vertex's (degrees, default 80) is
-   *  another surface's (the other side of a thin part, a limb touching the body). */
-  vtkSetClampMacro(NormalTestAngle, double, 1.0, 90.0);
-  vtkGetMacro(NormalTestAngle, double);
+  /** The farthest a fine vertex is moved onto the data, in mean edge lengths of the tracked mesh
+   *  (default 1): data farther along its normal count as none. (detail.reach; range [0.01, 10],
+   *  mean edge lengths) */
+  void SetReach(double value) { this->SetDetailOption("Reach", value); }
+  double GetReach() { return this->GetDetailOption("Reach"); }
   ///@}
+  ///@{
+  /** Weight of the membrane term against the data's (default 0.02): it spans holes; more smooths
+   *  the noise of point data away, and detail with it. (detail.smoothness; range [0, 100]) */
+  void SetSmoothness(double value) { this->SetDetailOption("Smoothness", value); }
+  double GetSmoothness() { return this->GetDetailOption("Smoothness"); }
+  ///@}
+  ///@{
+  /** Data whose surface normal turns more than this many degrees from a fine vertex's is another
+   *  surface's (the other side of a thin part, a limb touching the body) and is not followed
+   *  (default 80). (detail.normalAngle; range [1, 90], degrees) */
+  void SetNormalTestAngle(double value) { this->SetDetailOption("NormalTestAngle", value); }
+  double GetNormalTestAngle() { return this->GetDetailOption("NormalTestAngle"); }
+  ///@}
+  // clang-format on
+  // END generated options
 
 protected:
   vtkSurfaceDetailFilter();
@@ -99,10 +118,6 @@ protected:
   int RequestUpdateExtent(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
   int RequestData(vtkInformation*, vtkInformationVector**, vtkInformationVector*) override;
 
-  int DetailLevels;
-  double Reach;
-  double Smoothness;
-  double NormalTestAngle;
   int LevelsUsed = -1;
 
 private:
