@@ -5,6 +5,9 @@
 #include "dp/compress/DataFitCompression.h"
 #include "dp/compress/PcaCompression.h"
 #include "dp/geometry/BoundingBox.h"
+#include "dp/geometry/DataFit.h"
+#include "dp/geometry/FrameSamples.h"
+#include "dp/geometry/SurfaceLocator.h"
 #include "dp/geometry/SurfaceSampler.h"
 #include "dp/io/AnimatedMesh.h"
 
@@ -82,6 +85,105 @@ TEST(DataFit, MeasuresTheSamplesDistanceToTheMeshAndCountsFarOnesApart)
   EXPECT_EQ(
       dp::measureDataFit(take.mesh, take.positions.data(), views, 0.05 * take.diagonal).samples,
       exact.samples - take.samples[1].size() - 1);
+}
+
+// Each sample's squared distance to frame t's mesh, by brute force over every triangle.
+std::vector<double> bruteForceDistances(const Take& take, std::size_t t)
+{
+  const auto& tri = take.mesh.triangles();
+  const double* x = take.positions.data() + 3 * take.mesh.numberOfVertices() * t;
+  const dp::FrameSamples& s = take.samples[t];
+  std::vector<double> d2(s.size(), HUGE_VAL);
+  for (std::size_t i = 0; i < s.size(); ++i)
+    for (std::size_t f = 0; f < tri.size(); f += 3)
+    {
+      double w[3], c[3];
+      d2[i] =
+          std::min(d2[i], dp::closestPointOnTriangle(&s.points[3 * i], x + 3 * tri[f],
+                                                     x + 3 * tri[f + 1], x + 3 * tri[f + 2], w, c));
+    }
+  return d2;
+}
+
+TEST(DataFit, MatchesBruteForceAndMarksTheSamplesItCounted)
+{
+  // Noisy samples, a few moved far off: the RMS over those within reach, the count of the others
+  // and the flags of `within` are brute force's. Measured again with those flags on a moved take,
+  // only the flagged samples count, whatever their distance.
+  Take take(0.004, 3);
+  for (std::size_t i = 0; i < take.samples[1].size(); i += 97)
+    take.samples[1].points[3 * i + 2] += 0.3 * take.diagonal;
+  const double reach = 0.01 * take.diagonal;
+  std::vector<std::vector<bool>> within;
+  const dp::DataFit fit =
+      dp::measureDataFit(take.mesh, take.positions.data(), take.views(), reach, &within);
+  ASSERT_EQ(within.size(), take.samples.size());
+  double sum = 0;
+  std::size_t inside = 0, outside = 0;
+  std::vector<std::vector<double>> distances;
+  for (std::size_t t = 0; t < take.samples.size(); ++t)
+  {
+    distances.push_back(bruteForceDistances(take, t));
+    ASSERT_EQ(within[t].size(), take.samples[t].size());
+    for (std::size_t i = 0; i < distances[t].size(); ++i)
+    {
+      const bool near = distances[t][i] < reach * reach;
+      EXPECT_EQ(within[t][i], near) << "frame " << t << ", sample " << i;
+      (near ? inside : outside) += 1;
+      sum += near ? distances[t][i] : 0.0;
+    }
+  }
+  EXPECT_GT(outside, take.samples[1].size() / 97); // the moved samples and the noise's tail
+  EXPECT_EQ(fit.samples, inside);
+  EXPECT_EQ(fit.beyondReach, outside);
+  EXPECT_NEAR(fit.rms, std::sqrt(sum / static_cast<double>(inside)), 1e-12 * take.diagonal);
+
+  // The take moved by more than the reach: with the flags given, no sample is beyond it.
+  for (std::size_t i = 0; i < take.positions.size(); i += 3)
+    take.positions[i] += 0.02 * take.diagonal;
+  const dp::DataFit flagged =
+      dp::measureDataFit(take.mesh, take.positions.data(), take.views(), reach, &within);
+  EXPECT_EQ(flagged.samples, inside);
+  EXPECT_EQ(flagged.beyondReach, 0u);
+  sum = 0;
+  std::size_t farButFlagged = 0;
+  for (std::size_t t = 0; t < take.samples.size(); ++t)
+  {
+    const std::vector<double> d2 = bruteForceDistances(take, t);
+    for (std::size_t i = 0; i < d2.size(); ++i)
+      if (within[t][i])
+      {
+        sum += d2[i];
+        farButFlagged += d2[i] > reach * reach;
+      }
+  }
+  EXPECT_NEAR(flagged.rms, std::sqrt(sum / static_cast<double>(inside)), 1e-12 * take.diagonal);
+  EXPECT_GT(farButFlagged, inside / 10);
+}
+
+TEST(FrameSamples, AViewSeesTheSamplesWhereTheyAre)
+{
+  // A held copy's view reads its own arrays; a view through an index reads the points it names.
+  dp::FrameSamples held;
+  held.points = {0, 0, 0, 1, 2, 3, 4, 5, 6};
+  held.normals = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  held.voxel = 0.5;
+  EXPECT_EQ(held.size(), 3u);
+  EXPECT_FALSE(held.empty());
+  EXPECT_TRUE(dp::FrameSamples{}.empty());
+  const dp::SampleView all = held.view();
+  EXPECT_EQ(all.count, 3u);
+  EXPECT_EQ(all.voxel, 0.5);
+  for (std::size_t i = 0; i < 3; ++i)
+  {
+    EXPECT_EQ(all.point(i), &held.points[3 * i]);
+    EXPECT_EQ(all.normal(i), &held.normals[3 * i]);
+  }
+  const std::uint32_t index[2] = {2, 0};
+  const dp::SampleView some{held.points.data(), held.normals.data(), index, 2, 0.5};
+  EXPECT_EQ(some.point(0), &held.points[6]);
+  EXPECT_EQ(some.normal(0)[2], 1.0f);
+  EXPECT_EQ(some.point(1), &held.points[0]);
 }
 
 TEST(DataFit, TheRmsDeviationTargetIsMetAndReported)

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: BSD-3-Clause
 // The energy terms (internal, distance, coverage, temporal): gradients and Gauss-Newton models
-// against finite differences; the coverage term's pull and followed matches.
+// against finite differences; the coverage term's pull and followed matches; the sum of terms
+// (EnergyTerm.h) and the robust kernels' weights against their penalties' slopes.
 
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
@@ -12,10 +13,12 @@
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
+#include "dp/track/EnergyTerm.h"
 #include "dp/track/FrameData.h"
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
 #include "dp/track/InternalEnergyTerm.h"
+#include "dp/track/RobustKernel.h"
 #include "dp/track/Solvers.h"
 #include "dp/track/TemporalTerm.h"
 #include "dp/track/TracePreconditioner.h"
@@ -222,6 +225,132 @@ TEST(CoverageTerm, FollowedMatchesAreTheSearchedOnes)
     }
     EXPECT_GT(matched, followed.matches().size() / 2);
   }
+}
+
+TEST(EnergyTerm, TheSumAddsEachTermsValueAndGradient)
+{
+  // evaluateAll against each term evaluated alone: the values sum, and the gradients are added to
+  // what the buffer held (the solvers add several sums into one).
+  Frame f(tube().positions);
+  const dp::ClothEnergy cloth(f.mesh, f.shape.positions.data(), dp::ClothParameters{1, 0.1, 0.5});
+  const std::vector<double> target = jiggle(f.shape.positions, 0.01, 4);
+  dp::InternalEnergyTerm internal(cloth);
+  dp::TemporalTerm temporal(target, f.mass, 3.0, f.L, f.voxel);
+  const std::vector<double> x = jiggle(f.shape.positions, 0.01, 9);
+  std::vector<double> gInternal(x.size(), 0.0), gTemporal(x.size(), 0.0), g(x.size(), 0.25);
+  const double eInternal = internal.evaluate(x.data(), gInternal.data());
+  const double eTemporal = temporal.evaluate(x.data(), gTemporal.data());
+  ASSERT_GT(eInternal, 0);
+  ASSERT_GT(eTemporal, 0);
+  const double e = dp::evaluateAll({&internal, &temporal}, x.data(), g.data());
+  EXPECT_NEAR(e, eInternal + eTemporal, 1e-14 * e);
+  for (std::size_t i = 0; i < x.size(); ++i)
+    ASSERT_NEAR(g[i], 0.25 + gInternal[i] + gTemporal[i], 1e-12) << i;
+  // Without a gradient buffer, the same value; no terms, nothing.
+  EXPECT_EQ(dp::evaluateAll({&internal, &temporal}, x.data(), nullptr), e);
+  std::vector<double> untouched(x.size(), 0.25);
+  EXPECT_EQ(dp::evaluateAll({}, x.data(), untouched.data()), 0.0);
+  EXPECT_EQ(untouched, std::vector<double>(x.size(), 0.25));
+}
+
+// A term with only what every term must have: E = |x - c|^2 / 2 over one vertex.
+class PointPull : public dp::EnergyTerm
+{
+public:
+  const char* name() const override { return "pull"; }
+  double evaluate(const double* x, double* gradient) const override
+  {
+    double e = 0;
+    for (int k = 0; k < 3; ++k)
+    {
+      e += 0.5 * (x[k] - k) * (x[k] - k);
+      if (gradient)
+        gradient[k] += x[k] - k;
+    }
+    return e;
+  }
+  double addModel(const double* x, dp::support::BlockSparseMatrix& hessian,
+                  double* gradient) const override
+  {
+    const double identity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    hessian.addBlock(hessian.slotOf(0, 0), identity);
+    return evaluate(x, gradient);
+  }
+};
+
+TEST(EnergyTerm, ATermWithoutChoicesDecidesNothingAndCouplesNothing)
+{
+  // The defaults: no discrete choice changes, no coupling beyond each vertex with itself.
+  PointPull term;
+  const double x[3] = {1, 2, 3};
+  term.linearise(x);
+  EXPECT_EQ(term.decide(x), 0u);
+  std::vector<std::array<std::int64_t, 2>> pairs = {{4, 5}};
+  term.couplings(pairs);
+  EXPECT_EQ(pairs, (std::vector<std::array<std::int64_t, 2>>{{4, 5}}));
+  EXPECT_EQ(term.evaluate(x, nullptr), 0.5 * (1 + 1 + 1));
+}
+
+// The penalty whose iteratively reweighted least squares weight the kernel gives: rho(r) with
+// rho'(r) = w(u^2) r, u = r / s (Geman-McClure: s^2/2 u^2/(1+u^2); Huber: quadratic up to s,
+// linear beyond; none: r^2 / 2).
+double penalty(dp::RobustKernel::Kind kind, double r, double s)
+{
+  const double u2 = (r / s) * (r / s);
+  switch (kind)
+  {
+  case dp::RobustKernel::Kind::GemanMcClure:
+    return 0.5 * s * s * u2 / (1 + u2);
+  case dp::RobustKernel::Kind::Huber:
+    return std::abs(r) <= s ? 0.5 * r * r : s * std::abs(r) - 0.5 * s * s;
+  default:
+    return 0.5 * r * r;
+  }
+}
+
+TEST(RobustKernel, TheWeightTimesTheResidualIsThePenaltysSlope)
+{
+  // Each kernel's weight against the central difference of its closed-form penalty, at residuals
+  // from a hundredth to a hundred scales (away from Huber's kink at the scale).
+  for (const auto kind : {dp::RobustKernel::Kind::GemanMcClure, dp::RobustKernel::Kind::Huber,
+                          dp::RobustKernel::Kind::None})
+  {
+    dp::RobustKernel kernel;
+    kernel.kind = kind;
+    kernel.scale = 0.3;
+    const double s = kernel.scale;
+    for (double ratio : {0.01, 0.2, 0.7, 0.97, 1.03, 1.5, 3.0, 10.0, 100.0})
+      for (double sign : {-1.0, 1.0})
+      {
+        const double r = sign * ratio * s, h = 1e-6 * s;
+        const double slope = (penalty(kind, r + h, s) - penalty(kind, r - h, s)) / (2 * h);
+        const double weight = kernel.weightOfSquaredRatio((r / s) * (r / s));
+        EXPECT_NEAR(weight * r, slope, 1e-7 * std::max(std::abs(slope), s))
+            << "kind " << static_cast<int>(kind) << ", r / s = " << r / s;
+      }
+    // A residual of nothing has the full weight.
+    EXPECT_EQ(kernel.weightOfSquaredRatio(0), 1.0);
+  }
+}
+
+TEST(RobustKernel, OnlyAKernelWithAScaleWeighs)
+{
+  dp::RobustKernel kernel;
+  EXPECT_FALSE(kernel.active()); // none, scale 0
+  kernel.kind = dp::RobustKernel::Kind::GemanMcClure;
+  EXPECT_FALSE(kernel.active()); // a scale of 0: plain least squares
+  kernel.scale = 1;
+  EXPECT_TRUE(kernel.active());
+  kernel.kind = dp::RobustKernel::Kind::None;
+  EXPECT_FALSE(kernel.active());
+  EXPECT_EQ(kernel.weightOfSquaredRatio(1e6), 1.0);
+  // Geman-McClure fades out far residuals faster than Huber: 1/u^4 against 1/u.
+  dp::RobustKernel gm{dp::RobustKernel::Kind::GemanMcClure, 1},
+      huber{dp::RobustKernel::Kind::Huber, 1};
+  EXPECT_EQ(gm.weightOfSquaredRatio(1), 0.25);
+  EXPECT_EQ(huber.weightOfSquaredRatio(1), 1.0);
+  EXPECT_EQ(huber.weightOfSquaredRatio(16), 0.25);
+  EXPECT_EQ(gm.weightOfSquaredRatio(3), 1.0 / 16);
 }
 
 } // namespace

@@ -2,6 +2,7 @@
 // Engine readers and writers: every format, both directions, and every kind of bad file.
 #include "TestUtilities.h"
 
+#include "dp/io/PlyHeader.h"
 #include "dp/io/PointCloudIO.h"
 
 #include <gtest/gtest.h>
@@ -137,6 +138,92 @@ TEST(PLY, TruncatedAsciiBodyIsAnError)
   writeText(path, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                   "property float z\nend_header\n0 0 0\n1 1 1\n");
   expectFileError([&] { dp::readPLY(path); }, path, "truncated");
+}
+
+TEST(PlyHeader, ParsesEveryTypeNameListsAndWhereTheBodyStarts)
+{
+  // Both names of each type, a list, comments and obj_info, "\r\n" line ends and a binary body
+  // that begins with bytes a line reader would mistake for text: the body starts right after
+  // "end_header" and its line end, wherever those are.
+  const std::string header =
+      "ply\r\nformat binary_big_endian 1.0\r\ncomment two names per type\r\nobj_info x\r\n"
+      "element vertex 7\r\nproperty char a\r\nproperty uint8 b\r\nproperty short c\r\n"
+      "property uint16 d\r\nproperty int32 e\r\nproperty uint f\r\nproperty float32 g\r\n"
+      "property double h\r\n\r\nelement face 0\r\nproperty list uchar int vertex_indices\r\n"
+      "end_header\r\n";
+  const std::string bytes = header + std::string("\nend_header\n\0\x01", 14);
+  const dp::support::PlyHeader h = dp::support::parsePlyHeader("cube.ply", bytes);
+  EXPECT_EQ(h.encoding, dp::support::PlyBodyEncoding::Big);
+  EXPECT_EQ(h.bodyOffset, header.size());
+  ASSERT_EQ(h.elements.size(), 2u);
+  EXPECT_EQ(h.elements[0].name, "vertex");
+  EXPECT_EQ(h.elements[0].count, 7u);
+  using T = dp::support::PlyType;
+  const T types[] = {T::Int8,  T::UInt8,  T::Int16,   T::UInt16,
+                     T::Int32, T::UInt32, T::Float32, T::Float64};
+  const std::size_t sizes[] = {1, 1, 2, 2, 4, 4, 4, 8};
+  ASSERT_EQ(h.elements[0].properties.size(), 8u);
+  for (std::size_t p = 0; p < 8; ++p)
+  {
+    const dp::support::PlyProperty& property = h.elements[0].properties[p];
+    EXPECT_EQ(property.name, std::string(1, static_cast<char>('a' + p)));
+    EXPECT_EQ(property.type, types[p]) << property.name;
+    EXPECT_FALSE(property.isList);
+    EXPECT_EQ(dp::support::sizeOf(property.type), sizes[p]) << property.name;
+  }
+  EXPECT_EQ(h.elements[1].name, "face");
+  EXPECT_EQ(h.elements[1].count, 0u);
+  ASSERT_EQ(h.elements[1].properties.size(), 1u);
+  EXPECT_TRUE(h.elements[1].properties[0].isList);
+  EXPECT_EQ(h.elements[1].properties[0].countType, T::UInt8);
+  EXPECT_EQ(h.elements[1].properties[0].type, T::Int32);
+  EXPECT_EQ(h.elements[1].properties[0].name, "vertex_indices");
+
+  for (const auto& [format, encoding] :
+       {std::pair{"ascii", dp::support::PlyBodyEncoding::Ascii},
+        std::pair{"binary_little_endian", dp::support::PlyBodyEncoding::Little}})
+  {
+    const std::string text = std::string("ply\nformat ") + format + " 1.0\nend_header\n";
+    const dp::support::PlyHeader other = dp::support::parsePlyHeader("f.ply", text);
+    EXPECT_EQ(other.encoding, encoding) << format;
+    EXPECT_TRUE(other.elements.empty());
+    EXPECT_EQ(other.bodyOffset, text.size());
+  }
+}
+
+TEST(PlyHeader, RefusesEachFaultNamingTheFileAndTheLine)
+{
+  // (header, the message's part): the line number counts "ply" as line 1.
+  const std::pair<std::string, std::string> cases[] = {
+      {"", "not a PLY file"},
+      {"PLY\nformat ascii 1.0\nend_header\n", "not a PLY file"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\n", "no 'end_header' line"},
+      {"ply\nelement vertex 0\nend_header\n", "no 'format' line"},
+      {"ply\nformat ebcdic 1.0\nend_header\n", "PLY header line 2: unknown format 'ebcdic'"},
+      {"ply\nformat ascii 1.0\ncolour red\nend_header\n",
+       "PLY header line 3: unknown keyword 'colour'"},
+      {"ply\nformat ascii 1.0\nelement vertex -1\nend_header\n",
+       "PLY header line 3: malformed element line 'element vertex -1'"},
+      {"ply\nformat ascii 1.0\nelement vertex 2.5\nend_header\n", "malformed element line"},
+      {"ply\nformat ascii 1.0\nelement vertex\nend_header\n", "malformed element line"},
+      {"ply\nformat ascii 1.0\nelement\nend_header\n", "malformed element line"},
+      {"ply\nformat ascii 1.0\nelement vertex 2251799813685248\nend_header\n",
+       "malformed element line"}, // 2^51, beyond LargestCount
+      {"ply\nformat ascii 1.0\nelement vertex nan\nend_header\n", "malformed element line"},
+      {"ply\nformat ascii 1.0\nproperty float x\nend_header\n",
+       "PLY header line 3: property before any element"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quaternion x\nend_header\n",
+       "PLY header line 4: unknown property type 'quaternion'"},
+      {"ply\nformat ascii 1.0\nelement face 1\nproperty list word int v\nend_header\n",
+       "PLY header line 4: unknown list count type in 'property list word int v'"},
+      {"ply\nformat ascii 1.0\nelement face 1\nproperty list uchar long v\nend_header\n",
+       "unknown property type 'long'"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float\nend_header\n",
+       "PLY header line 4: property without a name"},
+  };
+  for (const auto& [text, expected] : cases)
+    expectFileError([&] { dp::support::parsePlyHeader("some/dir/bad.ply", text); },
+                    "some/dir/bad.ply", expected);
 }
 
 TEST(PLY, MalformedFilesAreErrorsNamingTheFile)

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: BSD-3-Clause
-// The fine level's solvers and the trace preconditioner.
+// The fine level's solvers, the choice among them (FineSolver) and the trace preconditioner.
 
 #include "dp/geometry/BoundingBox.h"
 #include "dp/geometry/LocalThickness.h"
@@ -11,6 +11,7 @@
 #include "dp/track/CoverageTerm.h"
 #include "dp/track/DeformationGraph.h"
 #include "dp/track/DistanceTerm.h"
+#include "dp/track/FineSolver.h"
 #include "dp/track/FrameData.h"
 #include "dp/track/FrameQuality.h"
 #include "dp/track/GraphRegistration.h"
@@ -245,6 +246,80 @@ TEST(TracePreconditioner, TheSupernodalFactorisationReportsAMatrixThatIsNotPosit
   P.coeffRef(450, 450) = -5; // a negative pivot
   EXPECT_FALSE(preconditioner.factorise(P));
   EXPECT_FALSE(preconditioner.factorised());
+}
+
+// The minimum of springs and anchors: (L + C) X = C T, three right-hand sides (x y z per column).
+Eigen::MatrixXd exactMinimum(const SpringsAndAnchors& term, std::int64_t n)
+{
+  std::vector<Eigen::Triplet<double>> entries;
+  for (std::size_t s = 0; s < term.springs.size(); ++s)
+  {
+    const auto a = static_cast<int>(term.springs[s][0]), b = static_cast<int>(term.springs[s][1]);
+    entries.emplace_back(a, a, term.stiffness[s]);
+    entries.emplace_back(b, b, term.stiffness[s]);
+    entries.emplace_back(a, b, -term.stiffness[s]);
+    entries.emplace_back(b, a, -term.stiffness[s]);
+  }
+  Eigen::MatrixXd rhs(n, 3);
+  for (std::int64_t v = 0; v < n; ++v)
+  {
+    entries.emplace_back(static_cast<int>(v), static_cast<int>(v), term.anchor[v]);
+    for (int k = 0; k < 3; ++k)
+      rhs(v, k) = term.anchor[v] * term.target[3 * v + k];
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  return Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(A).solve(rhs);
+}
+
+TEST(FineSolver, EachMethodTheOptionsNameReachesTheMinimumOnTheMeshsCouplings)
+{
+  // Springs along the tube's edges and across its hinges (every pair the fine level's terms may
+  // couple, which the Gauss-Newton matrix's pattern must hold), anchors to random targets: each
+  // method ends at the minimum a sparse solve gives, Gauss-Newton closest.
+  const Shape shape = tube();
+  const dp::TriangleMesh mesh(shape.triangles, shape.positions.size() / 3);
+  const auto n = static_cast<std::int64_t>(mesh.numberOfVertices());
+  std::mt19937 random(3);
+  std::uniform_real_distribution<double> unit(0, 1);
+  SpringsAndAnchors term;
+  for (const auto& e : mesh.edges())
+    term.springs.push_back({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  for (const auto& h : mesh.hinges())
+    term.springs.push_back({std::min(h[2], h[3]), std::max(h[2], h[3])});
+  for (std::size_t s = 0; s < term.springs.size(); ++s)
+    term.stiffness.push_back(0.2 + 0.3 * unit(random));
+  term.anchor.assign(static_cast<std::size_t>(n), 1.0);
+  for (std::int64_t i = 0; i < 3 * n; ++i)
+    term.target.push_back(unit(random) - 0.5);
+  const Eigen::MatrixXd minimum = exactMinimum(term, n);
+  const double scale = minimum.cwiseAbs().maxCoeff();
+
+  const std::pair<dp::TrackerSolver, double> methods[] = {
+      {dp::TrackerSolver::GaussNewton, 1e-6},
+      {dp::TrackerSolver::LBFGS, 1e-4},
+      {dp::TrackerSolver::SteepestDescent, 1e-3}};
+  for (const auto& [method, tolerance] : methods)
+  {
+    dp::TrackerOptions options;
+    options.solver = method;
+    options.provisionalDetermination = false;
+    const std::unique_ptr<dp::FineSolver> solver = dp::FineSolver::make(options, mesh, 1.0);
+    EXPECT_EQ(solver->takesFewStepsAfterCoarseLevel(), method == dp::TrackerSolver::GaussNewton);
+    std::vector<double> x(3 * n, 0.0);
+    std::vector<std::uint8_t> frozen(static_cast<std::size_t>(n), 0);
+    dp::SolveSettings settings;
+    settings.tolerance = 1e-12;
+    settings.maxIterations = 3000;
+    EXPECT_GT(solver->solve(x, {&term}, nullptr, settings, frozen), 0);
+    double error = 0;
+    for (std::int64_t v = 0; v < n; ++v)
+      for (int k = 0; k < 3; ++k)
+        error = std::max(error, std::abs(x[3 * v + k] - minimum(v, k)));
+    EXPECT_LT(error, tolerance * scale) << "solver " << static_cast<int>(method);
+    // Without provisional determination nothing is frozen.
+    EXPECT_EQ(std::count(frozen.begin(), frozen.end(), 1), 0) << static_cast<int>(method);
+  }
 }
 
 } // namespace

@@ -50,7 +50,7 @@ def documented_concerns():
             current = None
     documented = {}
     for name, entry in entries.items():
-        on = re.search(r"\(on ([^;)]*)[;)]\s*[^()]*\)?;?$", entry) or re.search(r"\(on ([^;)]*)", entry)
+        on = re.search(r"\(on ([^;)]*)", entry)
         documented[name] = set(re.findall(r"`(\w+)`", on.group(1))) if on else set()
     return documented
 
@@ -96,6 +96,27 @@ class TestEngineLayers(unittest.TestCase):
         self.assertNotIn("compress", reachable(concerns, "track"))
         self.assertNotIn("track", reachable(concerns, "compress"))
         self.assertNotIn("track", reachable(concerns, "detail"))
+
+
+class TestEngineUnitsAreTested(unittest.TestCase):
+    # Headers that are no unit of their own, with the reason; every other engine header is
+    # included by a GoogleTest file (Development.md: one test file per engine unit).
+    NOT_UNITS = {
+        "dp/track/TrackerParts.h": "Tracker's private parts, shared by its two source files",
+    }
+
+    def test_every_engine_header_is_included_by_a_test(self):
+        tests = os.path.join(ROOT, "Testing", "Cxx")
+        included = set()
+        for name in os.listdir(tests):
+            included |= set(re.findall(r'#include "(dp/[\w/]+\.h)"', read(os.path.join(tests, name))))
+        headers = set()
+        for folder, _, files in os.walk(os.path.join(ENGINE, "dp")):
+            headers |= {os.path.relpath(os.path.join(folder, f), ENGINE) for f in files
+                        if f.endswith(".h")}
+        self.assertEqual(sorted(headers - included - set(self.NOT_UNITS)), [],
+                         "engine headers no test includes")
+        self.assertEqual(sorted(set(self.NOT_UNITS) - headers), [], "exempted headers that are gone")
 
 
 if __name__ == "__main__":
