@@ -106,23 +106,7 @@ void vtkDeformableTrackFilter::SetTemplateVertices(int vertices)
   }
 }
 
-void vtkDeformableTrackFilter::SetTrackerOption(const char* name, double value)
-{
-  std::string error;
-  if (vtkDP::setOption(dp::trackerOptions(), this->Internal->Options, name, value, error))
-    this->Modified();
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-}
-
-double vtkDeformableTrackFilter::GetTrackerOption(const char* name)
-{
-  std::string error;
-  const double v = vtkDP::getOption(dp::trackerOptions(), this->Internal->Options, name, error);
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-  return v;
-}
+vtkDPOptionAccessorsMacro(vtkDeformableTrackFilter, TrackerOption, dp::trackerOptions());
 
 vtkDeformableTrackFilter::~vtkDeformableTrackFilter()
 {

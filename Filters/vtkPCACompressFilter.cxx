@@ -186,23 +186,7 @@ struct vtkPCACompressFilter::Internals
 
 vtkPCACompressFilter::vtkPCACompressFilter() : Internal(new Internals) {}
 
-void vtkPCACompressFilter::SetCompressionOption(const char* name, double value)
-{
-  std::string error;
-  if (vtkDP::setOption(dp::compressionOptions(), this->Internal->Options, name, value, error))
-    this->Modified();
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-}
-
-double vtkPCACompressFilter::GetCompressionOption(const char* name)
-{
-  std::string error;
-  const double v = vtkDP::getOption(dp::compressionOptions(), this->Internal->Options, name, error);
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-  return v;
-}
+vtkDPOptionAccessorsMacro(vtkPCACompressFilter, CompressionOption, dp::compressionOptions());
 
 void vtkPCACompressFilter::SetCompressionOptions(const dp::CompressionOptions& options)
 {

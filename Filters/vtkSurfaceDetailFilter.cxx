@@ -292,23 +292,7 @@ vtkSurfaceDetailFilter::vtkSurfaceDetailFilter() : Internal(new Internals)
   this->SetNumberOfInputPorts(2);
 }
 
-void vtkSurfaceDetailFilter::SetDetailOption(const char* name, double value)
-{
-  std::string error;
-  if (vtkDP::setOption(dp::detailOptions(), this->Internal->Options, name, value, error))
-    this->Modified();
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-}
-
-double vtkSurfaceDetailFilter::GetDetailOption(const char* name)
-{
-  std::string error;
-  const double v = vtkDP::getOption(dp::detailOptions(), this->Internal->Options, name, error);
-  if (!error.empty())
-    vtkErrorMacro(<< error);
-  return v;
-}
+vtkDPOptionAccessorsMacro(vtkSurfaceDetailFilter, DetailOption, dp::detailOptions());
 
 vtkSurfaceDetailFilter::~vtkSurfaceDetailFilter()
 {

@@ -51,4 +51,29 @@ double getOption(const dp::OptionTable<Options>& table, const Options& options, 
 }
 } // namespace vtkDP
 
+/**
+ * Defines a filter's generic option accessors, `Set<Family>(name, value)` and
+ * `Get<Family>(name)`, over engine table `table` and the options the filter holds in
+ * `this->Internal->Options`: a changed value marks the filter modified; an unknown name or a NaN
+ * is reported as the filter's error. Used once per filter, in its .cxx, followed by a `;`.
+ */
+#define vtkDPOptionAccessorsMacro(Class, Family, table)                                            \
+  void Class::Set##Family(const char* name, double value)                                          \
+  {                                                                                                \
+    std::string error;                                                                             \
+    if (vtkDP::setOption(table, this->Internal->Options, name, value, error))                      \
+      this->Modified();                                                                            \
+    if (!error.empty())                                                                            \
+      vtkErrorMacro(<< error);                                                                     \
+  }                                                                                                \
+  double Class::Get##Family(const char* name)                                                      \
+  {                                                                                                \
+    std::string error;                                                                             \
+    const double v = vtkDP::getOption(table, this->Internal->Options, name, error);                \
+    if (!error.empty())                                                                            \
+      vtkErrorMacro(<< error);                                                                     \
+    return v;                                                                                      \
+  }                                                                                                \
+  static_assert(true, "the macro is used as a statement")
+
 #endif

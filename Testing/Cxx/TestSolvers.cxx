@@ -107,6 +107,30 @@ public:
   }
 };
 
+// The minimum of springs and anchors: (L + C) X = C T, three right-hand sides (x y z per column).
+Eigen::MatrixXd exactMinimum(const SpringsAndAnchors& term, std::int64_t n)
+{
+  std::vector<Eigen::Triplet<double>> entries;
+  for (std::size_t s = 0; s < term.springs.size(); ++s)
+  {
+    const auto a = static_cast<int>(term.springs[s][0]), b = static_cast<int>(term.springs[s][1]);
+    entries.emplace_back(a, a, term.stiffness[s]);
+    entries.emplace_back(b, b, term.stiffness[s]);
+    entries.emplace_back(a, b, -term.stiffness[s]);
+    entries.emplace_back(b, a, -term.stiffness[s]);
+  }
+  Eigen::MatrixXd rhs(n, 3);
+  for (std::int64_t v = 0; v < n; ++v)
+  {
+    entries.emplace_back(static_cast<int>(v), static_cast<int>(v), term.anchor[v]);
+    for (int k = 0; k < 3; ++k)
+      rhs(v, k) = term.anchor[v] * term.target[3 * v + k];
+  }
+  Eigen::SparseMatrix<double> A(n, n);
+  A.setFromTriplets(entries.begin(), entries.end());
+  return Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(A).solve(rhs);
+}
+
 // When the preconditioner is the model's own matrix, conjugate gradients solve each step exactly:
 // Levenberg-Marquardt reaches the minimum in a few steps whatever the fill-reducing order of the
 // factor, so any slip in applying it (order, transposes, D) shows. Run on n vertices: below and
@@ -131,26 +155,7 @@ void solvesAQuadraticInFewSteps(std::int64_t n)
   for (std::int64_t i = 0; i < 3 * n; ++i)
     term.target.push_back(unit(random) - 0.5);
 
-  // The minimum: (L + C) X = C T, three right-hand sides.
-  std::vector<Eigen::Triplet<double>> entries;
-  for (std::size_t s = 0; s < term.springs.size(); ++s)
-  {
-    const auto a = static_cast<int>(term.springs[s][0]), b = static_cast<int>(term.springs[s][1]);
-    entries.emplace_back(a, a, term.stiffness[s]);
-    entries.emplace_back(b, b, term.stiffness[s]);
-    entries.emplace_back(a, b, -term.stiffness[s]);
-    entries.emplace_back(b, a, -term.stiffness[s]);
-  }
-  Eigen::MatrixXd rhs(n, 3);
-  for (std::int64_t v = 0; v < n; ++v)
-  {
-    entries.emplace_back(static_cast<int>(v), static_cast<int>(v), term.anchor[v]);
-    for (int k = 0; k < 3; ++k)
-      rhs(v, k) = term.anchor[v] * term.target[3 * v + k];
-  }
-  Eigen::SparseMatrix<double> A(n, n);
-  A.setFromTriplets(entries.begin(), entries.end());
-  const Eigen::MatrixXd minimum = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(A).solve(rhs);
+  const Eigen::MatrixXd minimum = exactMinimum(term, n);
 
   std::vector<std::array<std::int64_t, 2>> pairs;
   term.couplings(pairs);
@@ -246,30 +251,6 @@ TEST(TracePreconditioner, TheSupernodalFactorisationReportsAMatrixThatIsNotPosit
   P.coeffRef(450, 450) = -5; // a negative pivot
   EXPECT_FALSE(preconditioner.factorise(P));
   EXPECT_FALSE(preconditioner.factorised());
-}
-
-// The minimum of springs and anchors: (L + C) X = C T, three right-hand sides (x y z per column).
-Eigen::MatrixXd exactMinimum(const SpringsAndAnchors& term, std::int64_t n)
-{
-  std::vector<Eigen::Triplet<double>> entries;
-  for (std::size_t s = 0; s < term.springs.size(); ++s)
-  {
-    const auto a = static_cast<int>(term.springs[s][0]), b = static_cast<int>(term.springs[s][1]);
-    entries.emplace_back(a, a, term.stiffness[s]);
-    entries.emplace_back(b, b, term.stiffness[s]);
-    entries.emplace_back(a, b, -term.stiffness[s]);
-    entries.emplace_back(b, a, -term.stiffness[s]);
-  }
-  Eigen::MatrixXd rhs(n, 3);
-  for (std::int64_t v = 0; v < n; ++v)
-  {
-    entries.emplace_back(static_cast<int>(v), static_cast<int>(v), term.anchor[v]);
-    for (int k = 0; k < 3; ++k)
-      rhs(v, k) = term.anchor[v] * term.target[3 * v + k];
-  }
-  Eigen::SparseMatrix<double> A(n, n);
-  A.setFromTriplets(entries.begin(), entries.end());
-  return Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>(A).solve(rhs);
 }
 
 TEST(FineSolver, EachMethodTheOptionsNameReachesTheMinimumOnTheMeshsCouplings)
