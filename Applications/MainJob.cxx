@@ -79,7 +79,8 @@ std::string pvdText(const std::vector<std::pair<double, std::string>>& frames)
 class MainJob
 {
 public:
-  explicit MainJob(Settings settings) : S(std::move(settings)), Paths(S.output), Bar(!S.quiet)
+  explicit MainJob(Settings settings)
+      : Given(std::move(settings)), Paths(Given.output), Bar(!Given.quiet)
   {
     Printer->ProgressShown = Bar.enabled();
   }
@@ -91,7 +92,7 @@ public:
     track();
     if (!Job.failed && !Interrupted)
       compress();
-    writeReport(S, Paths, Job, Source);
+    writeReport(Given, Paths, Job, Source);
     return Interrupted ? 130 : Job.failed ? 1 : 0;
   }
 
@@ -108,8 +109,8 @@ private:
   bool openSequence()
   {
     watch(Source);
-    Job.inputName = S.input;
-    if (S.input.empty())
+    Job.inputName = Given.input;
+    if (Given.input.empty())
     {
       const std::string folder = (Paths.output / "input").string();
       std::cout << "No input given: generating the built-in sample sequence in " << folder << "\n";
@@ -119,22 +120,22 @@ private:
       Job.inputName = dp::writeSampledSequence(dp::BendingTube(), sampling, folder);
       Source->SetFileName(Job.inputName.c_str());
     }
-    else if (fs::is_directory(S.input))
+    else if (fs::is_directory(Given.input))
     {
-      Source->SetDirectoryName(S.input.c_str());
-      Source->SetFilePattern(S.pattern.c_str());
+      Source->SetDirectoryName(Given.input.c_str());
+      Source->SetFilePattern(Given.pattern.c_str());
     }
     else
-      Source->SetFileName(S.input.c_str());
+      Source->SetFileName(Given.input.c_str());
     Job.frames = Source->GetNumberOfFrames();
     if (Job.frames < 0)
       return false; // the printer has said why
-    if (S.frames > 0 && S.frames < Job.frames)
+    if (Given.frames > 0 && Given.frames < Job.frames)
     {
       // Only the first N frames: a .series file listing them with their times, which the
       // source then reads (and the user can see what was tracked).
       nlohmann::json files = nlohmann::json::array();
-      for (int f = 0; f < S.frames; ++f)
+      for (int f = 0; f < Given.frames; ++f)
         files.push_back({{"name", fs::absolute(Source->GetFramePath(f)).string()},
                          {"time", Source->GetFrameTime(f)}});
       fs::create_directories(Paths.output);
@@ -161,13 +162,13 @@ private:
     watch(Tracker);
     Tracker->SetInputConnection(Source->GetOutputPort());
     for (const dp::TrackerOptionDescription& option : dp::trackerOptions())
-      Tracker->SetTrackerOption(option.name.c_str(), option.get(S.tracker));
-    Tracker->SetTemplateVertices(S.vertices);
-    Tracker->SetTemplateSource(S.templateFrom);
-    if (!S.templateFile.empty())
+      Tracker->SetTrackerOption(option.name.c_str(), option.get(Given.tracker));
+    Tracker->SetTemplateVertices(Given.vertices);
+    Tracker->SetTemplateSource(Given.templateFrom);
+    if (!Given.templateFile.empty())
     {
       watch(TemplateReader);
-      TemplateReader->SetFileName(S.templateFile.c_str());
+      TemplateReader->SetFileName(Given.templateFile.c_str());
       if (TemplateReader->GetNumberOfFrames() < 0)
         return false;
       TemplateReader->Update();
@@ -175,7 +176,7 @@ private:
         return false;
       if (TemplateReader->GetOutput()->GetNumberOfPolys() == 0)
       {
-        std::cerr << "error: " << S.templateFile
+        std::cerr << "error: " << Given.templateFile
                   << ": has no polygons, so it cannot be the template mesh\n";
         return false;
       }
@@ -187,7 +188,7 @@ private:
     watch(DataSource);
     Detail->SetInputConnection(0, Tracker->GetOutputPort());
     Detail->SetDataConnection(DataSource->GetOutputPort());
-    Detail->SetDetailLevels(S.detailLevels);
+    Detail->SetDetailLevels(Given.detailLevels);
     return true;
   }
 
@@ -214,7 +215,7 @@ private:
     writer->SetDataModeToBinary();
     writer->SetCompressorTypeToZLib();
     watch(writer);
-    if (!S.quiet)
+    if (!Given.quiet)
       std::printf("%6s %10s %9s %6s %12s %12s %9s %8s %8s\n", "frame", "time", "points", "iter",
                   "rms dist", "max dist", "ms", "far pts%", "bare %");
     for (int f = 0; f < Job.frames && !Interrupted; ++f)
@@ -289,7 +290,7 @@ private:
         vtkStringArray::SafeDownCast(detailed->GetFieldData()->GetAbstractArray("DetailChoice"));
     Job.detailChoice =
         choice && choice->GetNumberOfValues() > 0 ? choice->GetValue(0) : std::string();
-    if (!S.quiet)
+    if (!Given.quiet)
     {
       Bar.clear();
       std::printf("Detail: %s\n", Job.detailChoice.c_str());
@@ -318,7 +319,7 @@ private:
     Job.meshTriangles = mesh->GetNumberOfPolys();
     auto* made = vtkStringArray::SafeDownCast(mesh->GetFieldData()->GetAbstractArray("Template"));
     Job.templateMade = made && made->GetNumberOfValues() > 0 ? made->GetValue(0) : std::string();
-    if (!Job.templateMade.empty() && !S.quiet)
+    if (!Job.templateMade.empty() && !Given.quiet)
     {
       Bar.clear();
       std::printf("Template: %s\n", Job.templateMade.c_str());
@@ -376,7 +377,7 @@ private:
                         figuresOf(mesh),
                         std::isfinite(detailSeconds) ? detailSeconds : 0.0};
     Job.records.push_back(r);
-    if (!S.quiet)
+    if (!Given.quiet)
     {
       Bar.clear();
       const dp::FrameFigures& g = r.figures;
@@ -395,7 +396,7 @@ private:
     vtkNew<vtkPCACompressFilter> compressor;
     watch(compressor);
     compressor->SetInputConnection(Detail->GetOutputPort());
-    compressor->SetCompressionOptions(S.compression);
+    compressor->SetCompressionOptions(Given.compression);
     vtkNew<ProgressWatcher> progress;
     progress->Bar = &Bar;
     progress->What = "compressing";
@@ -419,7 +420,7 @@ private:
     }
     if (!writeCompressed(*sequence))
       return;
-    sayCompression(compressor->GetOutput(), *sequence, S.compression, Paths, Job);
+    sayCompression(compressor->GetOutput(), *sequence, Given.compression, Paths, Job);
     sayAgainstInputMeshes(*sequence);
     sayGlb(Paths, Job);
   }
@@ -468,9 +469,9 @@ private:
     {
       dp::writeCompressedSequence(Paths.dpz.string(), sequence);
       dp::GlbOptions glb;
-      glb.meshopt = S.meshopt;
+      glb.meshopt = Given.meshopt;
       Job.glbWritten = dp::writeGlb(Paths.glb.string(), sequence, glb);
-      if (S.view)
+      if (Given.view)
         keepPageGlb(sequence);
       Job.compression["glb"] = {{"detailLevel", Job.glbWritten.level},
                                 {"vertices", Job.glbWritten.vertices},
@@ -491,18 +492,18 @@ private:
   void keepPageGlb(const dp::CompressedSequence& sequence)
   {
     fs::path plain = Paths.glb;
-    if (S.meshopt)
+    if (Given.meshopt)
     {
       plain = Paths.output / "view.glb.partial";
       dp::writeGlb(plain.string(), sequence);
     }
     std::ifstream in(plain, std::ios::binary);
     Job.pageGlb.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
-    if (S.meshopt)
+    if (Given.meshopt)
       fs::remove(plain);
   }
 
-  const Settings S;
+  const Settings Given; // what the command line asked
   const JobPaths Paths;
   JobState Job;
   vtkNew<MessagePrinter> Printer;
